@@ -1,0 +1,393 @@
+//! Statistics of a synthesised field against its model: σ per component, Welch
+//! auto-spectra in log-spaced bands against eq. 4, and pooled co-coherence against eq. 5.
+//!
+//! Estimators: Welch's method with a Hann window, 50 % overlap and the record mean removed;
+//! one-sided PSD per Hz. Co-coherence is the real part of the cross-spectrum normalised by the
+//! auto-spectra, *pooled* over every pair of points at one separation before normalising
+//! (Σ Re S_ab / √(Σ S_aa Σ S_bb)). A single-record magnitude coherence is biased upwards
+//! (≈ 0.18 where the truth is 0), which is why it is not used.
+//!
+//! With Taylor advection the model co-coherence along x is Coh(f, Δx) · cos(ωΔx/U_c).
+//! The two lowest log bands are biased by window leakage on the steep low end of the
+//! spectrum and are reported but flagged.
+
+use std::f64::consts::PI;
+use std::sync::Arc;
+
+use rayon::prelude::*;
+
+use realfft::RealFftPlanner;
+use realfft::num_complex::Complex;
+use serde::{Deserialize, Serialize};
+
+use crate::field::WindField;
+use crate::params::Component;
+use crate::spectrum;
+use crate::synth;
+
+/// Windowed segment spectra of one record (one FFT per segment).
+pub type Segments = Vec<Vec<Complex<f64>>>;
+
+/// Welch estimator: segment length, time step and the FFT plan.
+#[derive(Clone)]
+pub struct Welch {
+    segment: usize,
+    dt: f64,
+    window: Vec<f64>,
+    fft: Arc<dyn realfft::RealToComplex<f64>>,
+}
+
+impl std::fmt::Debug for Welch {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Welch").field("segment", &self.segment).field("dt", &self.dt).finish()
+    }
+}
+
+impl Welch {
+    /// An estimator with segments of `segment` samples (made even, at least 4) at step `dt`.
+    pub fn new(segment: usize, dt: f64) -> Welch {
+        let n = (segment & !1).max(4);
+        let window = (0..n).map(|i| 0.5 - 0.5 * (2.0 * PI * i as f64 / n as f64).cos()).collect();
+        let fft = RealFftPlanner::<f64>::new().plan_fft_forward(n);
+        Welch { segment: n, dt, window, fft }
+    }
+
+    /// Segment length in samples.
+    pub fn segment(&self) -> usize {
+        self.segment
+    }
+
+    /// Frequencies of the one-sided bins, k = 0 … segment/2, in Hz.
+    pub fn freqs(&self) -> Vec<f64> {
+        (0..=self.segment / 2).map(|k| k as f64 / (self.segment as f64 * self.dt)).collect()
+    }
+
+    /// Windowed spectra of every segment of a record (record mean removed, 50 % overlap).
+    ///
+    /// The record is one period of a loop, so segments wrap around its end: starts at
+    /// s·segment/2 for s = 0 … 2M/segment − 1. Every synthesised line then enters the set of
+    /// segments with the same weight and the cross terms between lines cancel over the set,
+    /// so the estimate carries the field's own scatter, not the segmentation's. (For a
+    /// record that is not periodic, pass a segment length that divides nothing special:
+    /// the wrap only costs one spurious seam per segment that crosses it.)
+    pub fn spectra(&self, rec: &[f64]) -> Segments {
+        let n = self.segment;
+        let m = rec.len();
+        let mean = rec.iter().sum::<f64>() / m as f64;
+        let count = (2 * m / n).max(1);
+        let mut out = Vec::with_capacity(count);
+        let mut buf = vec![0.0; n];
+        for s in 0..count {
+            let start = s * n / 2;
+            for i in 0..n {
+                buf[i] = (rec[(start + i) % m] - mean) * self.window[i];
+            }
+            let mut spec = self.fft.make_output_vec();
+            if self.fft.process(&mut buf, &mut spec).is_err() {
+                unreachable!("segment lengths are fixed by construction");
+            }
+            out.push(spec);
+        }
+        out
+    }
+
+    /// |Ŵ(δ)|² of the Hann window's DFT at a distance of δ bins (δ real), from the closed
+    /// form Ŵ = ½D(δ) − ¼D(δ−1) − ¼D(δ+1) with the Dirichlet kernel
+    /// D(δ) = e^{−iπδ(n−1)/n} sin(πδ)/sin(πδ/n).
+    fn hann_gain(&self, delta: f64) -> f64 {
+        let n = self.segment as f64;
+        let d = |x: f64| -> Complex<f64> {
+            let s = (PI * x / n).sin();
+            let mag = if s.abs() < 1e-12 { n * (PI * x).cos().signum() * (PI * x / n).cos().signum() } else { (PI * x).sin() / s };
+            Complex::from_polar(1.0, -PI * x * (n - 1.0) / n) * mag
+        };
+        (d(delta) * 0.5 - d(delta - 1.0) * 0.25 - d(delta + 1.0) * 0.25).norm_sqr()
+    }
+
+    /// Expected value of the estimator, bin by bin, for a record of `m` samples made of the
+    /// lines j = 1 … m/2 − 1 (frequency j/(m dt)) with random phases and variance
+    /// `line_power(j)`. For [`Welch::psd`] this is the model *as the estimator sees it*,
+    /// leakage of the window included; the ratio of two such sums (cross over auto) is the
+    /// expected pooled co-coherence.
+    pub fn expected(&self, m: usize, line_power: &dyn Fn(usize) -> f64) -> Vec<f64> {
+        let n = self.segment;
+        let norm = self.dt / self.window.iter().map(|w| w * w).sum::<f64>();
+        let powers: Vec<f64> = (0..m / 2).map(|j| if j == 0 { 0.0 } else { line_power(j) }).collect();
+        // The Hann gain falls as δ⁻⁶: beyond 48 bins a line adds < 1e-10 of its power.
+        const REACH: f64 = 48.0;
+        let per_bin = m as f64 / n as f64;
+        (0..=n / 2)
+            .map(|k| {
+                let one_sided = if k == 0 || k == n / 2 { 1.0 } else { 2.0 };
+                let kf = k as f64;
+                let lo = (((kf - REACH) * per_bin).floor().max(1.0)) as usize;
+                let hi = (((kf + REACH) * per_bin).ceil() as usize).min(powers.len());
+                let mut sum: f64 = (lo..hi)
+                    .map(|j| {
+                        let c = j as f64 / per_bin;
+                        0.5 * powers[j] * self.hann_gain(kf - c)
+                    })
+                    .sum();
+                // Mirror image of the negative frequencies, near DC only.
+                let hi_img = (((REACH - kf).max(0.0) * per_bin).ceil() as usize).min(powers.len());
+                sum += (1..hi_img).map(|j| 0.5 * powers[j] * self.hann_gain(kf + j as f64 / per_bin)).sum::<f64>();
+                one_sided * norm * sum
+            })
+            .collect()
+    }
+
+    /// One-sided PSD per Hz averaged over all records' segments.
+    pub fn psd<'a>(&self, records: impl IntoIterator<Item = &'a Segments>) -> Vec<f64> {
+        let norm = self.dt / self.window.iter().map(|w| w * w).sum::<f64>();
+        let mut acc = vec![0.0; self.segment / 2 + 1];
+        let mut count = 0usize;
+        for spec in records.into_iter().flatten() {
+            for (a, s) in acc.iter_mut().zip(spec) {
+                *a += s.norm_sqr();
+            }
+            count += 1;
+        }
+        let last = acc.len() - 1;
+        for (k, a) in acc.iter_mut().enumerate() {
+            let one_sided = if k == 0 || k == last { 1.0 } else { 2.0 };
+            *a *= one_sided * norm / count.max(1) as f64;
+        }
+        acc
+    }
+
+    /// Pooled co-coherence Σ Re S_ab / √(Σ S_aa Σ S_bb) over all pairs' segments.
+    pub fn pooled_cocoherence<'a>(&self, pairs: impl IntoIterator<Item = (&'a Segments, &'a Segments)>) -> Vec<f64> {
+        let nb = self.segment / 2 + 1;
+        let (mut sab, mut saa, mut sbb) = (vec![0.0; nb], vec![0.0; nb], vec![0.0; nb]);
+        for (sa, sb) in pairs {
+            for (x, y) in sa.iter().zip(sb) {
+                for k in 0..nb {
+                    sab[k] += (x[k] * y[k].conj()).re;
+                    saa[k] += x[k].norm_sqr();
+                    sbb[k] += y[k].norm_sqr();
+                }
+            }
+        }
+        (0..nb).map(|k| if saa[k] > 0.0 { sab[k] / (saa[k] * sbb[k]).sqrt() } else { 0.0 }).collect()
+    }
+}
+
+/// Log-spaced bands over bins 1 … n−2 (DC and Nyquist excluded: the synthesis leaves both
+/// empty, so the window's leakage biases the Nyquist bin low). Each band lists its bin
+/// indices; `per_decade` bands per decade; empty bands are dropped.
+pub fn log_bands(freqs: &[f64], per_decade: f64) -> Vec<Vec<usize>> {
+    let (f1, fmax) = (freqs[1], freqs[freqs.len() - 1]);
+    let nb = ((fmax / f1).log10() * per_decade).ceil().max(1.0) as usize;
+    let mut bands = vec![Vec::new(); nb];
+    for (k, &f) in freqs.iter().enumerate().take(freqs.len() - 1).skip(1) {
+        let b = (((f / f1).log10() * per_decade) as usize).min(nb - 1);
+        bands[b].push(k);
+    }
+    bands.retain(|b| !b.is_empty());
+    bands
+}
+
+/// One row of a spectral comparison.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct BandRow {
+    /// Geometric centre frequency of the band, Hz.
+    pub f: f64,
+    /// Measured value averaged over the band.
+    pub measured: f64,
+    /// Model value the estimator expects (the discrete model lines seen through the window,
+    /// leakage included), averaged over the band.
+    pub model: f64,
+    /// Whether the band is one of the two lowest (leakage-biased, not held to tolerance).
+    pub low_biased: bool,
+}
+
+impl BandRow {
+    /// Relative error measured/model − 1.
+    pub fn rel_error(&self) -> f64 {
+        self.measured / self.model - 1.0
+    }
+}
+
+/// Co-coherence against eq. 5 at one separation.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CoherenceRow {
+    /// Axis of the separation: "x" or "y".
+    pub axis: String,
+    /// Separation in grid steps.
+    pub steps: usize,
+    /// Separation in m.
+    pub metres: f64,
+    /// Bands (f, measured, expected model) — only bands where the model exceeds 0.02.
+    pub bands: Vec<BandRow>,
+}
+
+impl CoherenceRow {
+    /// Largest |measured − model| over bands where the model exceeds `above`, the two
+    /// lowest (leakage-biased) bands excluded.
+    pub fn max_abs_error(&self, above: f64) -> f64 {
+        self.bands.iter().filter(|b| b.model > above && !b.low_biased).map(|b| (b.measured - b.model).abs()).fold(0.0, f64::max)
+    }
+}
+
+/// Per-component statistics of a field.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ComponentStats {
+    /// Component letter.
+    pub component: String,
+    /// Measured σ of the fluctuations (all points and frames at the first height), m/s.
+    pub sigma: f64,
+    /// σ of the discrete target Σ 2 S0 Δω, m/s.
+    pub sigma_target: f64,
+    /// σ of the model (infinite loop), m/s.
+    pub sigma_model: f64,
+    /// Measured mean, m/s.
+    pub mean: f64,
+    /// Auto-spectrum against eq. 4 in log bands.
+    pub spectrum: Vec<BandRow>,
+    /// Co-coherence against eq. 5 at several separations.
+    pub coherence: Vec<CoherenceRow>,
+}
+
+/// Statistics of every component.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FieldStats {
+    /// Height (m) the statistics were taken at (the grid's first).
+    pub height: f64,
+    /// Welch segment length used.
+    pub segment: usize,
+    /// Per component u, v, w.
+    pub components: Vec<ComponentStats>,
+}
+
+/// Compute the statistics of `field` at its first height. Separations of 1, 2 and 4 grid
+/// steps along x and y (those that fit). `segment`: Welch segment length (None: frames/8,
+/// at least 32).
+pub fn field_stats(field: &WindField, segment: Option<usize>) -> FieldStats {
+    ensemble_stats(std::slice::from_ref(field), segment)
+}
+
+/// Statistics pooled over an ensemble of fields that share grid and parameters (different
+/// seeds): the mean, variance, spectra and co-coherence estimators average over every
+/// field's records. One realisation of a grid only holds as many independent samples of a
+/// low frequency as the grid spans coherence lengths at that frequency; an ensemble adds more.
+///
+/// # Panics
+/// If `fields` is empty or the fields' grids differ (a programming error, not input).
+pub fn ensemble_stats(fields: &[WindField], segment: Option<usize>) -> FieldStats {
+    let field = &fields[0];
+    assert!(fields.iter().all(|f| f.grid == field.grid), "ensemble fields must share a grid");
+    let g = &field.grid;
+    let m = g.frames;
+    let welch = Welch::new(segment.unwrap_or((m / 8).max(32)).min(m), g.dt);
+    let seg = welch.segment();
+    let freqs = welch.freqs();
+    let bands = log_bands(&freqs, 8.0);
+    let z = g.zs[0];
+    let u_ref = synth::reference_speed(&field.params, g);
+    let band_rows = |meas: &[f64], model: &[f64], keep: &dyn Fn(f64) -> bool| {
+        let mut rows = Vec::new();
+        for (i, b) in bands.iter().enumerate() {
+            let mv = b.iter().map(|&k| model[k]).sum::<f64>() / b.len() as f64;
+            if !keep(mv) {
+                continue;
+            }
+            let me = b.iter().map(|&k| meas[k]).sum::<f64>() / b.len() as f64;
+            let f = (freqs[b[0]] * freqs[b[b.len() - 1]]).sqrt();
+            rows.push(BandRow { f, measured: me, model: mv, low_biased: i < 2 });
+        }
+        rows
+    };
+    let mut components = Vec::new();
+    for comp in Component::ALL {
+        let per_field = g.nx() * g.ny();
+        let recs: Vec<Vec<f64>> = fields
+            .iter()
+            .flat_map(|f| (0..per_field).map(move |p| f.record(comp, 0, p / g.nx(), p % g.nx())))
+            .collect();
+        let n = (recs.len() * m) as f64;
+        let mean = recs.iter().flatten().sum::<f64>() / n;
+        let var = recs.iter().flatten().map(|x| (x - mean).powi(2)).sum::<f64>() / n;
+        let specs: Vec<Segments> = recs.par_iter().map(|r| welch.spectra(r)).collect();
+        let psd = welch.psd(&specs);
+        let p = &field.params;
+        let df = 1.0 / (m as f64 * g.dt);
+        let line = |j: usize| spectrum::one_sided(p, comp, j as f64 * df, z) * df;
+        let expected_auto = welch.expected(m, &line);
+        let spectrum = band_rows(&psd, &expected_auto, &|_| true);
+        let mut coherence = Vec::new();
+        for (axis, coords, n_axis) in [("x", &g.xs, g.nx()), ("y", &g.ys, g.ny())] {
+            for steps in [1usize, 2, 4] {
+                if steps >= n_axis {
+                    continue;
+                }
+                let metres = coords[steps] - coords[0];
+                let mut pairs = Vec::new();
+                for base in (0..fields.len()).map(|i| i * per_field) {
+                for iy in 0..g.ny() {
+                    for ix in 0..g.nx() {
+                        let (jx, jy) = if axis == "x" { (ix + steps, iy) } else { (ix, iy + steps) };
+                        if jx < g.nx() && jy < g.ny() {
+                            pairs.push((base + iy * g.nx() + ix, base + jy * g.nx() + jx));
+                        }
+                    }
+                }
+                }
+                let coh = welch.pooled_cocoherence(pairs.iter().map(|&(a, b)| (&specs[a], &specs[b])));
+                let d = if axis == "x" { [metres, 0.0, 0.0] } else { [0.0, metres, 0.0] };
+                let model = |f: f64| {
+                    let c = spectrum::coherence(p, comp, f, d, u_ref);
+                    if p.advection { c * (2.0 * PI * f * d[0] / u_ref).cos() } else { c }
+                };
+                let cross = welch.expected(m, &|j| line(j) * model(j as f64 * df));
+                let expected: Vec<f64> = cross.iter().zip(&expected_auto).map(|(c, a)| c / a).collect();
+                let bands = band_rows(&coh, &expected, &|mv| mv > 0.02);
+                coherence.push(CoherenceRow { axis: axis.into(), steps, metres, bands });
+            }
+        }
+        let cap = field.captured();
+        components.push(ComponentStats {
+            component: comp.name().into(),
+            sigma: var.sqrt(),
+            sigma_target: spectrum::discrete_variance(p, comp, z, m, g.dt).sqrt(),
+            sigma_model: cap.sigma_model[comp.index()],
+            mean,
+            spectrum,
+            coherence,
+        });
+    }
+    FieldStats { height: z, segment: seg, components }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn welch_of_a_sine_puts_its_power_at_its_frequency() {
+        let dt = 0.1;
+        let n = 4096;
+        let f0 = 1.25; // exactly on a bin of a 256-sample segment: 1.25 · 25.6 = 32
+        let amp: f64 = 2.0;
+        let rec: Vec<f64> = (0..n).map(|i| amp * (2.0 * PI * f0 * i as f64 * dt).sin()).collect();
+        let w = Welch::new(256, dt);
+        let psd = w.psd([&w.spectra(&rec)]);
+        let df = 1.0 / (256.0 * dt);
+        let total: f64 = psd.iter().sum::<f64>() * df;
+        assert!((total / (amp * amp / 2.0) - 1.0).abs() < 0.01, "power {total}");
+        let peak = psd.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).map(|p| p.0);
+        assert_eq!(peak, Some(32));
+    }
+
+    #[test]
+    fn cocoherence_of_identical_and_opposite_records() {
+        let rec: Vec<f64> = (0..1024).map(|i| ((i * 7919) % 101) as f64 - 50.0).collect();
+        let neg: Vec<f64> = rec.iter().map(|x| -x).collect();
+        let w = Welch::new(128, 1.0);
+        let (a, b) = (w.spectra(&rec), w.spectra(&neg));
+        let same = w.pooled_cocoherence([(&a, &a)]);
+        let opp = w.pooled_cocoherence([(&a, &b)]);
+        for k in 1..64 {
+            assert!((same[k] - 1.0).abs() < 1e-12 && (opp[k] + 1.0).abs() < 1e-12);
+        }
+    }
+}
