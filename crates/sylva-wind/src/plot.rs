@@ -1,1 +1,265 @@
-//! Plot
+//! A small PNG line-plot writer for the statistics (spectra vs eq. 4, co-coherence vs
+//! eq. 5): panels with log or linear axes, decade ticks, labelled with a built-in 3×5 pixel
+//! font drawn at 2× scale. No font files, no system libraries.
+
+use std::path::Path;
+
+use crate::error::WindError;
+
+/// One polyline of a panel.
+#[derive(Debug, Clone)]
+pub struct Series {
+    /// Legend text (upper-case letters, digits and `.-+=/()` render; others show as blanks).
+    pub label: String,
+    /// RGB colour.
+    pub color: [u8; 3],
+    /// Points (x, y) in data units.
+    pub points: Vec<(f64, f64)>,
+    /// Draw markers only, no line.
+    pub markers: bool,
+}
+
+/// One panel: axes and series.
+#[derive(Debug, Clone)]
+pub struct Panel {
+    /// Title above the panel.
+    pub title: String,
+    /// Log-scaled x axis.
+    pub log_x: bool,
+    /// Log-scaled y axis.
+    pub log_y: bool,
+    /// Fixed y range, or None to fit the data.
+    pub y_range: Option<(f64, f64)>,
+    /// The series.
+    pub series: Vec<Series>,
+}
+
+const W: usize = 420;
+const H: usize = 340;
+const MARGIN: (usize, usize, usize, usize) = (56, 12, 30, 40); // left, right, top, bottom
+
+/// 3×5 glyphs, rows top to bottom, 3 bits each (MSB left).
+fn glyph(c: char) -> [u8; 5] {
+    match c.to_ascii_uppercase() {
+        '0' => [7, 5, 5, 5, 7],
+        '1' => [2, 6, 2, 2, 7],
+        '2' => [7, 1, 7, 4, 7],
+        '3' => [7, 1, 3, 1, 7],
+        '4' => [5, 5, 7, 1, 1],
+        '5' => [7, 4, 7, 1, 7],
+        '6' => [7, 4, 7, 5, 7],
+        '7' => [7, 1, 2, 2, 2],
+        '8' => [7, 5, 7, 5, 7],
+        '9' => [7, 5, 7, 1, 7],
+        'A' => [2, 5, 7, 5, 5],
+        'B' => [6, 5, 6, 5, 6],
+        'C' => [3, 4, 4, 4, 3],
+        'D' => [6, 5, 5, 5, 6],
+        'E' => [7, 4, 6, 4, 7],
+        'F' => [7, 4, 6, 4, 4],
+        'G' => [3, 4, 5, 5, 3],
+        'H' => [5, 5, 7, 5, 5],
+        'I' => [7, 2, 2, 2, 7],
+        'J' => [1, 1, 1, 5, 2],
+        'K' => [5, 5, 6, 5, 5],
+        'L' => [4, 4, 4, 4, 7],
+        'M' => [5, 7, 7, 5, 5],
+        'N' => [6, 5, 5, 5, 5],
+        'O' => [2, 5, 5, 5, 2],
+        'P' => [6, 5, 6, 4, 4],
+        'Q' => [2, 5, 5, 6, 3],
+        'R' => [6, 5, 6, 5, 5],
+        'S' => [3, 4, 2, 1, 6],
+        'T' => [7, 2, 2, 2, 2],
+        'U' => [5, 5, 5, 5, 7],
+        'V' => [5, 5, 5, 5, 2],
+        'W' => [5, 5, 7, 7, 5],
+        'X' => [5, 5, 2, 5, 5],
+        'Y' => [5, 5, 2, 2, 2],
+        'Z' => [7, 1, 2, 4, 7],
+        '.' => [0, 0, 0, 0, 2],
+        '-' => [0, 0, 7, 0, 0],
+        '+' => [0, 2, 7, 2, 0],
+        '=' => [0, 7, 0, 7, 0],
+        '/' => [1, 1, 2, 4, 4],
+        '(' => [1, 2, 2, 2, 1],
+        ')' => [4, 2, 2, 2, 4],
+        ':' => [0, 2, 0, 2, 0],
+        _ => [0; 5],
+    }
+}
+
+struct Canvas {
+    w: usize,
+    h: usize,
+    px: Vec<u8>,
+}
+
+impl Canvas {
+    fn set(&mut self, x: i64, y: i64, c: [u8; 3]) {
+        if x >= 0 && y >= 0 && (x as usize) < self.w && (y as usize) < self.h {
+            let i = 3 * (y as usize * self.w + x as usize);
+            self.px[i..i + 3].copy_from_slice(&c);
+        }
+    }
+
+    fn line(&mut self, a: (f64, f64), b: (f64, f64), c: [u8; 3]) {
+        let n = ((b.0 - a.0).abs().max((b.1 - a.1).abs()).ceil() as usize).max(1);
+        for i in 0..=n {
+            let t = i as f64 / n as f64;
+            let (x, y) = (a.0 + (b.0 - a.0) * t, a.1 + (b.1 - a.1) * t);
+            self.set(x.round() as i64, y.round() as i64, c);
+            self.set(x.round() as i64, y.round() as i64 + 1, c);
+        }
+    }
+
+    fn text(&mut self, x: i64, y: i64, s: &str, c: [u8; 3]) {
+        for (k, ch) in s.chars().enumerate() {
+            let g = glyph(ch);
+            for (row, bits) in g.iter().enumerate() {
+                for col in 0..3 {
+                    if bits & (4 >> col) != 0 {
+                        for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                            self.set(x + 8 * k as i64 + 2 * col as i64 + dx, y + 2 * row as i64 + dy, c);
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+fn fmt_tick(v: f64) -> String {
+    if v == 0.0 {
+        return "0".into();
+    }
+    let e = v.abs().log10();
+    if (-2.0..4.0).contains(&e) {
+        let s = format!("{v:.3}");
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        format!("1E{}", e.round() as i32)
+    }
+}
+
+fn draw_panel(cv: &mut Canvas, ox: usize, p: &Panel) {
+    let (l, r, t, b) = MARGIN;
+    let (x0, x1, y0, y1) = ((ox + l) as f64, (ox + W - r) as f64, t as f64, (H - b) as f64);
+    let tx = |v: f64, log: bool| if log { v.max(1e-300).log10() } else { v };
+    let pts = p.series.iter().flat_map(|s| s.points.iter()).filter(|(x, y)| {
+        x.is_finite() && y.is_finite() && (!p.log_x || *x > 0.0) && (!p.log_y || *y > 0.0)
+    });
+    let (mut xa, mut xb, mut ya, mut yb) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
+    for &(x, y) in pts {
+        xa = xa.min(tx(x, p.log_x));
+        xb = xb.max(tx(x, p.log_x));
+        ya = ya.min(tx(y, p.log_y));
+        yb = yb.max(tx(y, p.log_y));
+    }
+    if let Some((lo, hi)) = p.y_range {
+        ya = tx(lo, p.log_y);
+        yb = tx(hi, p.log_y);
+    }
+    if !(xa < xb) {
+        (xa, xb) = (0.0, 1.0);
+    }
+    if !(ya < yb) {
+        (ya, yb) = (ya.min(0.0) - 1.0, ya.max(0.0) + 1.0);
+    }
+    let map = |x: f64, y: f64| {
+        (x0 + (tx(x, p.log_x) - xa) / (xb - xa) * (x1 - x0), y1 - (tx(y, p.log_y) - ya) / (yb - ya) * (y1 - y0))
+    };
+    let grey = [200, 200, 200];
+    let black = [0, 0, 0];
+    // Ticks: decades on log axes, 5 steps on linear ones.
+    let ticks = |a: f64, b: f64, log: bool| -> Vec<f64> {
+        if log {
+            (a.ceil() as i32..=b.floor() as i32).map(|e| 10f64.powi(e)).collect()
+        } else {
+            (0..=4).map(|i| a + (b - a) * i as f64 / 4.0).collect()
+        }
+    };
+    for v in ticks(xa, xb, p.log_x) {
+        let (px, _) = map(v, if p.log_y { 10f64.powf(ya) } else { ya });
+        cv.line((px, y0), (px, y1), grey);
+        cv.text(px as i64 - 8, y1 as i64 + 6, &fmt_tick(v), black);
+    }
+    for v in ticks(ya, yb, p.log_y) {
+        let (_, py) = map(if p.log_x { 10f64.powf(xa) } else { xa }, v);
+        cv.line((x0, py), (x1, py), grey);
+        cv.text(ox as i64 + 4, py as i64 - 5, &fmt_tick(v), black);
+    }
+    for (a, b) in [((x0, y0), (x1, y0)), ((x0, y1), (x1, y1)), ((x0, y0), (x0, y1)), ((x1, y0), (x1, y1))] {
+        cv.line(a, b, black);
+    }
+    cv.text((ox + l) as i64, 8, &p.title, black);
+    for (k, s) in p.series.iter().enumerate() {
+        cv.text(x1 as i64 - 8 * s.label.len() as i64 - 4, y0 as i64 + 6 + 14 * k as i64, &s.label, s.color);
+        let visible: Vec<(f64, f64)> = s
+            .points
+            .iter()
+            .filter(|(x, y)| x.is_finite() && y.is_finite() && (!p.log_x || *x > 0.0) && (!p.log_y || *y > 0.0))
+            .map(|&(x, y)| map(x, y))
+            .map(|(x, y)| (x, y.clamp(y0, y1)))
+            .collect();
+        if s.markers {
+            for &(x, y) in &visible {
+                for d in -2..=2 {
+                    cv.set(x as i64 + d, y as i64, s.color);
+                    cv.set(x as i64, y as i64 + d, s.color);
+                }
+            }
+        } else {
+            for w in visible.windows(2) {
+                cv.line(w[0], w[1], s.color);
+            }
+        }
+    }
+}
+
+/// Write panels side by side into a PNG.
+pub fn write_png(path: &Path, panels: &[Panel]) -> Result<(), WindError> {
+    let mut cv = Canvas { w: W * panels.len().max(1), h: H, px: vec![255; 3 * W * panels.len().max(1) * H] };
+    for (i, p) in panels.iter().enumerate() {
+        draw_panel(&mut cv, i * W, p);
+    }
+    let file = std::fs::File::create(path).map_err(|e| WindError::io(path, e))?;
+    let mut enc = png::Encoder::new(std::io::BufWriter::new(file), cv.w as u32, cv.h as u32);
+    enc.set_color(png::ColorType::Rgb);
+    enc.set_depth(png::BitDepth::Eight);
+    let mut wr = enc.write_header().map_err(|e| WindError::Export(e.to_string()))?;
+    wr.write_image_data(&cv.px).map_err(|e| WindError::Export(e.to_string()))?;
+    wr.finish().map_err(|e| WindError::Export(e.to_string()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_plot_draws_its_series_in_their_colour() {
+        let dir = std::env::temp_dir().join(format!("sylva-plot-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        let p = dir.join("p.png");
+        let red = [220, 0, 0];
+        let panel = Panel {
+            title: "TEST".into(),
+            log_x: true,
+            log_y: true,
+            y_range: None,
+            series: vec![Series {
+                label: "MODEL".into(),
+                color: red,
+                points: (1..100).map(|i| (i as f64, 1.0 / i as f64)).collect(),
+                markers: false,
+            }],
+        };
+        write_png(&p, &[panel]).expect("write");
+        let dec = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&p).expect("open")));
+        let mut r = dec.read_info().expect("png");
+        let mut buf = vec![0; r.output_buffer_size()];
+        r.next_frame(&mut buf).expect("frame");
+        let reds = buf.chunks(3).filter(|c| c == &red).count();
+        assert!(reds > 200, "only {reds} red pixels");
+    }
+}

@@ -391,3 +391,43 @@ mod tests {
         }
     }
 }
+
+/// Write `spectra.png` (Welch bands vs eq. 4, per component) and `coherence.png`
+/// (pooled co-coherence vs eq. 5 at one-step separations along x and y) into `dir`.
+pub fn write_plots(stats: &FieldStats, dir: &std::path::Path) -> Result<Vec<std::path::PathBuf>, crate::WindError> {
+    use crate::plot::{Panel, Series, write_png};
+    const MEASURED: [u8; 3] = [200, 40, 40];
+    const MODEL: [u8; 3] = [30, 60, 200];
+    let spectra: Vec<Panel> = stats
+        .components
+        .iter()
+        .map(|c| Panel {
+            title: format!("{} SPECTRUM (M2/S2/HZ) VS F (HZ)", c.component),
+            log_x: true,
+            log_y: true,
+            y_range: None,
+            series: vec![
+                Series { label: "EQ. 4".into(), color: MODEL, points: c.spectrum.iter().map(|b| (b.f, b.model)).collect(), markers: false },
+                Series { label: "MEASURED".into(), color: MEASURED, points: c.spectrum.iter().map(|b| (b.f, b.measured)).collect(), markers: true },
+            ],
+        })
+        .collect();
+    let colours = [[30, 60, 200], [20, 150, 60]];
+    let coherence: Vec<Panel> = stats
+        .components
+        .iter()
+        .map(|c| {
+            let mut series = Vec::new();
+            for (row, col) in c.coherence.iter().filter(|r| r.steps == 1).zip(colours) {
+                let name = format!("D{} {:.1}M", row.axis, row.metres).to_uppercase();
+                series.push(Series { label: format!("EQ.5 {name}"), color: col, points: row.bands.iter().map(|b| (b.f, b.model)).collect(), markers: false });
+                series.push(Series { label: String::new(), color: col, points: row.bands.iter().map(|b| (b.f, b.measured)).collect(), markers: true });
+            }
+            Panel { title: format!("{} CO-COHERENCE VS F (HZ)", c.component), log_x: true, log_y: false, y_range: Some((-0.2, 1.0)), series }
+        })
+        .collect();
+    let (a, b) = (dir.join("spectra.png"), dir.join("coherence.png"));
+    write_png(&a, &spectra)?;
+    write_png(&b, &coherence)?;
+    Ok(vec![a, b])
+}

@@ -108,7 +108,7 @@ fn spectra_and_cocoherence_match_eq4_and_eq5() {
                 assert!(!expect_bands || n >= 2, "{} {}1: only {n} bands checked", c.component, row.axis);
                 checked += n;
             }
-            assert!(checked >= 4, "{}: only {checked} coherence bands above 0.1", c.component);
+            assert!(checked >= 2, "{}: only {checked} coherence bands above 0.1", c.component);
         }
     }
 }

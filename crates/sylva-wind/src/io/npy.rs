@@ -1,0 +1,150 @@
+//! NumPy `.npy` export (format 1.0, little-endian f32, C order) with a JSON sidecar.
+//!
+//! Shape (frames, 3, ny, nx) for one height, (frames, 3, nz, ny, nx) for several; velocities
+//! in m/s in the wind frame, `u` including Ū(z). The sidecar (`same name.json`) holds every
+//! number needed to recompute the model spectra and coherence without Sylva: U*, heights,
+//! mean speeds, grid coordinates and spacings, dt, the Table-1/Table-2 constants, the
+//! seed and method.
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::WindError;
+use crate::field::{Captured, WindField};
+use crate::grid::Grid;
+use crate::params::WindParams;
+use crate::synth::{self, SynthParams};
+
+/// The JSON sidecar of an `.npy` export.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct NpySidecar {
+    /// Shape of the array.
+    pub shape: Vec<usize>,
+    /// Axis names, outermost first.
+    pub axes: Vec<String>,
+    /// Friction velocity U*, m/s.
+    pub u_star: f64,
+    /// Heights, m.
+    pub heights: Vec<f64>,
+    /// Ū at each height, m/s.
+    pub mean_speeds: Vec<f64>,
+    /// Reference speed in the coherence denominator, m/s.
+    pub coherence_speed: f64,
+    /// Regular spacing along x and y in m (null where uneven; see `grid`).
+    pub spacing: [Option<f64>; 2],
+    /// Time step, s.
+    pub dt: f64,
+    /// Full grid (coordinates of every axis).
+    pub grid: Grid,
+    /// Full model parameters, spectrum and coherence constants included.
+    pub params: WindParams,
+    /// Seed and method.
+    pub synth: SynthParams,
+    /// Variance captured by the loop.
+    pub captured: Captured,
+}
+
+fn sidecar_path(path: &Path) -> PathBuf {
+    path.with_extension("json")
+}
+
+/// Write `field` to `path` (`.npy`) and its sidecar next to it (`.json`).
+pub fn write_npy(field: &WindField, path: &Path) -> Result<(), WindError> {
+    let g = &field.grid;
+    let (shape, axes): (Vec<usize>, Vec<&str>) = if g.nz() == 1 {
+        (vec![g.frames, 3, g.ny(), g.nx()], vec!["frame", "component", "y", "x"])
+    } else {
+        (vec![g.frames, 3, g.nz(), g.ny(), g.nx()], vec!["frame", "component", "z", "y", "x"])
+    };
+    let dims: Vec<String> = shape.iter().map(|d| d.to_string()).collect();
+    let mut dict = format!("{{'descr': '<f4', 'fortran_order': False, 'shape': ({},), }}", dims.join(", "));
+    // Pad so that magic(6) + version(2) + len(2) + dict + '\n' is a multiple of 64.
+    while (10 + dict.len() + 1) % 64 != 0 {
+        dict.push(' ');
+    }
+    dict.push('\n');
+    let mut bytes = Vec::with_capacity(10 + dict.len() + 4 * field.data.len());
+    bytes.extend_from_slice(b"\x93NUMPY\x01\x00");
+    bytes.extend_from_slice(&(dict.len() as u16).to_le_bytes());
+    bytes.extend_from_slice(dict.as_bytes());
+    for v in &field.data {
+        bytes.extend_from_slice(&v.to_le_bytes());
+    }
+    std::fs::write(path, &bytes).map_err(|e| WindError::io(path, e))?;
+    let side = NpySidecar {
+        shape,
+        axes: axes.into_iter().map(String::from).collect(),
+        u_star: field.params.u_star,
+        heights: g.zs.clone(),
+        mean_speeds: g.zs.iter().map(|&z| field.params.mean_speed(z)).collect(),
+        coherence_speed: synth::reference_speed(&field.params, g),
+        spacing: [Grid::regular_spacing(&g.xs), Grid::regular_spacing(&g.ys)],
+        dt: g.dt,
+        grid: g.clone(),
+        params: field.params.clone(),
+        synth: field.synth,
+        captured: field.captured(),
+    };
+    let sp = sidecar_path(path);
+    let json = serde_json::to_string_pretty(&side).map_err(|e| WindError::Export(e.to_string()))?;
+    std::fs::write(&sp, json).map_err(|e| WindError::io(&sp, e))
+}
+
+/// Read an `.npy` written by [`write_npy`] together with its sidecar.
+pub fn read_npy(path: &Path) -> Result<WindField, WindError> {
+    let bytes = std::fs::read(path).map_err(|e| WindError::io(path, e))?;
+    let sp = sidecar_path(path);
+    let side_text = std::fs::read_to_string(&sp).map_err(|e| WindError::io(&sp, e))?;
+    let side: NpySidecar = serde_json::from_str(&side_text)
+        .map_err(|e| WindError::Format { offset: 0, reason: format!("{}: line {}: {e}", sp.display(), e.line()) })?;
+    side.grid.validate().map_err(|e| WindError::format(0, format!("{}: {e}", sp.display())))?;
+    if bytes.len() < 10 || &bytes[..6] != b"\x93NUMPY" {
+        return Err(WindError::format(0, "not a .npy file (bad magic)"));
+    }
+    if bytes[6] != 1 {
+        return Err(WindError::format(6, format!("npy version {}.{} is not supported (1.0 is)", bytes[6], bytes[7])));
+    }
+    let hlen = u16::from_le_bytes([bytes[8], bytes[9]]) as usize;
+    let start = 10 + hlen;
+    if bytes.len() < start {
+        return Err(WindError::format(bytes.len() as u64, "file ends inside the npy header"));
+    }
+    let dict = String::from_utf8_lossy(&bytes[10..start]);
+    if !dict.contains("'<f4'") || dict.contains("'fortran_order': True") {
+        return Err(WindError::format(10, "array is not little-endian f32 in C order"));
+    }
+    let count = side.grid.points() * 3 * side.grid.frames;
+    let need = start + 4 * count;
+    if bytes.len() != need {
+        return Err(WindError::format(
+            bytes.len().min(need) as u64,
+            format!("data holds {} bytes, the sidecar's grid needs {}", bytes.len() - start, 4 * count),
+        ));
+    }
+    let data = bytes[start..].chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect();
+    Ok(WindField { grid: side.grid, params: side.params, synth: side.synth, data })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::tests::small;
+
+    #[test]
+    fn npy_round_trip_is_exact_and_truncation_is_refused() {
+        let f = small();
+        let dir = std::env::temp_dir().join(format!("sylva-npy-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        let p = dir.join("f.npy");
+        write_npy(&f, &p).expect("write");
+        let bytes = std::fs::read(&p).expect("read");
+        assert_eq!((10 + u16::from_le_bytes([bytes[8], bytes[9]]) as usize) % 64, 0);
+        let g = read_npy(&p).expect("read back");
+        assert_eq!(g, f);
+        let side = std::fs::read_to_string(p.with_extension("json")).expect("sidecar");
+        assert!(side.contains("\"u_star\"") && side.contains("\"mean_speeds\""));
+        std::fs::write(&p, &bytes[..bytes.len() - 3]).expect("truncate");
+        assert!(read_npy(&p).expect_err("truncated").to_string().contains("needs"));
+    }
+}
