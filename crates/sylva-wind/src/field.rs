@@ -68,7 +68,9 @@ impl WindField {
 
     /// The record of one component at one grid point (fluctuation plus mean), length `frames`.
     pub fn record(&self, c: Component, iz: usize, iy: usize, ix: usize) -> Vec<f64> {
-        (0..self.grid.frames).map(|t| self.data[self.index(t, c.index(), iz, iy, ix)] as f64).collect()
+        (0..self.grid.frames)
+            .map(|t| self.data[self.index(t, c.index(), iz, iy, ix)] as f64)
+            .collect()
     }
 
     /// What the loop captures of the model variance.
@@ -185,7 +187,8 @@ impl FieldView<'_> {
         for (dz, wz) in [(0, 1.0 - fz), (1, fz)] {
             for (dy, wy) in [(0, 1.0 - fy), (1, fy)] {
                 for (dx, wx) in [(0, 1.0 - fx), (1, fx)] {
-                    let (x, y, z) = ((ix + dx).min(nx - 1), (iy + dy).min(ny - 1), (iz + dz).min(nz - 1));
+                    let (x, y, z) =
+                        ((ix + dx).min(nx - 1), (iy + dy).min(ny - 1), (iz + dz).min(nz - 1));
                     corners[n] = ((z * ny + y) * nx + x, wx * wy * wz);
                     n += 1;
                 }
@@ -228,7 +231,9 @@ impl<'a> MipPyramid<'a> {
         let (mut xs, mut ys) = (g.xs.clone(), g.ys.clone());
         while xs.len() > 1 || ys.len() > 1 {
             let src: &[f32] = coarse.last().map_or(&field.data, |l| &l.data);
-            let half = |a: &[f64]| -> Vec<f64> { a.chunks(2).map(|c| c.iter().sum::<f64>() / c.len() as f64).collect() };
+            let half = |a: &[f64]| -> Vec<f64> {
+                a.chunks(2).map(|c| c.iter().sum::<f64>() / c.len() as f64).collect()
+            };
             let (nxs, nys) = (half(&xs), half(&ys));
             let (nx, ny, nz) = (xs.len(), ys.len(), g.nz());
             let (mx, my) = (nxs.len(), nys.len());
@@ -310,7 +315,10 @@ mod tests {
             let h = 1e-5;
             let d_left = (v.sample(p, t0)[0] - v.sample(p, t0 - h)[0]) / h;
             let d_right = (v.sample(p, t0 + h)[0] - v.sample(p, t0)[0]) / h;
-            assert!((d_left - d_right).abs() < 1e-2 * (1.0 + d_left.abs()), "{d_left} vs {d_right}");
+            assert!(
+                (d_left - d_right).abs() < 1e-2 * (1.0 + d_left.abs()),
+                "{d_left} vs {d_right}"
+            );
         }
     }
 
@@ -358,7 +366,9 @@ mod tests {
         assert!((got - want).abs() < 1e-4, "{got} vs {want}");
         // Averaging keeps the mean and lowers the variance.
         let var = |lv: FieldView<'_>| {
-            let s: Vec<f64> = (0..64).map(|t| lv.sample_wind_frame([10.0, 7.0, 20.0], t as f64 * 0.1)[1]).collect();
+            let s: Vec<f64> = (0..64)
+                .map(|t| lv.sample_wind_frame([10.0, 7.0, 20.0], t as f64 * 0.1)[1])
+                .collect();
             let m = s.iter().sum::<f64>() / 64.0;
             s.iter().map(|x| (x - m).powi(2)).sum::<f64>() / 64.0
         };

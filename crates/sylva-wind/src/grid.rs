@@ -88,7 +88,7 @@ impl Grid {
         if let Some(z) = self.zs.iter().find(|z| **z <= 0.0) {
             return Err(ParamError::new("grid.zs", *z, "heights > 0 m"));
         }
-        if self.frames < 4 || self.frames % 2 != 0 {
+        if self.frames < 4 || !self.frames.is_multiple_of(2) {
             return Err(ParamError::new("grid.frames", self.frames as f64, "an even number ≥ 4"));
         }
         if !(self.dt > 0.0 && self.dt.is_finite()) {

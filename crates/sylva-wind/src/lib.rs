@@ -32,6 +32,6 @@ pub use error::{ParamError, WindError};
 pub use field::{Captured, FieldView, MipPyramid, WindField, drag};
 pub use grid::Grid;
 pub use params::{
-    CoherenceSpeed, Component, Preset, Profile, SpectrumModel, WindParams, AIR_DENSITY, KARMAN,
+    AIR_DENSITY, CoherenceSpeed, Component, KARMAN, Preset, Profile, SpectrumModel, WindParams,
 };
 pub use synth::{Method, SynthParams};

@@ -232,7 +232,12 @@ impl Default for WindParams {
     }
 }
 
-fn check(ok: bool, field: &'static str, value: f64, expected: &'static str) -> Result<(), ParamError> {
+fn check(
+    ok: bool,
+    field: &'static str,
+    value: f64,
+    expected: &'static str,
+) -> Result<(), ParamError> {
     if ok && value.is_finite() { Ok(()) } else { Err(ParamError::new(field, value, expected)) }
 }
 

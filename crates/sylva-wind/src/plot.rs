@@ -120,7 +120,11 @@ impl Canvas {
                 for col in 0..3 {
                     if bits & (4 >> col) != 0 {
                         for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
-                            self.set(x + 8 * k as i64 + 2 * col as i64 + dx, y + 2 * row as i64 + dy, c);
+                            self.set(
+                                x + 8 * k as i64 + 2 * col as i64 + dx,
+                                y + 2 * row as i64 + dy,
+                                c,
+                            );
                         }
                     }
                 }
@@ -149,7 +153,8 @@ fn draw_panel(cv: &mut Canvas, ox: usize, p: &Panel) {
     let pts = p.series.iter().flat_map(|s| s.points.iter()).filter(|(x, y)| {
         x.is_finite() && y.is_finite() && (!p.log_x || *x > 0.0) && (!p.log_y || *y > 0.0)
     });
-    let (mut xa, mut xb, mut ya, mut yb) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
+    let (mut xa, mut xb, mut ya, mut yb) =
+        (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
     for &(x, y) in pts {
         xa = xa.min(tx(x, p.log_x));
         xb = xb.max(tx(x, p.log_x));
@@ -160,14 +165,17 @@ fn draw_panel(cv: &mut Canvas, ox: usize, p: &Panel) {
         ya = tx(lo, p.log_y);
         yb = tx(hi, p.log_y);
     }
-    if !(xa < xb) {
+    if xa.partial_cmp(&xb) != Some(std::cmp::Ordering::Less) {
         (xa, xb) = (0.0, 1.0);
     }
-    if !(ya < yb) {
+    if ya.partial_cmp(&yb) != Some(std::cmp::Ordering::Less) {
         (ya, yb) = (ya.min(0.0) - 1.0, ya.max(0.0) + 1.0);
     }
     let map = |x: f64, y: f64| {
-        (x0 + (tx(x, p.log_x) - xa) / (xb - xa) * (x1 - x0), y1 - (tx(y, p.log_y) - ya) / (yb - ya) * (y1 - y0))
+        (
+            x0 + (tx(x, p.log_x) - xa) / (xb - xa) * (x1 - x0),
+            y1 - (tx(y, p.log_y) - ya) / (yb - ya) * (y1 - y0),
+        )
     };
     let grey = [200, 200, 200];
     let black = [0, 0, 0];
@@ -189,16 +197,25 @@ fn draw_panel(cv: &mut Canvas, ox: usize, p: &Panel) {
         cv.line((x0, py), (x1, py), grey);
         cv.text(ox as i64 + 4, py as i64 - 5, &fmt_tick(v), black);
     }
-    for (a, b) in [((x0, y0), (x1, y0)), ((x0, y1), (x1, y1)), ((x0, y0), (x0, y1)), ((x1, y0), (x1, y1))] {
+    for (a, b) in
+        [((x0, y0), (x1, y0)), ((x0, y1), (x1, y1)), ((x0, y0), (x0, y1)), ((x1, y0), (x1, y1))]
+    {
         cv.line(a, b, black);
     }
     cv.text((ox + l) as i64, 8, &p.title, black);
     for (k, s) in p.series.iter().enumerate() {
-        cv.text(x1 as i64 - 8 * s.label.len() as i64 - 4, y0 as i64 + 6 + 14 * k as i64, &s.label, s.color);
+        cv.text(
+            x1 as i64 - 8 * s.label.len() as i64 - 4,
+            y0 as i64 + 6 + 14 * k as i64,
+            &s.label,
+            s.color,
+        );
         let visible: Vec<(f64, f64)> = s
             .points
             .iter()
-            .filter(|(x, y)| x.is_finite() && y.is_finite() && (!p.log_x || *x > 0.0) && (!p.log_y || *y > 0.0))
+            .filter(|(x, y)| {
+                x.is_finite() && y.is_finite() && (!p.log_x || *x > 0.0) && (!p.log_y || *y > 0.0)
+            })
             .map(|&(x, y)| map(x, y))
             .map(|(x, y)| (x, y.clamp(y0, y1)))
             .collect();
@@ -219,7 +236,8 @@ fn draw_panel(cv: &mut Canvas, ox: usize, p: &Panel) {
 
 /// Write panels side by side into a PNG.
 pub fn write_png(path: &Path, panels: &[Panel]) -> Result<(), WindError> {
-    let mut cv = Canvas { w: W * panels.len().max(1), h: H, px: vec![255; 3 * W * panels.len().max(1) * H] };
+    let mut cv =
+        Canvas { w: W * panels.len().max(1), h: H, px: vec![255; 3 * W * panels.len().max(1) * H] };
     for (i, p) in panels.iter().enumerate() {
         draw_panel(&mut cv, i * W, p);
     }
@@ -255,7 +273,8 @@ mod tests {
             }],
         };
         write_png(&p, &[panel]).expect("write");
-        let dec = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&p).expect("open")));
+        let dec =
+            png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&p).expect("open")));
         let mut r = dec.read_info().expect("png");
         let mut buf = vec![0; r.output_buffer_size()];
         r.next_frame(&mut buf).expect("frame");

@@ -77,13 +77,25 @@ pub fn model_variance(params: &WindParams, comp: Component) -> f64 {
 }
 
 /// Variance Σ_j 2 S0(ω_j) Δω actually present in a loop of `frames` frames at step `dt`.
-pub fn discrete_variance(params: &WindParams, comp: Component, z: f64, frames: usize, dt: f64) -> f64 {
+pub fn discrete_variance(
+    params: &WindParams,
+    comp: Component,
+    z: f64,
+    frames: usize,
+    dt: f64,
+) -> f64 {
     let dw = 2.0 * PI / (frames as f64 * dt);
     (1..frames / 2).map(|j| 2.0 * two_sided(params, comp, j as f64 * dw, z) * dw).sum()
 }
 
 /// Fraction of the model variance σ² that a loop of `frames` frames at `dt` captures.
-pub fn captured_fraction(params: &WindParams, comp: Component, z: f64, frames: usize, dt: f64) -> f64 {
+pub fn captured_fraction(
+    params: &WindParams,
+    comp: Component,
+    z: f64,
+    frames: usize,
+    dt: f64,
+) -> f64 {
     discrete_variance(params, comp, z, frames, dt) / model_variance(params, comp)
 }
 

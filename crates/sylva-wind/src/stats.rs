@@ -98,7 +98,11 @@ impl Welch {
         let n = self.segment as f64;
         let d = |x: f64| -> Complex<f64> {
             let s = (PI * x / n).sin();
-            let mag = if s.abs() < 1e-12 { n * (PI * x).cos().signum() * (PI * x / n).cos().signum() } else { (PI * x).sin() / s };
+            let mag = if s.abs() < 1e-12 {
+                n * (PI * x).cos().signum() * (PI * x / n).cos().signum()
+            } else {
+                (PI * x).sin() / s
+            };
             Complex::from_polar(1.0, -PI * x * (n - 1.0) / n) * mag
         };
         (d(delta) * 0.5 - d(delta - 1.0) * 0.25 - d(delta + 1.0) * 0.25).norm_sqr()
@@ -112,7 +116,8 @@ impl Welch {
     pub fn expected(&self, m: usize, line_power: &dyn Fn(usize) -> f64) -> Vec<f64> {
         let n = self.segment;
         let norm = self.dt / self.window.iter().map(|w| w * w).sum::<f64>();
-        let powers: Vec<f64> = (0..m / 2).map(|j| if j == 0 { 0.0 } else { line_power(j) }).collect();
+        let powers: Vec<f64> =
+            (0..m / 2).map(|j| if j == 0 { 0.0 } else { line_power(j) }).collect();
         // The Hann gain falls as δ⁻⁶: beyond 48 bins a line adds < 1e-10 of its power.
         const REACH: f64 = 48.0;
         let per_bin = m as f64 / n as f64;
@@ -130,7 +135,9 @@ impl Welch {
                     .sum();
                 // Mirror image of the negative frequencies, near DC only.
                 let hi_img = (((REACH - kf).max(0.0) * per_bin).ceil() as usize).min(powers.len());
-                sum += (1..hi_img).map(|j| 0.5 * powers[j] * self.hann_gain(kf + j as f64 / per_bin)).sum::<f64>();
+                sum += (1..hi_img)
+                    .map(|j| 0.5 * powers[j] * self.hann_gain(kf + j as f64 / per_bin))
+                    .sum::<f64>();
                 one_sided * norm * sum
             })
             .collect()
@@ -156,7 +163,10 @@ impl Welch {
     }
 
     /// Pooled co-coherence Σ Re S_ab / √(Σ S_aa Σ S_bb) over all pairs' segments.
-    pub fn pooled_cocoherence<'a>(&self, pairs: impl IntoIterator<Item = (&'a Segments, &'a Segments)>) -> Vec<f64> {
+    pub fn pooled_cocoherence<'a>(
+        &self,
+        pairs: impl IntoIterator<Item = (&'a Segments, &'a Segments)>,
+    ) -> Vec<f64> {
         let nb = self.segment / 2 + 1;
         let (mut sab, mut saa, mut sbb) = (vec![0.0; nb], vec![0.0; nb], vec![0.0; nb]);
         for (sa, sb) in pairs {
@@ -168,7 +178,9 @@ impl Welch {
                 }
             }
         }
-        (0..nb).map(|k| if saa[k] > 0.0 { sab[k] / (saa[k] * sbb[k]).sqrt() } else { 0.0 }).collect()
+        (0..nb)
+            .map(|k| if saa[k] > 0.0 { sab[k] / (saa[k] * sbb[k]).sqrt() } else { 0.0 })
+            .collect()
     }
 }
 
@@ -225,7 +237,11 @@ impl CoherenceRow {
     /// Largest |measured − model| over bands where the model exceeds `above`, the two
     /// lowest (leakage-biased) bands excluded.
     pub fn max_abs_error(&self, above: f64) -> f64 {
-        self.bands.iter().filter(|b| b.model > above && !b.low_biased).map(|b| (b.measured - b.model).abs()).fold(0.0, f64::max)
+        self.bands
+            .iter()
+            .filter(|b| b.model > above && !b.low_biased)
+            .map(|b| (b.measured - b.model).abs())
+            .fold(0.0, f64::max)
     }
 }
 
@@ -323,23 +339,26 @@ pub fn ensemble_stats(fields: &[WindField], segment: Option<usize>) -> FieldStat
                 let metres = coords[steps] - coords[0];
                 let mut pairs = Vec::new();
                 for base in (0..fields.len()).map(|i| i * per_field) {
-                for iy in 0..g.ny() {
-                    for ix in 0..g.nx() {
-                        let (jx, jy) = if axis == "x" { (ix + steps, iy) } else { (ix, iy + steps) };
-                        if jx < g.nx() && jy < g.ny() {
-                            pairs.push((base + iy * g.nx() + ix, base + jy * g.nx() + jx));
+                    for iy in 0..g.ny() {
+                        for ix in 0..g.nx() {
+                            let (jx, jy) =
+                                if axis == "x" { (ix + steps, iy) } else { (ix, iy + steps) };
+                            if jx < g.nx() && jy < g.ny() {
+                                pairs.push((base + iy * g.nx() + ix, base + jy * g.nx() + jx));
+                            }
                         }
                     }
                 }
-                }
-                let coh = welch.pooled_cocoherence(pairs.iter().map(|&(a, b)| (&specs[a], &specs[b])));
+                let coh =
+                    welch.pooled_cocoherence(pairs.iter().map(|&(a, b)| (&specs[a], &specs[b])));
                 let d = if axis == "x" { [metres, 0.0, 0.0] } else { [0.0, metres, 0.0] };
                 let model = |f: f64| {
                     let c = spectrum::coherence(p, comp, f, d, u_ref);
                     if p.advection { c * (2.0 * PI * f * d[0] / u_ref).cos() } else { c }
                 };
                 let cross = welch.expected(m, &|j| line(j) * model(j as f64 * df));
-                let expected: Vec<f64> = cross.iter().zip(&expected_auto).map(|(c, a)| c / a).collect();
+                let expected: Vec<f64> =
+                    cross.iter().zip(&expected_auto).map(|(c, a)| c / a).collect();
                 let bands = band_rows(&coh, &expected, &|mv| mv > 0.02);
                 coherence.push(CoherenceRow { axis: axis.into(), steps, metres, bands });
             }
@@ -356,6 +375,75 @@ pub fn ensemble_stats(fields: &[WindField], segment: Option<usize>) -> FieldStat
         });
     }
     FieldStats { height: z, segment: seg, components }
+}
+
+/// Write `spectra.png` (Welch bands vs eq. 4, per component) and `coherence.png`
+/// (pooled co-coherence vs eq. 5 at one-step separations along x and y) into `dir`.
+pub fn write_plots(
+    stats: &FieldStats,
+    dir: &std::path::Path,
+) -> Result<Vec<std::path::PathBuf>, crate::WindError> {
+    use crate::plot::{Panel, Series, write_png};
+    const MEASURED: [u8; 3] = [200, 40, 40];
+    const MODEL: [u8; 3] = [30, 60, 200];
+    let spectra: Vec<Panel> = stats
+        .components
+        .iter()
+        .map(|c| Panel {
+            title: format!("{} SPECTRUM (M2/S2/HZ) VS F (HZ)", c.component),
+            log_x: true,
+            log_y: true,
+            y_range: None,
+            series: vec![
+                Series {
+                    label: "EQ. 4".into(),
+                    color: MODEL,
+                    points: c.spectrum.iter().map(|b| (b.f, b.model)).collect(),
+                    markers: false,
+                },
+                Series {
+                    label: "MEASURED".into(),
+                    color: MEASURED,
+                    points: c.spectrum.iter().map(|b| (b.f, b.measured)).collect(),
+                    markers: true,
+                },
+            ],
+        })
+        .collect();
+    let colours = [[30, 60, 200], [20, 150, 60]];
+    let coherence: Vec<Panel> = stats
+        .components
+        .iter()
+        .map(|c| {
+            let mut series = Vec::new();
+            for (row, col) in c.coherence.iter().filter(|r| r.steps == 1).zip(colours) {
+                let name = format!("D{} {:.1}M", row.axis, row.metres).to_uppercase();
+                series.push(Series {
+                    label: format!("EQ.5 {name}"),
+                    color: col,
+                    points: row.bands.iter().map(|b| (b.f, b.model)).collect(),
+                    markers: false,
+                });
+                series.push(Series {
+                    label: String::new(),
+                    color: col,
+                    points: row.bands.iter().map(|b| (b.f, b.measured)).collect(),
+                    markers: true,
+                });
+            }
+            Panel {
+                title: format!("{} CO-COHERENCE VS F (HZ)", c.component),
+                log_x: true,
+                log_y: false,
+                y_range: Some((-0.2, 1.0)),
+                series,
+            }
+        })
+        .collect();
+    let (a, b) = (dir.join("spectra.png"), dir.join("coherence.png"));
+    write_png(&a, &spectra)?;
+    write_png(&b, &coherence)?;
+    Ok(vec![a, b])
 }
 
 #[cfg(test)]
@@ -390,44 +478,4 @@ mod tests {
             assert!((same[k] - 1.0).abs() < 1e-12 && (opp[k] + 1.0).abs() < 1e-12);
         }
     }
-}
-
-/// Write `spectra.png` (Welch bands vs eq. 4, per component) and `coherence.png`
-/// (pooled co-coherence vs eq. 5 at one-step separations along x and y) into `dir`.
-pub fn write_plots(stats: &FieldStats, dir: &std::path::Path) -> Result<Vec<std::path::PathBuf>, crate::WindError> {
-    use crate::plot::{Panel, Series, write_png};
-    const MEASURED: [u8; 3] = [200, 40, 40];
-    const MODEL: [u8; 3] = [30, 60, 200];
-    let spectra: Vec<Panel> = stats
-        .components
-        .iter()
-        .map(|c| Panel {
-            title: format!("{} SPECTRUM (M2/S2/HZ) VS F (HZ)", c.component),
-            log_x: true,
-            log_y: true,
-            y_range: None,
-            series: vec![
-                Series { label: "EQ. 4".into(), color: MODEL, points: c.spectrum.iter().map(|b| (b.f, b.model)).collect(), markers: false },
-                Series { label: "MEASURED".into(), color: MEASURED, points: c.spectrum.iter().map(|b| (b.f, b.measured)).collect(), markers: true },
-            ],
-        })
-        .collect();
-    let colours = [[30, 60, 200], [20, 150, 60]];
-    let coherence: Vec<Panel> = stats
-        .components
-        .iter()
-        .map(|c| {
-            let mut series = Vec::new();
-            for (row, col) in c.coherence.iter().filter(|r| r.steps == 1).zip(colours) {
-                let name = format!("D{} {:.1}M", row.axis, row.metres).to_uppercase();
-                series.push(Series { label: format!("EQ.5 {name}"), color: col, points: row.bands.iter().map(|b| (b.f, b.model)).collect(), markers: false });
-                series.push(Series { label: String::new(), color: col, points: row.bands.iter().map(|b| (b.f, b.measured)).collect(), markers: true });
-            }
-            Panel { title: format!("{} CO-COHERENCE VS F (HZ)", c.component), log_x: true, log_y: false, y_range: Some((-0.2, 1.0)), series }
-        })
-        .collect();
-    let (a, b) = (dir.join("spectra.png"), dir.join("coherence.png"));
-    write_png(&a, &spectra)?;
-    write_png(&b, &coherence)?;
-    Ok(vec![a, b])
 }

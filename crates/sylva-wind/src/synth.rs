@@ -220,7 +220,8 @@ fn synth_component<T: Sample>(
             let gaps = |axis: &[f64], c: f64| -> Vec<(Vec<f64>, Vec<f64>)> {
                 axis.windows(2).map(|w| lines.ar1(c, w[1] - w[0])).collect()
             };
-            let (gx, gy, gz) = (gaps(&grid.xs, cc.cx), gaps(&grid.ys, cc.cy), gaps(&grid.zs, cc.cz));
+            let (gx, gy, gz) =
+                (gaps(&grid.xs, cc.cx), gaps(&grid.ys, cc.cy), gaps(&grid.zs, cc.cz));
             let bx = (BLOCK_BYTES / (col_len * 16).max(1)).clamp(1, nx);
             let mut block = vec![C64::default(); bx * col_len];
             let mut carry = vec![C64::default(); col_len];
@@ -265,9 +266,10 @@ fn synth_component<T: Sample>(
                     let bxi = ix - x0;
                     let (before, cur) = blk.split_at_mut(bxi * col_len);
                     let prev = if bxi == 0 { &carry[..] } else { &before[(bxi - 1) * col_len..] };
-                    cur[..col_len].par_chunks_mut(nc).zip(prev.par_chunks(nc)).for_each(
-                        |(c, p)| ar1_step(p, c, rho, s),
-                    );
+                    cur[..col_len]
+                        .par_chunks_mut(nc)
+                        .zip(prev.par_chunks(nc))
+                        .for_each(|(c, p)| ar1_step(p, c, rho, s));
                 }
                 carry.copy_from_slice(&blk[(x1 - x0 - 1) * col_len..]);
                 let adv = params.advection;
@@ -298,7 +300,8 @@ fn synth_component<T: Sample>(
                     let sa = lines.scale[(a / (nx * ny)) * nc + j];
                     for b in 0..=a {
                         let sb = lines.scale[(b / (nx * ny)) * nc + j];
-                        let d = [pts[a][0] - pts[b][0], pts[a][1] - pts[b][1], pts[a][2] - pts[b][2]];
+                        let d =
+                            [pts[a][0] - pts[b][0], pts[a][1] - pts[b][1], pts[a][2] - pts[b][2]];
                         let um = match params.coherence_speed {
                             CoherenceSpeed::Reference => lines.u_ref,
                             CoherenceSpeed::PairMean => 0.5 * (pts[a][3] + pts[b][3]),

@@ -105,7 +105,12 @@ fn spectra_and_cocoherence_match_eq4_and_eq5() {
                 // (With advection the x co-coherence oscillates as cos(ωΔx/U) and is mostly
                 // below 0.1 at 24 m; it is still held to 0.03 wherever it is above.)
                 let expect_bands = row.steps == 1 && (!advection || row.axis == "y");
-                assert!(!expect_bands || n >= 2, "{} {}1: only {n} bands checked", c.component, row.axis);
+                assert!(
+                    !expect_bands || n >= 2,
+                    "{} {}1: only {n} bands checked",
+                    c.component,
+                    row.axis
+                );
                 checked += n;
             }
             assert!(checked >= 2, "{}: only {checked} coherence bands above 0.1", c.component);
@@ -144,7 +149,8 @@ fn a_wrong_spectrum_scaling_would_be_caught() {
     // The statistics see a field whose fluctuations were inflated by √(4π) (the
     // one-sided/two-sided pitfall): the variance check must fail on it.
     let mut f = generate(&sparse_grid(), &WindParams::default(), 4);
-    let means: Vec<f64> = (0..3).map(|c| if c == 0 { f.params.mean_speed(20.0) } else { 0.0 }).collect();
+    let means: Vec<f64> =
+        (0..3).map(|c| if c == 0 { f.params.mean_speed(20.0) } else { 0.0 }).collect();
     let n = f.grid.points();
     for (i, v) in f.data.iter_mut().enumerate() {
         let c = (i / n) % 3;
@@ -159,9 +165,14 @@ fn generate_with_threads(threads: usize, seed: u64) -> Vec<f32> {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("thread pool");
     let grid = Grid::regular(20, 12, 3.0, &[15.0, 25.0], 256, 0.1);
     pool.install(|| {
-        WindField::generate(&WindParams::default(), &grid, SynthParams { seed, method: Method::Separable }, &|_| {})
-            .expect("valid setup")
-            .data
+        WindField::generate(
+            &WindParams::default(),
+            &grid,
+            SynthParams { seed, method: Method::Separable },
+            &|_| {},
+        )
+        .expect("valid setup")
+        .data
     })
 }
 
@@ -185,7 +196,8 @@ fn the_loop_is_seamless() {
     };
     for c in 0..3 {
         let typical: f64 =
-            (0..g.frames - 1).map(|t| rms_step(frame(t, c), frame(t + 1, c))).sum::<f64>() / (g.frames - 1) as f64;
+            (0..g.frames - 1).map(|t| rms_step(frame(t, c), frame(t + 1, c))).sum::<f64>()
+                / (g.frames - 1) as f64;
         let seam = rms_step(frame(g.frames - 1, c), frame(0, c));
         assert!(seam < 1.5 * typical, "component {c}: seam step {seam} vs typical {typical}");
         // A cut that is not a period boundary jumps far more: the check can fail.

@@ -17,14 +17,19 @@ use crate::grid::Grid;
 pub fn write_bts(field: &WindField, x_index: usize, path: &Path) -> Result<(), WindError> {
     let g = &field.grid;
     if x_index >= g.nx() {
-        return Err(WindError::Export(format!("x index {x_index} is outside the grid (nx = {})", g.nx())));
+        return Err(WindError::Export(format!(
+            "x index {x_index} is outside the grid (nx = {})",
+            g.nx()
+        )));
     }
     let dy = Grid::regular_spacing(&g.ys)
         .ok_or_else(|| WindError::Export("TurbSim needs evenly spaced y coordinates".into()))?;
     let dz = Grid::regular_spacing(&g.zs)
         .ok_or_else(|| WindError::Export("TurbSim needs evenly spaced heights".into()))?;
     let (nz, ny) = (g.nz(), g.ny());
-    let at = |t: usize, c: usize, iz: usize, iy: usize| field.data[field.index(t, c, iz, iy, x_index)] as f64;
+    let at = |t: usize, c: usize, iz: usize, iy: usize| {
+        field.data[field.index(t, c, iz, iy, x_index)] as f64
+    };
     // Scale each component over ±32767 counts, as TurbSim does (count = slope·v + offset).
     let mut slope = [0.0f64; 3];
     let mut offset = [0.0f64; 3];
@@ -85,8 +90,10 @@ mod tests {
 
     /// An independent reader following the published layout.
     fn read(bytes: &[u8]) -> (Vec<i32>, Vec<f32>, Vec<[f64; 3]>) {
-        let i32_at = |o: usize| i32::from_le_bytes([bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]]);
-        let f32_at = |o: usize| f32::from_le_bytes([bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]]);
+        let i32_at =
+            |o: usize| i32::from_le_bytes([bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]]);
+        let f32_at =
+            |o: usize| f32::from_le_bytes([bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]]);
         let ints: Vec<i32> = (0..4).map(|k| i32_at(2 + 4 * k)).collect();
         let floats: Vec<f32> = (0..12).map(|k| f32_at(18 + 4 * k)).collect();
         let nchar = i32_at(66) as usize;

@@ -137,7 +137,10 @@ pub fn parse_swf(bytes: &[u8]) -> Result<WindField, WindError> {
     }
     let hend = 16 + hlen as usize;
     if bytes.len() < hend + 4 {
-        return Err(WindError::format(bytes.len() as u64, format!("file ends inside the header (which ends at byte {hend})")));
+        return Err(WindError::format(
+            bytes.len() as u64,
+            format!("file ends inside the header (which ends at byte {hend})"),
+        ));
     }
     // Checksum before trusting anything in the header.
     let body = &bytes[..bytes.len() - 4];
@@ -147,7 +150,9 @@ pub fn parse_swf(bytes: &[u8]) -> Result<WindField, WindError> {
         Ok(h) => h,
         Err(e) => {
             let reason = if crc32fast::hash(body) != stored {
-                format!("header does not parse ({e}) and the checksum does not match: the file is corrupt or truncated")
+                format!(
+                    "header does not parse ({e}) and the checksum does not match: the file is corrupt or truncated"
+                )
             } else {
                 format!("header does not parse: {e}")
             };
@@ -171,7 +176,9 @@ pub fn parse_swf(bytes: &[u8]) -> Result<WindField, WindError> {
     if crc != stored {
         return Err(WindError::format(
             (bytes.len() - 4) as u64,
-            format!("checksum mismatch (stored {stored:08x}, computed {crc:08x}): the file is corrupt"),
+            format!(
+                "checksum mismatch (stored {stored:08x}, computed {crc:08x}): the file is corrupt"
+            ),
         ));
     }
     let n = header.grid.points();
@@ -193,8 +200,13 @@ mod tests {
 
     pub(crate) fn small() -> WindField {
         let grid = Grid::regular(5, 4, 2.0, &[12.0, 20.0], 16, 0.1);
-        WindField::generate(&WindParams::default(), &grid, SynthParams { seed: 5, method: Method::Separable }, &|_| {})
-            .expect("valid setup")
+        WindField::generate(
+            &WindParams::default(),
+            &grid,
+            SynthParams { seed: 5, method: Method::Separable },
+            &|_| {},
+        )
+        .expect("valid setup")
     }
 
     fn bytes_of(f: &WindField) -> Vec<u8> {

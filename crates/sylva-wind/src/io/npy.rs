@@ -58,7 +58,8 @@ pub fn write_npy(field: &WindField, path: &Path) -> Result<(), WindError> {
         (vec![g.frames, 3, g.nz(), g.ny(), g.nx()], vec!["frame", "component", "z", "y", "x"])
     };
     let dims: Vec<String> = shape.iter().map(|d| d.to_string()).collect();
-    let mut dict = format!("{{'descr': '<f4', 'fortran_order': False, 'shape': ({},), }}", dims.join(", "));
+    let mut dict =
+        format!("{{'descr': '<f4', 'fortran_order': False, 'shape': ({},), }}", dims.join(", "));
     // Pad so that magic(6) + version(2) + len(2) + dict + '\n' is a multiple of 64.
     while (10 + dict.len() + 1) % 64 != 0 {
         dict.push(' ');
@@ -96,14 +97,19 @@ pub fn read_npy(path: &Path) -> Result<WindField, WindError> {
     let bytes = std::fs::read(path).map_err(|e| WindError::io(path, e))?;
     let sp = sidecar_path(path);
     let side_text = std::fs::read_to_string(&sp).map_err(|e| WindError::io(&sp, e))?;
-    let side: NpySidecar = serde_json::from_str(&side_text)
-        .map_err(|e| WindError::Format { offset: 0, reason: format!("{}: line {}: {e}", sp.display(), e.line()) })?;
+    let side: NpySidecar = serde_json::from_str(&side_text).map_err(|e| WindError::Format {
+        offset: 0,
+        reason: format!("{}: line {}: {e}", sp.display(), e.line()),
+    })?;
     side.grid.validate().map_err(|e| WindError::format(0, format!("{}: {e}", sp.display())))?;
     if bytes.len() < 10 || &bytes[..6] != b"\x93NUMPY" {
         return Err(WindError::format(0, "not a .npy file (bad magic)"));
     }
     if bytes[6] != 1 {
-        return Err(WindError::format(6, format!("npy version {}.{} is not supported (1.0 is)", bytes[6], bytes[7])));
+        return Err(WindError::format(
+            6,
+            format!("npy version {}.{} is not supported (1.0 is)", bytes[6], bytes[7]),
+        ));
     }
     let hlen = u16::from_le_bytes([bytes[8], bytes[9]]) as usize;
     let start = 10 + hlen;
@@ -119,10 +125,17 @@ pub fn read_npy(path: &Path) -> Result<WindField, WindError> {
     if bytes.len() != need {
         return Err(WindError::format(
             bytes.len().min(need) as u64,
-            format!("data holds {} bytes, the sidecar's grid needs {}", bytes.len() - start, 4 * count),
+            format!(
+                "data holds {} bytes, the sidecar's grid needs {}",
+                bytes.len() - start,
+                4 * count
+            ),
         ));
     }
-    let data = bytes[start..].chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect();
+    let data = bytes[start..]
+        .chunks_exact(4)
+        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        .collect();
     Ok(WindField { grid: side.grid, params: side.params, synth: side.synth, data })
 }
 
