@@ -23,9 +23,11 @@
 //! Taylor advection multiplies every coefficient by e^{−iω x/U_c} (U_c: the reference speed),
 //! a diagonal unitary factor that keeps both factorisations exact.
 //!
-//! Memory: the separable method works on blocks of x-columns holding all frequency lines,
-//! carrying the x-recursion state from block to block, so its working memory is bounded
-//! (about [`BLOCK_BYTES`]) whatever the grid size; the output itself is the only large buffer.
+//! Memory and order of work: the separable method walks the grid one x-column at a time,
+//! carrying the x-recursion state from column to column; each column is transformed and
+//! staged, and every 16 columns the staged records are written frame-major. Its working
+//! memory is a few columns' worth (two coefficient columns of nz·ny·(M/2+1) complex values
+//! and 16 staged record columns), whatever nx: the output itself is the only large buffer.
 
 use std::f64::consts::PI;
 
@@ -40,9 +42,6 @@ use crate::params::{CoherenceSpeed, Component, WindParams};
 use crate::spectrum;
 
 type C64 = Complex<f64>;
-
-/// Working memory the separable method aims at for its coefficient block, in bytes.
-pub const BLOCK_BYTES: usize = 256 << 20;
 
 /// Synthesis method.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -67,19 +66,28 @@ pub struct SynthParams {
 /// Largest point count the dense Cholesky method accepts (its matrix is n² f64 per line).
 pub const CHOLESKY_MAX_POINTS: usize = 4096;
 
-/// A number type the synthesis can write (f32 for fields, f64 for reference checks).
-pub trait Sample: Copy + Send + Sync + Default + 'static {
+/// A number type the synthesis can write (f32 for fields, f64 for reference checks). The
+/// coefficients are computed in f64; the final inverse FFT runs in this type.
+pub trait Sample: realfft::FftNum + Default {
     /// Convert from the f64 the synthesis computes in.
-    fn from_f64(x: f64) -> Self;
+    fn from_f64_sample(x: f64) -> Self;
+    /// out = v ⊙ sc, narrowed to this type.
+    fn scale_into(v: &[C64], sc: &[f64], out: &mut [Complex<Self>]);
 }
 impl Sample for f32 {
-    fn from_f64(x: f64) -> Self {
+    fn from_f64_sample(x: f64) -> Self {
         x as f32
+    }
+    fn scale_into(v: &[C64], sc: &[f64], out: &mut [Complex<f32>]) {
+        scale_f32(v, sc, out)
     }
 }
 impl Sample for f64 {
-    fn from_f64(x: f64) -> Self {
+    fn from_f64_sample(x: f64) -> Self {
         x
+    }
+    fn scale_into(v: &[C64], sc: &[f64], out: &mut [Complex<f64>]) {
+        scale_f64(v, sc, out)
     }
 }
 
@@ -100,21 +108,149 @@ fn line_key(seed: u64, comp: Component, j: usize) -> u64 {
     mix64(s ^ (j as u64).wrapping_mul(0xd6e8_feb8_6659_fd93))
 }
 
-/// The unit phasor e^{iφ_jk} of Cholesky column `k` on the line with key `key`: a point
-/// drawn uniformly in the unit disc by rejection and normalised, so φ is exactly uniform.
-#[inline]
-fn phasor(key: u64, k: usize) -> C64 {
-    let mut attempt = 0u64;
-    loop {
-        let h = mix64(key.wrapping_add((k as u64 * 8 + attempt).wrapping_mul(GOLDEN)));
-        let a = (h >> 32) as f64 * (2.0 / 4_294_967_296.0) - 1.0;
-        let b = (h & 0xffff_ffff) as f64 * (2.0 / 4_294_967_296.0) - 1.0;
-        let r2 = a * a + b * b;
-        if r2 <= 1.0 && r2 > 1e-12 {
-            let inv = 1.0 / r2.sqrt();
-            return C64::new(a * inv, b * inv);
+/// The unit phasor e^{iφ_jk} of Cholesky column `k` on the line with key `key`.
+///
+/// φ = 2π u with u the top 53 bits of a hash, so φ is uniform on a 2^-53 lattice. cos and
+/// sin come from the quarter turn q = round(4u) mod 4 and the remainder r ∈ [−π/4, π/4]
+/// through Taylor polynomials to r¹⁶/r¹⁵ (truncation < 1e-16). Everything is integer
+/// arithmetic, IEEE adds and multiplies and bit selects — no libm, no branch — so the value
+/// is the same on every machine and in every vectorised or scalar build of [`phasor_row`].
+#[inline(always)]
+fn phasor(key: u64, k: u64) -> C64 {
+    let h = mix64(key.wrapping_add(k.wrapping_mul(GOLDEN)));
+    // u = u53 / 2^53; 4u = u53 / 2^51; q = round(4u), r = (4u − q)·π/2.
+    let u53 = (h >> 11) as i64;
+    let q = (u53 + (1 << 50)) >> 51;
+    let r = (u53 - (q << 51)) as f64 * (std::f64::consts::FRAC_PI_2 / 2_251_799_813_685_248.0);
+    let r2 = r * r;
+    // cos r = Σ (−1)^n r^{2n}/(2n)!, sin r = r Σ (−1)^n r^{2n}/(2n+1)!, Horner in r².
+    let c = 1.0
+        + r2 * (-1.0 / 2.0
+            + r2 * (1.0 / 24.0
+                + r2 * (-1.0 / 720.0
+                    + r2 * (1.0 / 40_320.0
+                        + r2 * (-1.0 / 3_628_800.0
+                            + r2 * (1.0 / 479_001_600.0
+                                + r2 * (-1.0 / 87_178_291_200.0
+                                    + r2 * (1.0 / 20_922_789_888_000.0))))))));
+    let sn = r
+        * (1.0
+            + r2 * (-1.0 / 6.0
+                + r2 * (1.0 / 120.0
+                    + r2 * (-1.0 / 5040.0
+                        + r2 * (1.0 / 362_880.0
+                            + r2 * (-1.0 / 39_916_800.0
+                                + r2 * (1.0 / 6_227_020_800.0
+                                    + r2 * (-1.0 / 1_307_674_368_000.0))))))));
+    // Rotate by q quarter turns: (re, im) = (c, s), (−s, c), (−c, −s), (s, −c) for q = 0…3,
+    // as bit selects: swap c and s when q is odd, then flip signs.
+    let q = q as u64;
+    let swap = 0u64.wrapping_sub(q & 1);
+    let (cb, sb) = (c.to_bits(), sn.to_bits());
+    let a = (cb & !swap) | (sb & swap);
+    let b = (sb & !swap) | (cb & swap);
+    const SIGN: u64 = 1 << 63;
+    let neg_re = ((q ^ (q >> 1)) & 1) << 63;
+    let neg_im = ((q >> 1) & 1) << 63;
+    C64::new(f64::from_bits(a ^ (neg_re & SIGN)), f64::from_bits(b ^ (neg_im & SIGN)))
+}
+
+/// Defines a kernel three times — AVX-512, AVX2 and baseline — from one body, and picks the
+/// widest the CPU has at run time. The body uses plain IEEE adds and multiplies (Rust never
+/// fuses them), so every variant gives the same bits: only the speed differs.
+macro_rules! simd_kernel {
+    ($(#[$m:meta])* fn $name:ident($($a:ident: $t:ty),* $(,)?) $body:block) => {
+        $(#[$m])*
+        fn $name($($a: $t),*) {
+            #[inline(always)]
+            fn imp($($a: $t),*) $body
+            #[cfg(target_arch = "x86_64")]
+            #[target_feature(enable = "avx512f,avx512dq,avx512vl,avx2")]
+            fn wide($($a: $t),*) {
+                imp($($a),*)
+            }
+            #[cfg(target_arch = "x86_64")]
+            #[target_feature(enable = "avx2")]
+            fn avx2($($a: $t),*) {
+                imp($($a),*)
+            }
+            #[cfg(target_arch = "x86_64")]
+            {
+                if std::arch::is_x86_feature_detected!("avx512dq")
+                    && std::arch::is_x86_feature_detected!("avx512vl")
+                {
+                    // SAFETY: the CPU has these AVX-512 subsets, checked just above.
+                    return unsafe { wide($($a),*) };
+                }
+                if std::arch::is_x86_feature_detected!("avx2") {
+                    // SAFETY: the CPU has AVX2, checked just above.
+                    return unsafe { avx2($($a),*) };
+                }
+            }
+            imp($($a),*)
         }
-        attempt += 1;
+    };
+}
+
+simd_kernel! {
+    /// x-recursion step of a run of lines of one point row, with fresh phasors:
+    /// v_j ← ρ_j v_j + s_j e^{iφ_jk}, or v_j ← e^{iφ_jk} in the first column.
+    fn phasor_row(keys: &[u64], k: u64, v: &mut [C64], ar: Option<(&[f64], &[f64])>) {
+        match ar {
+            None => {
+                for (o, key) in v.iter_mut().zip(keys) {
+                    *o = phasor(*key, k);
+                }
+            }
+            Some((rho, s)) => {
+                for (((o, key), r), s) in v.iter_mut().zip(keys).zip(rho).zip(s) {
+                    let e = phasor(*key, k);
+                    *o = C64::new(o.re * r + e.re * s, o.im * r + e.im * s);
+                }
+            }
+        }
+    }
+}
+
+simd_kernel! {
+    /// One row of the y recursion, fused with the column's advection factor:
+    /// out = a ⊙ x, then out = ρ ⊙ prev + s ⊙ out when a previous row exists.
+    fn y_row(x: &[C64], adv: &[C64], prev: Option<&[C64]>, ar: (&[f64], &[f64]), out: &mut [C64]) {
+        for ((o, x), a) in out.iter_mut().zip(x).zip(adv) {
+            *o = C64::new(x.re * a.re - x.im * a.im, x.re * a.im + x.im * a.re);
+        }
+        if let Some(prev) = prev {
+            for (((o, p), r), s) in out.iter_mut().zip(prev).zip(ar.0).zip(ar.1) {
+                *o = C64::new(p.re * r + o.re * s, p.im * r + o.im * s);
+            }
+        }
+    }
+}
+
+simd_kernel! {
+    /// One AR(1) step on a vector of lines: cur = ρ ⊙ prev + s ⊙ cur.
+    fn ar1_step(prev: &[C64], cur: &mut [C64], rho: &[f64], s: &[f64]) {
+        for (((c, p), r), s) in cur.iter_mut().zip(prev).zip(rho).zip(s) {
+            *c = C64::new(p.re * r + c.re * s, p.im * r + c.im * s);
+        }
+    }
+}
+
+simd_kernel! {
+    /// Scale coefficients by a real factor per line and narrow them to f32.
+    fn scale_f32(v: &[C64], sc: &[f64], out: &mut [Complex<f32>]) {
+        for ((o, c), s) in out.iter_mut().zip(v).zip(sc) {
+            *o = Complex::new((c.re * s) as f32, (c.im * s) as f32);
+        }
+    }
+}
+
+simd_kernel! {
+    /// Scale coefficients by a real factor per line.
+    fn scale_f64(v: &[C64], sc: &[f64], out: &mut [Complex<f64>]) {
+        for ((o, c), s) in out.iter_mut().zip(v).zip(sc) {
+            *o = Complex::new(c.re * s, c.im * s);
+        }
     }
 }
 
@@ -151,6 +287,16 @@ impl Lines {
         Lines { nc, omega, keys, scale, u_ref, sqrt_dw: dw.sqrt() }
     }
 
+    /// Taylor-advection factor e^{−iω_j x/U_c} per line at along-wind position x (1 when off).
+    fn advection(&self, on: bool, x: f64) -> Vec<C64> {
+        self.omega
+            .iter()
+            .map(
+                |w| if on { C64::from_polar(1.0, -w * x / self.u_ref) } else { C64::new(1.0, 0.0) },
+            )
+            .collect()
+    }
+
     /// AR(1) factors (ρ, √(1−ρ²)) per line for a gap of `gap` metres with decay constant `c`.
     fn ar1(&self, c: f64, gap: f64) -> (Vec<f64>, Vec<f64>) {
         let mut rho = vec![0.0; self.nc];
@@ -185,6 +331,23 @@ impl<T: Copy> OutPtr<T> {
     }
 }
 
+/// A raw view of a coefficient buffer whose tasks own disjoint line ranges of every row.
+#[derive(Clone, Copy)]
+struct RowsPtr(*mut C64);
+// SAFETY: tasks only form slices of disjoint index ranges (see the call sites), and the
+// buffer outlives the parallel scope.
+unsafe impl Sync for RowsPtr {}
+unsafe impl Send for RowsPtr {}
+impl RowsPtr {
+    /// # Safety
+    /// `[at, at + len)` lies in the buffer and no other live slice overlaps it mutably.
+    #[allow(clippy::mut_from_ref)]
+    unsafe fn slice<'a>(self, at: usize, len: usize) -> &'a mut [C64] {
+        // SAFETY: guaranteed by the caller.
+        unsafe { std::slice::from_raw_parts_mut(self.0.add(at), len) }
+    }
+}
+
 /// Where the records of one component go in a frame-major buffer.
 struct OutLayout {
     /// Elements between consecutive frames.
@@ -193,6 +356,101 @@ struct OutLayout {
     offset: usize,
     /// Added to every sample at height index z (the mean speed for `u`, else 0).
     add: Vec<f64>,
+}
+
+/// Columns of records gathered before they are written out frame-major: 16 f32 fill one
+/// cache line of a frame row.
+const EMIT_COLUMNS: usize = 64;
+
+/// Turns columns of coefficients into records and writes them frame-major.
+///
+/// Each column (all points at one x, already advected) is scaled per line and height and
+/// inverse-FFT'd point by point into a staging buffer; every [`EMIT_COLUMNS`] columns the
+/// buffer is transposed into the output in tiles of frames, so reads and writes stay in cache.
+struct Emitter<'a, T> {
+    grid: &'a Grid,
+    layout: &'a OutLayout,
+    out: OutPtr<T>,
+    c2r: std::sync::Arc<dyn realfft::ComplexToReal<T>>,
+    /// Records staged as (column in batch, point p = iz·ny + iy, frame).
+    rec: Vec<T>,
+    /// First x index of the batch and columns staged.
+    x0: usize,
+    staged: usize,
+}
+
+impl<'a, T: Sample> Emitter<'a, T> {
+    fn new(grid: &'a Grid, layout: &'a OutLayout, out: &mut [T]) -> Self {
+        let np = grid.nz() * grid.ny();
+        let c2r = RealFftPlanner::<T>::new().plan_fft_inverse(grid.frames);
+        Emitter {
+            grid,
+            layout,
+            out: OutPtr(out.as_mut_ptr(), out.len()),
+            c2r,
+            rec: vec![T::default(); EMIT_COLUMNS.min(grid.nx()) * np * grid.frames],
+            x0: 0,
+            staged: 0,
+        }
+    }
+
+    /// Emit column `ix`: coefficients `col` (point-major, nc lines each) times the real
+    /// factor `scale[iz·nc + j]` of the point's height, then one inverse FFT per point.
+    fn push(&mut self, ix: usize, col: &[C64], scale: &[f64]) {
+        let (ny, m) = (self.grid.ny(), self.grid.frames);
+        let nc = m / 2 + 1;
+        let np = self.grid.nz() * ny;
+        let slot = &mut self.rec[self.staged * np * m..(self.staged + 1) * np * m];
+        let c2r = &self.c2r;
+        let add = &self.layout.add;
+        slot.par_chunks_mut(m).enumerate().for_each_init(
+            || (c2r.make_input_vec(), c2r.make_scratch_vec()),
+            |(spec, scratch), (p, dst)| {
+                let iz = p / ny;
+                T::scale_into(&col[p * nc..(p + 1) * nc], &scale[iz * nc..(iz + 1) * nc], spec);
+                // DC and Nyquist are exactly zero, as the real inverse FFT requires.
+                spec[0] = Complex::default();
+                spec[nc - 1] = Complex::default();
+                if c2r.process_with_scratch(spec, dst, scratch).is_err() {
+                    unreachable!("FFT buffer lengths are fixed by construction");
+                }
+                let mean = T::from_f64_sample(add[iz]);
+                for d in dst.iter_mut() {
+                    *d = *d + mean;
+                }
+            },
+        );
+        if self.staged == 0 {
+            self.x0 = ix;
+        }
+        self.staged += 1;
+        if self.staged == EMIT_COLUMNS || ix + 1 == self.grid.nx() {
+            self.flush();
+        }
+    }
+
+    /// Write the staged columns frame-major, one task per point row, in tiles of frames.
+    fn flush(&mut self) {
+        const TILE: usize = 64;
+        let (nx, m) = (self.grid.nx(), self.grid.frames);
+        let np = self.grid.nz() * self.grid.ny();
+        let (bw, x0, rec, out, layout) = (self.staged, self.x0, &self.rec, &self.out, self.layout);
+        (0..np).into_par_iter().for_each(|p| {
+            let base = layout.offset + p * nx + x0;
+            for t0 in (0..m).step_by(TILE) {
+                let t1 = (t0 + TILE).min(m);
+                for t in t0..t1 {
+                    let row = base + t * layout.frame_stride;
+                    for b in 0..bw {
+                        // SAFETY: (frame t, point row p, column x0 + b) belongs to this task
+                        // alone and lies inside the buffer sized by the caller.
+                        unsafe { out.write(row + b, rec[(b * np + p) * m + t]) };
+                    }
+                }
+            }
+        });
+        self.staged = 0;
+    }
 }
 
 /// Synthesise the fluctuations of one component into `out` (frame-major, layout described
@@ -210,9 +468,7 @@ fn synth_component<T: Sample>(
     let (nx, ny, nz) = (grid.nx(), grid.ny(), grid.nz());
     let nc = lines.nc;
     let col_len = nz * ny * nc;
-    let ptr = OutPtr(out.as_mut_ptr(), out.len());
-    let mut planner = RealFftPlanner::<f64>::new();
-    let c2r = planner.plan_fft_inverse(grid.frames);
+    let mut emitter = Emitter::new(grid, layout, out);
 
     match synth.method {
         Method::Separable => {
@@ -222,60 +478,65 @@ fn synth_component<T: Sample>(
             };
             let (gx, gy, gz) =
                 (gaps(&grid.xs, cc.cx), gaps(&grid.ys, cc.cy), gaps(&grid.zs, cc.cz));
-            let bx = (BLOCK_BYTES / (col_len * 16).max(1)).clamp(1, nx);
-            let mut block = vec![C64::default(); bx * col_len];
-            let mut carry = vec![C64::default(); col_len];
-            let mut x0 = 0;
-            while x0 < nx {
-                let x1 = (x0 + bx).min(nx);
-                let blk = &mut block[..(x1 - x0) * col_len];
-                // Phasors, then the y and z recursions, column by column (independent).
-                blk.par_chunks_mut(col_len).enumerate().for_each(|(bxi, col)| {
-                    let ix = x0 + bxi;
-                    for (p, v) in col.chunks_mut(nc).enumerate() {
-                        let k = p * nx + ix; // p = iz·ny + iy, k = (iz·ny + iy)·nx + ix
-                        v[0] = C64::default();
-                        v[nc - 1] = C64::default();
-                        for j in 1..nc - 1 {
-                            v[j] = phasor(lines.keys[j], k);
-                        }
+            // L_x acts along x on each point row, L_y ⊗ L_z across rows; they commute, so
+            // the x recursion runs first on the raw phasors and its state is carried from
+            // column to column, and the y and z recursions run within each column.
+            let mut xstate = vec![C64::default(); col_len];
+            let mut col = vec![C64::default(); col_len];
+            // Lines are independent until the FFT: each task takes a range of lines and
+            // walks every point row of the column, so a row's state stays in cache between
+            // its x step, its y step and the next row's y step.
+            const LINES_PER_TASK: usize = 128;
+            let ranges: Vec<std::ops::Range<usize>> = (1..nc - 1)
+                .step_by(LINES_PER_TASK)
+                .map(|j0| j0..(j0 + LINES_PER_TASK).min(nc - 1))
+                .collect();
+            for ix in 0..nx {
+                let adv = lines.advection(params.advection, grid.xs[ix]);
+                let (xs_ptr, col_ptr) = (RowsPtr(xstate.as_mut_ptr()), RowsPtr(col.as_mut_ptr()));
+                ranges.par_iter().for_each(|r| {
+                    let at = |p: usize| p * nc + r.start;
+                    fn part<'v>(v: &'v [f64], r: &std::ops::Range<usize>) -> &'v [f64] {
+                        &v[r.clone()]
                     }
                     for iz in 0..nz {
-                        for iy in 1..ny {
-                            let (rho, s) = &gy[iy - 1];
-                            let (a, b) = col.split_at_mut((iz * ny + iy) * nc);
-                            ar1_step(&a[(iz * ny + iy - 1) * nc..], &mut b[..nc], rho, s);
+                        for iy in 0..ny {
+                            let p = iz * ny + iy;
+                            // SAFETY: this task alone touches lines `r` of every row; rows p
+                            // and p − 1 are disjoint ranges of `col`.
+                            let (x, out, prev) = unsafe {
+                                (
+                                    xs_ptr.slice(at(p), r.len()),
+                                    col_ptr.slice(at(p), r.len()),
+                                    (iy > 0).then(|| &*col_ptr.slice(at(p - 1), r.len())),
+                                )
+                            };
+                            let k = (p * nx + ix) as u64; // Cholesky column of point (ix, iy, iz)
+                            let ar =
+                                (ix > 0).then(|| (part(&gx[ix - 1].0, r), part(&gx[ix - 1].1, r)));
+                            phasor_row(&lines.keys[r.clone()], k, x, ar);
+                            let ay = if iy > 0 {
+                                (part(&gy[iy - 1].0, r), part(&gy[iy - 1].1, r))
+                            } else {
+                                (&[][..], &[][..])
+                            };
+                            y_row(x, &adv[r.clone()], prev, ay, out);
                         }
                     }
                     for iz in 1..nz {
-                        let (rho, s) = &gz[iz - 1];
-                        let (a, b) = col.split_at_mut(iz * ny * nc);
-                        let prev = &a[(iz - 1) * ny * nc..];
+                        let (rho, s) = (part(&gz[iz - 1].0, r), part(&gz[iz - 1].1, r));
                         for iy in 0..ny {
-                            let r = iy * nc..(iy + 1) * nc;
-                            ar1_step(&prev[r.clone()], &mut b[r], rho, s);
+                            let (p, q) = ((iz - 1) * ny + iy, iz * ny + iy);
+                            // SAFETY: as above; rows p and q differ.
+                            let (prev, cur) = unsafe {
+                                (&*col_ptr.slice(at(p), r.len()), col_ptr.slice(at(q), r.len()))
+                            };
+                            ar1_step(prev, cur, rho, s);
                         }
                     }
                 });
-                // The x recursion: sequential over columns, parallel over points.
-                for ix in x0..x1 {
-                    if ix == 0 {
-                        continue;
-                    }
-                    let (rho, s) = &gx[ix - 1];
-                    let bxi = ix - x0;
-                    let (before, cur) = blk.split_at_mut(bxi * col_len);
-                    let prev = if bxi == 0 { &carry[..] } else { &before[(bxi - 1) * col_len..] };
-                    cur[..col_len]
-                        .par_chunks_mut(nc)
-                        .zip(prev.par_chunks(nc))
-                        .for_each(|(c, p)| ar1_step(p, c, rho, s));
-                }
-                carry.copy_from_slice(&blk[(x1 - x0 - 1) * col_len..]);
-                let adv = params.advection;
-                emit_block(grid, &lines, adv, true, blk, x0, x1, &c2r, &ptr, layout);
-                progress(x1 as f64 / nx as f64);
-                x0 = x1;
+                emitter.push(ix, &col, &lines.scale);
+                progress((ix + 1) as f64 / nx as f64);
             }
         }
         Method::Cholesky => {
@@ -290,7 +551,7 @@ fn synth_component<T: Sample>(
                 [grid.xs[ix], grid.ys[iy], grid.zs[iz], params.mean_speed(grid.zs[iz])]
             };
             let pts: Vec<[f64; 4]> = (0..n).map(pos).collect();
-            // Coefficients laid out (x, z, y, j) like a separable block spanning all columns.
+            // Coefficients laid out (x, z, y, j): one column after another.
             let mut block = vec![C64::default(); nx * col_len];
             let mut mat = vec![0.0f64; n * n];
             let mut e = vec![C64::default(); n];
@@ -317,7 +578,7 @@ fn synth_component<T: Sample>(
                     ))
                 })?;
                 for (k, ek) in e.iter_mut().enumerate() {
-                    *ek = phasor(lines.keys[j], k);
+                    *ek = phasor(lines.keys[j], k as u64);
                 }
                 for a in 0..n {
                     let row = &mat[a * n..a * n + a + 1];
@@ -327,91 +588,20 @@ fn synth_component<T: Sample>(
                 }
                 progress(j as f64 / (nc - 2) as f64);
             }
-            // The dense factor already holds √S0: emit without scaling again.
-            let (adv, scale) = (params.advection, false);
-            emit_block(grid, &lines, adv, scale, &mut block, 0, nx, &c2r, &ptr, layout);
+            // The dense factor already holds √S0: advect, then scale by √Δω alone.
+            let sqrt_dw = vec![lines.sqrt_dw; nz * nc];
+            for (ix, col) in block.chunks_mut(col_len).enumerate() {
+                let adv = lines.advection(params.advection, grid.xs[ix]);
+                for v in col.chunks_mut(nc) {
+                    for (c, a) in v.iter_mut().zip(&adv) {
+                        *c *= *a;
+                    }
+                }
+                emitter.push(ix, col, &sqrt_dw);
+            }
         }
     }
     Ok(())
-}
-
-/// One AR(1) step on a vector of lines: cur = ρ ⊙ prev + s ⊙ cur.
-#[inline]
-fn ar1_step(prev: &[C64], cur: &mut [C64], rho: &[f64], s: &[f64]) {
-    for (((c, p), r), s) in cur.iter_mut().zip(prev).zip(rho).zip(s) {
-        *c = *p * *r + *c * *s;
-    }
-}
-
-/// Scale a block of unit-variance coefficients by √Δω √S0(z) (when `scale`; the dense
-/// method's coefficients carry √S0 already and only need √Δω), apply advection,
-/// inverse-FFT every point and write the records frame-major.
-fn emit_block<T: Sample>(
-    grid: &Grid,
-    lines: &Lines,
-    advection: bool,
-    scale: bool,
-    blk: &mut [C64],
-    x0: usize,
-    x1: usize,
-    c2r: &std::sync::Arc<dyn realfft::ComplexToReal<f64>>,
-    out: &OutPtr<T>,
-    layout: &OutLayout,
-) {
-    let (nx, ny, nz, m) = (grid.nx(), grid.ny(), grid.nz(), grid.frames);
-    let nc = lines.nc;
-    let col_len = nz * ny * nc;
-    let bw = x1 - x0;
-    // Scale and advect, column by column.
-    blk.par_chunks_mut(col_len).enumerate().for_each(|(bxi, col)| {
-        let x = grid.xs[x0 + bxi];
-        let adv: Vec<C64> = (0..nc)
-            .map(|j| {
-                if advection {
-                    C64::from_polar(1.0, -lines.omega[j] * x / lines.u_ref)
-                } else {
-                    C64::new(1.0, 0.0)
-                }
-            })
-            .collect();
-        for (p, v) in col.chunks_mut(nc).enumerate() {
-            if scale {
-                let sc = &lines.scale[(p / ny) * nc..(p / ny + 1) * nc];
-                for ((c, s), a) in v.iter_mut().zip(sc).zip(&adv) {
-                    *c *= *a * *s;
-                }
-            } else {
-                for (c, a) in v.iter_mut().zip(&adv) {
-                    *c *= *a * lines.sqrt_dw;
-                }
-            }
-        }
-    });
-    let blk: &[C64] = blk;
-    // One task per (z, y) row: FFT its points, then write frame by frame.
-    (0..nz * ny).into_par_iter().for_each_init(
-        || (vec![C64::default(); nc], vec![0.0f64; bw * m], c2r.make_scratch_vec()),
-        |(spec, rec, scratch), p| {
-            for bxi in 0..bw {
-                spec.copy_from_slice(&blk[bxi * col_len + p * nc..bxi * col_len + (p + 1) * nc]);
-                // DC and Nyquist are exactly zero, as the real inverse FFT requires.
-                let dst = &mut rec[bxi * m..(bxi + 1) * m];
-                if c2r.process_with_scratch(spec, dst, scratch).is_err() {
-                    unreachable!("FFT buffer lengths are fixed by construction");
-                }
-            }
-            let add = layout.add[p / ny];
-            let base = layout.offset + p * nx + x0;
-            for t in 0..m {
-                let row = base + t * layout.frame_stride;
-                for bxi in 0..bw {
-                    // SAFETY: index (t, this row, x0 + bxi) belongs to this task alone and
-                    // lies inside the buffer sized by the caller.
-                    unsafe { out.write(row + bxi, T::from_f64(rec[bxi * m + t] + add)) };
-                }
-            }
-        },
-    );
 }
 
 /// In-place lower Cholesky factor of the symmetric matrix whose lower triangle is in `a`
@@ -504,7 +694,7 @@ mod tests {
         let n = 200_000;
         let mut hist = [0usize; 16];
         for k in 0..n {
-            let p = phasor(key, k);
+            let p = phasor(key, k as u64);
             assert!((p.norm() - 1.0).abs() < 1e-12);
             let a = p.im.atan2(p.re) + PI;
             hist[((a / (2.0 * PI) * 16.0) as usize).min(15)] += 1;
@@ -512,6 +702,31 @@ mod tests {
         // Each bin expects n/16 = 12500 with σ ≈ 108: 6σ bounds.
         for h in hist {
             assert!((h as f64 - 12_500.0).abs() < 650.0, "{hist:?}");
+        }
+    }
+
+    #[test]
+    fn vectorised_kernels_give_the_scalar_bits() {
+        // The widest kernel the CPU has must agree bit for bit with the scalar phasor, so
+        // the field does not depend on the machine's vector units.
+        let keys: Vec<u64> = (0..301).map(|j| line_key(3, Component::V, j)).collect();
+        let rho: Vec<f64> = (0..301).map(|j| (-(j as f64) * 0.01).exp()).collect();
+        let s: Vec<f64> = rho.iter().map(|r| (1.0 - r * r).sqrt()).collect();
+        for k in [0u64, 7, 123_456] {
+            let mut v: Vec<C64> = (0..301).map(|j| C64::new(j as f64, -1.0)).collect();
+            let want: Vec<C64> = v
+                .iter()
+                .zip(&keys)
+                .zip(rho.iter().zip(&s))
+                .map(|((o, key), (r, s))| {
+                    let e = phasor(*key, k);
+                    C64::new(o.re * r + e.re * s, o.im * r + e.im * s)
+                })
+                .collect();
+            phasor_row(&keys, k, &mut v, Some((&rho, &s)));
+            for (a, b) in v.iter().zip(&want) {
+                assert_eq!((a.re.to_bits(), a.im.to_bits()), (b.re.to_bits(), b.im.to_bits()));
+            }
         }
     }
 

@@ -97,7 +97,9 @@ pub fn write_swf(field: &WindField, path: &Path) -> Result<(), WindError> {
     bytes.extend_from_slice(&json);
     for (i, v) in field.data.iter().enumerate() {
         let c = (i / n) % 3;
-        let q = ((*v as f64 - offset[c]) / scale[c]).round().clamp(-32767.0, 32767.0) as i16;
+        let x = ((*v as f64 - offset[c]) / scale[c]).clamp(-32767.0, 32767.0);
+        // Round half away from zero without a libm call (`as` truncates toward zero).
+        let q = (x + 0.5f64.copysign(x)) as i16;
         bytes.extend_from_slice(&q.to_le_bytes());
     }
     let crc = crc32fast::hash(&bytes);
