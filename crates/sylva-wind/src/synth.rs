@@ -358,9 +358,9 @@ struct OutLayout {
     add: Vec<f64>,
 }
 
-/// Columns of records gathered before they are written out frame-major: 16 f32 fill one
-/// cache line of a frame row.
-const EMIT_COLUMNS: usize = 64;
+/// Columns of records gathered before they are written out frame-major: 32 f32 make a
+/// 128-byte run of a frame row per write burst.
+const EMIT_COLUMNS: usize = 32;
 
 /// Turns columns of coefficients into records and writes them frame-major.
 ///

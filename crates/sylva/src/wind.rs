@@ -73,16 +73,16 @@ pub struct ModelArgs {
     #[arg(long, value_enum, default_value = "breeze")]
     preset: PresetArg,
     /// Friction velocity U* in m/s (overrides the preset). σ_u = 2.5 U*.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     u_star: Option<f64>,
     /// Mean profile.
     #[arg(long, value_enum, default_value = "log")]
     profile: ProfileArg,
     /// Log law: roughness length z0 in m (forest ≈ 0.1 × canopy height).
-    #[arg(long, default_value_t = 1.5)]
+    #[arg(long, default_value_t = 1.5, allow_negative_numbers = true)]
     z0: f64,
     /// Log law: zero-plane displacement d in m (forest ≈ ⅔ × canopy height).
-    #[arg(long, default_value_t = 10.0)]
+    #[arg(long, default_value_t = 10.0, allow_negative_numbers = true)]
     displacement: f64,
     /// Power law: reference speed in m/s.
     #[arg(long, default_value_t = 8.0)]
@@ -97,7 +97,7 @@ pub struct ModelArgs {
     #[arg(long, value_enum, default_value = "paper")]
     spectrum: SpectrumArg,
     /// Direction the wind blows towards, degrees counter-clockwise from +x.
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     direction: f64,
     /// Turn Taylor advection of gusts off (reproduces the paper exactly).
     #[arg(long)]
@@ -144,13 +144,13 @@ pub struct GridArgs {
     #[arg(long, default_value_t = 64)]
     ny: usize,
     /// Regular spacing of x and y in m.
-    #[arg(long, default_value_t = 4.0)]
+    #[arg(long, default_value_t = 4.0, allow_negative_numbers = true)]
     spacing: f64,
     /// Uneven x coordinates in m, comma-separated and increasing (overrides --nx/--spacing).
-    #[arg(long, value_delimiter = ',')]
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
     xs: Option<Vec<f64>>,
     /// Uneven y coordinates in m (overrides --ny/--spacing).
-    #[arg(long, value_delimiter = ',')]
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
     ys: Option<Vec<f64>>,
     /// Heights in m, comma-separated and increasing.
     #[arg(long, value_delimiter = ',', default_value = "20")]
@@ -160,7 +160,7 @@ pub struct GridArgs {
     #[arg(long, default_value_t = 2048)]
     frames: usize,
     /// Time step in s; resolves up to 1/(2 dt) Hz.
-    #[arg(long, default_value_t = 0.1)]
+    #[arg(long, default_value_t = 0.1, allow_negative_numbers = true)]
     dt: f64,
     /// Seed of the random phases. Same seed, same bits.
     #[arg(long, default_value_t = 1)]
