@@ -43,6 +43,9 @@ pub struct NpySidecar {
     pub synth: SynthParams,
     /// Variance captured by the loop.
     pub captured: Captured,
+    /// CRC-32 (IEEE) of the `.npy` file's data bytes (after its header), so a reader can
+    /// detect corruption; `.npy` itself carries no checksum.
+    pub data_crc32: u32,
 }
 
 fn sidecar_path(path: &Path) -> PathBuf {
@@ -69,9 +72,11 @@ pub fn write_npy(field: &WindField, path: &Path) -> Result<(), WindError> {
     bytes.extend_from_slice(b"\x93NUMPY\x01\x00");
     bytes.extend_from_slice(&(dict.len() as u16).to_le_bytes());
     bytes.extend_from_slice(dict.as_bytes());
+    let data_start = bytes.len();
     for v in &field.data {
         bytes.extend_from_slice(&v.to_le_bytes());
     }
+    let data_crc32 = crc32fast::hash(&bytes[data_start..]);
     std::fs::write(path, &bytes).map_err(|e| WindError::io(path, e))?;
     let side = NpySidecar {
         shape,
@@ -86,6 +91,7 @@ pub fn write_npy(field: &WindField, path: &Path) -> Result<(), WindError> {
         params: field.params.clone(),
         synth: field.synth,
         captured: field.captured(),
+        data_crc32,
     };
     let sp = sidecar_path(path);
     let json = serde_json::to_string_pretty(&side).map_err(|e| WindError::Export(e.to_string()))?;
@@ -132,6 +138,16 @@ pub fn read_npy(path: &Path) -> Result<WindField, WindError> {
             ),
         ));
     }
+    let crc = crc32fast::hash(&bytes[start..]);
+    if crc != side.data_crc32 {
+        return Err(WindError::format(
+            start as u64,
+            format!(
+                "data checksum {crc:08x} differs from the sidecar's {:08x}: the file is corrupt",
+                side.data_crc32
+            ),
+        ));
+    }
     let data = bytes[start..]
         .chunks_exact(4)
         .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
@@ -159,5 +175,14 @@ mod tests {
         assert!(side.contains("\"u_star\"") && side.contains("\"mean_speeds\""));
         std::fs::write(&p, &bytes[..bytes.len() - 3]).expect("truncate");
         assert!(read_npy(&p).expect_err("truncated").to_string().contains("needs"));
+        let mut flipped = bytes.clone();
+        let last = flipped.len() - 1;
+        flipped[last] ^= 0x01;
+        std::fs::write(&p, &flipped).expect("flip");
+        assert!(read_npy(&p).expect_err("bit flip").to_string().contains("checksum"));
+        let mut v2 = bytes;
+        v2[6] = 2;
+        std::fs::write(&p, &v2).expect("version");
+        assert!(read_npy(&p).expect_err("version 2").to_string().contains("version 2"));
     }
 }
