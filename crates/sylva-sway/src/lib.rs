@@ -1,6 +1,22 @@
-//! Quasi-physical tree animation (paper §4.2): damped angular springs on skeleton joints,
-//! leaf-cluster sway and the animation LOD (active-joint budgets).
+//! Quasi-physical tree animation (paper §4.2, §4.3): every active joint of a tree skeleton
+//! is a damped angular spring with two bending angles driven by the eq.-8 drag of the wind
+//! on what it carries; joint rotations compose into one matrix palette per tree; leaf
+//! clusters flutter on top; the animation LOD simulates only the heaviest joints.
 //!
-//! Documented placeholder: the crate exports nothing until the spring model lands. It will
-//! depend on `sylva-wind` (velocities, eq.-8 force) and `sylva-tree` (skeletons) only.
+//! * [`SwayParams`] — material and model constants, with sources.
+//! * [`SwaySpecies`] — a skeleton prepared once: inertia, stiffness from the cantilever
+//!   frequency, damping, drag areas, joint priorities.
+//! * [`SwayBatch`] — many instances stepped together with an exact (any-dt) integrator,
+//!   active-joint budgets with smooth blending, palettes; parallel and deterministic.
+//! * [`leaves`] — the flutter model a vertex shader evaluates.
 #![warn(missing_docs)]
+
+pub mod batch;
+pub mod leaves;
+pub mod params;
+pub mod species;
+
+pub use batch::{Palette, SwayBatch, transform};
+pub use leaves::{LeafParams, LeafSway};
+pub use params::{SwayParamError, SwayParams};
+pub use species::{JointSpring, SwaySpecies};

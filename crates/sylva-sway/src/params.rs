@@ -1,0 +1,80 @@
+//! Material and model constants of the sway model, with their sources.
+
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+/// A sway parameter out of range.
+#[derive(Debug, Clone, PartialEq, Error)]
+#[error("sway parameter `{field}` = {value} is invalid: expected {expected}")]
+pub struct SwayParamError {
+    /// Field name.
+    pub field: &'static str,
+    /// Value found.
+    pub value: f32,
+    /// Valid range.
+    pub expected: &'static str,
+}
+
+/// Constants of the damped-angular-spring model (paper §4.2).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SwayParams {
+    /// Young's modulus of green wood E, Pa (> 0). Default 9 GPa (green hardwoods span about
+    /// 6–12 GPa; USDA Wood Handbook, table 5-3a, green modulus of elasticity).
+    pub youngs_modulus: f32,
+    /// Density of green wood ρ_w, kg/m³ (> 0). Default 800 (green hardwoods ≈ 700–1000).
+    pub wood_density: f32,
+    /// Damping ratio ζ of every joint, structural plus aerodynamic (0 < ζ < 1). Default
+    /// 0.08; measured tree sway shows about 3–10 %, more with a dense crown.
+    pub damping_ratio: f32,
+    /// Drag coefficient of a branch segment (cylinder in cross-flow), C_d. Default 1.0.
+    pub wood_drag: f32,
+    /// Drag coefficient of leaves per one-sided leaf area, C_d. Default 0.2 (leaves
+    /// streamline and reconfigure; broadleaf crowns measure about 0.1–0.4).
+    pub leaf_drag: f32,
+    /// Air density ρ, kg/m³ (eq. 8). Default 1.2.
+    pub air_density: f32,
+    /// Time over which a joint switched off by the animation LOD blends its rotation to the
+    /// rest pose (and back when switched on), s (> 0). Default 0.5.
+    pub blend_time: f32,
+}
+
+impl Default for SwayParams {
+    fn default() -> Self {
+        SwayParams {
+            youngs_modulus: 9.0e9,
+            wood_density: 800.0,
+            damping_ratio: 0.08,
+            wood_drag: 1.0,
+            leaf_drag: 0.2,
+            air_density: 1.2,
+            blend_time: 0.5,
+        }
+    }
+}
+
+impl SwayParams {
+    /// Check every field; the error names it.
+    pub fn validate(&self) -> Result<(), SwayParamError> {
+        let check = |ok: bool, field, value: f32, expected| {
+            if ok && value.is_finite() {
+                Ok(())
+            } else {
+                Err(SwayParamError { field, value, expected })
+            }
+        };
+        check(self.youngs_modulus > 0.0, "youngs_modulus", self.youngs_modulus, "> 0 Pa")?;
+        check(self.wood_density > 0.0, "wood_density", self.wood_density, "> 0 kg/m³")?;
+        check(
+            self.damping_ratio > 0.0 && self.damping_ratio < 1.0,
+            "damping_ratio",
+            self.damping_ratio,
+            "in (0, 1)",
+        )?;
+        check(self.wood_drag >= 0.0, "wood_drag", self.wood_drag, "≥ 0")?;
+        check(self.leaf_drag >= 0.0, "leaf_drag", self.leaf_drag, "≥ 0")?;
+        check(self.air_density > 0.0, "air_density", self.air_density, "> 0 kg/m³")?;
+        check(self.blend_time > 0.0, "blend_time", self.blend_time, "> 0 s")?;
+        Ok(())
+    }
+}
