@@ -4,7 +4,10 @@
 //! wind relative to the segment's own motion, accumulated from the tips inwards into the
 //! moment about each joint; (2) springs — the exact zero-order-hold step of each active
 //! joint's two bending angles; joints beyond the instance's budget are frozen and their
-//! displayed rotation blends to the rest pose over `blend_time`; (3) palette — each joint's
+//! displayed rotation blends to the rest pose over `blend_time` (a joint switched back on
+//! restarts at its static equilibrium under the present load and blends in over the same
+//! time), so a switch moves a point per frame by at most its deflection × dt/blend_time
+//! beyond the springs' own motion; (3) palette — each joint's
 //! rotation about its rest position composed with its parent's into one 3×4 matrix per
 //! joint (rest pose → animated pose, tree space).
 //!
@@ -227,15 +230,17 @@ fn step_instance(
     for i in 0..n {
         let active = sp.rank[i] < budget;
         if active {
-            if weight[i] == 0.0 {
-                // Coming back from fully off: restart from rest so the blend starts at 0.
-                theta[i] = [0.0; 2];
-                rate[i] = [0.0; 2];
-            }
             let t = &tr[i];
             let mom = [loads[i][3], loads[i][4], loads[i][5]];
+            let restart = weight[i] == 0.0;
             for (a, axis) in sp.axes[i].iter().enumerate() {
                 let eq = dot(mom, *axis) * t.inv_k;
+                if restart {
+                    // Back from fully off: start at rest under the present load, so the
+                    // joint fades in without a step response.
+                    theta[i][a] = eq;
+                    rate[i][a] = 0.0;
+                }
                 let x = theta[i][a] - eq;
                 let v = rate[i][a];
                 theta[i][a] = t.a11 * x + t.a12 * v + eq;
