@@ -11,9 +11,12 @@
 //! rotation about its rest position composed with its parent's into one 3×4 matrix per
 //! joint (rest pose → animated pose, tree space).
 //!
-//! Instances are independent and each is computed by the same sequence of operations
-//! whatever the thread that runs it, so results are bit-identical for any thread count.
-//! After the first step at a given dt nothing is allocated.
+//! Layout: instances are gathered in groups of [`LANES`]; within a group every array is
+//! (joint, …, lane), so each joint is computed for all lanes of a group at once and the
+//! compiler vectorises across instances (AVX-512, AVX2 or the baseline, picked at run
+//! time; the same IEEE operations either way). Groups are independent and each is computed
+//! by the same sequence of operations whatever thread runs it, so results are bit-identical
+//! for any thread count. After the first step at a given dt nothing is allocated.
 
 use rayon::prelude::*;
 
@@ -25,23 +28,10 @@ pub type Palette = [f32; 12];
 
 const IDENTITY: Palette = [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0];
 
-/// Instances of one species and their animation state.
-#[derive(Debug, Clone)]
-pub struct SwayBatch {
-    species: SwaySpecies,
-    instances: usize,
-    /// Bending angles (rad) and rates (rad/s) per (instance, joint).
-    theta: Vec<[f32; 2]>,
-    rate: Vec<[f32; 2]>,
-    /// Displayed fraction of each joint's rotation (animation-LOD blend), 0 … 1.
-    weight: Vec<f32>,
-    /// Load scratch per (instance, joint): force and moment accumulators.
-    loads: Vec<[f32; 6]>,
-    palettes: Vec<Palette>,
-    budget: Vec<u32>,
-    transitions: Vec<Transition>,
-    dt: f32,
-}
+/// Instances per group: the vector width the joint loops run across.
+pub const LANES: usize = 16;
+
+type Lanes = [f32; LANES];
 
 fn cross(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
     [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
@@ -50,21 +40,54 @@ fn cross(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
 fn dot(a: [f32; 3], b: [f32; 3]) -> f32 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
+const ZERO: Lanes = [0.0; LANES];
+
+/// Instances of one species and their animation state.
+#[derive(Debug, Clone)]
+pub struct SwayBatch {
+    species: SwaySpecies,
+    instances: usize,
+    /// Per group, per joint, per axis: bending angle (rad) and rate (rad/s), lanes inner.
+    theta: Vec<[Lanes; 2]>,
+    rate: Vec<[Lanes; 2]>,
+    /// Displayed fraction of each joint's rotation (animation-LOD blend), 0 … 1.
+    weight: Vec<Lanes>,
+    /// Load scratch per (group, joint): force and moment accumulators.
+    loads: Vec<[Lanes; 6]>,
+    /// Palette scratch per (group, joint), lanes inner (parents are read from here).
+    pal_lanes: Vec<[Lanes; 12]>,
+    /// Palettes per (instance, joint): what the renderer uploads.
+    palettes: Vec<Palette>,
+    budget: Vec<u32>,
+    transitions: Vec<Transition>,
+    dt: f32,
+}
 
 /// Rotation matrix of the rotation vector φ (axis × angle), Rodrigues' formula. Small
 /// angles use Taylor series of sin a/a and (1 − cos a)/a² (error < 1e-9 below 0.5 rad).
+#[cfg(test)]
 fn rotation(phi: [f32; 3]) -> [[f32; 3]; 3] {
     let a2 = dot(phi, phi);
-    let (s, c) = if a2 < 0.25 {
-        // sin a / a and (1 − cos a) / a²
-        (
-            1.0 - a2 / 6.0 * (1.0 - a2 / 20.0 * (1.0 - a2 / 42.0 * (1.0 - a2 / 72.0))),
-            0.5 * (1.0 - a2 / 12.0 * (1.0 - a2 / 30.0 * (1.0 - a2 / 56.0 * (1.0 - a2 / 90.0)))),
-        )
-    } else {
-        let a = a2.sqrt();
-        (a.sin() / a, (1.0 - a.cos()) / a2)
-    };
+    let (s, c) = if a2 < 0.25 { small_angle(a2) } else { large_angle(a2) };
+    rodrigues(phi, s, c)
+}
+
+/// (sin a / a, (1 − cos a) / a²) from a² by Taylor series, for a² < 0.25.
+#[inline(always)]
+fn small_angle(a2: f32) -> (f32, f32) {
+    (
+        1.0 - a2 / 6.0 * (1.0 - a2 / 20.0 * (1.0 - a2 / 42.0 * (1.0 - a2 / 72.0))),
+        0.5 * (1.0 - a2 / 12.0 * (1.0 - a2 / 30.0 * (1.0 - a2 / 56.0 * (1.0 - a2 / 90.0)))),
+    )
+}
+
+fn large_angle(a2: f32) -> (f32, f32) {
+    let a = a2.sqrt();
+    (a.sin() / a, (1.0 - a.cos()) / a2)
+}
+
+#[inline(always)]
+fn rodrigues(phi: [f32; 3], s: f32, c: f32) -> [[f32; 3]; 3] {
     let [x, y, z] = phi;
     [
         [1.0 - c * (y * y + z * z), c * x * y - s * z, c * x * z + s * y],
@@ -77,14 +100,15 @@ impl SwayBatch {
     /// `instances` trees of `species`, at rest, every joint active.
     pub fn new(species: SwaySpecies, instances: usize) -> SwayBatch {
         let n = species.len();
-        let total = n * instances;
+        let groups = instances.div_ceil(LANES);
         SwayBatch {
             instances,
-            theta: vec![[0.0; 2]; total],
-            rate: vec![[0.0; 2]; total],
-            weight: vec![1.0; total],
-            loads: vec![[0.0; 6]; total],
-            palettes: vec![IDENTITY; total],
+            theta: vec![[ZERO; 2]; groups * n],
+            rate: vec![[ZERO; 2]; groups * n],
+            weight: vec![[1.0; LANES]; groups * n],
+            loads: vec![[ZERO; 6]; groups * n],
+            pal_lanes: vec![[ZERO; 12]; groups * n],
+            palettes: vec![IDENTITY; instances * n],
             budget: vec![n as u32; instances],
             transitions: Vec::with_capacity(n),
             dt: f32::NAN,
@@ -113,22 +137,30 @@ impl SwayBatch {
         self.budget[i] as usize
     }
 
+    fn slot(&self, i: usize, j: usize) -> (usize, usize) {
+        ((i / LANES) * self.species.len() + j, i % LANES)
+    }
+
     /// Bending angles (rad) of joint `j` of instance `i`.
     pub fn angles(&self, i: usize, j: usize) -> [f32; 2] {
-        self.theta[i * self.species.len() + j]
+        let (k, l) = self.slot(i, j);
+        [self.theta[k][0][l], self.theta[k][1][l]]
     }
 
     /// Displayed fraction of joint `j`'s rotation in instance `i` (animation-LOD blend).
     pub fn weight(&self, i: usize, j: usize) -> f32 {
-        self.weight[i * self.species.len() + j]
+        let (k, l) = self.slot(i, j);
+        self.weight[k][l]
     }
 
     /// Set the state of joint `j` of instance `i` (for probes and tests: a release test
     /// starts from a bent joint at rest).
     pub fn set_state(&mut self, i: usize, j: usize, angles: [f32; 2], rates: [f32; 2]) {
-        let k = i * self.species.len() + j;
-        self.theta[k] = angles;
-        self.rate[k] = rates;
+        let (k, l) = self.slot(i, j);
+        for a in 0..2 {
+            self.theta[k][a][l] = angles[a];
+            self.rate[k][a][l] = rates[a];
+        }
     }
 
     /// The palettes of instance `i`, one per joint.
@@ -143,8 +175,8 @@ impl SwayBatch {
     }
 
     /// Advance every instance by `dt` seconds (> 0) in the wind `wind[i]` (m/s, tree space,
-    /// one velocity per instance), then recompose the palettes. Cannot fail; a non-finite
-    /// or non-positive `dt` leaves the state unchanged.
+    /// one velocity per instance; missing entries mean still air), then recompose the
+    /// palettes. Cannot fail; a non-finite or non-positive `dt` leaves the state unchanged.
     pub fn step(&mut self, dt: f32, wind: &[[f32; 3]]) {
         if !(dt > 0.0 && dt.is_finite()) {
             return;
@@ -158,107 +190,212 @@ impl SwayBatch {
         }
         let n = sp.len();
         let blend = dt / sp.params.blend_time;
-        let tr = &self.transitions;
+        let (tr, budget, ni) = (&self.transitions, &self.budget, self.instances);
         self.theta
             .par_chunks_mut(n)
             .zip(self.rate.par_chunks_mut(n))
             .zip(self.weight.par_chunks_mut(n))
             .zip(self.loads.par_chunks_mut(n))
-            .zip(self.palettes.par_chunks_mut(n))
-            .zip(self.budget.par_iter())
+            .zip(self.pal_lanes.par_chunks_mut(n))
+            .zip(self.palettes.par_chunks_mut(n * LANES))
             .enumerate()
-            .for_each(|(i, (((((theta, rate), weight), loads), pal), &budget))| {
-                let u = wind.get(i).copied().unwrap_or([0.0; 3]);
-                step_instance(sp, tr, blend, budget, u, theta, rate, weight, loads, pal);
+            .for_each(|(g, (((((theta, rate), weight), loads), lanes), out))| {
+                let mut u = [ZERO; 3];
+                let mut bud = [0u32; LANES];
+                for l in 0..LANES.min(ni - g * LANES) {
+                    let w = wind.get(g * LANES + l).copied().unwrap_or([0.0; 3]);
+                    for c in 0..3 {
+                        u[c][l] = w[c];
+                    }
+                    bud[l] = budget[g * LANES + l];
+                }
+                let mut st = Group { theta, rate, weight, loads, lanes, out };
+                step_group(sp, tr, blend, &bud, &u, &mut st);
             });
     }
 }
 
-fn step_instance(
+/// One group's state, lanes inner.
+struct Group<'a> {
+    theta: &'a mut [[Lanes; 2]],
+    rate: &'a mut [[Lanes; 2]],
+    weight: &'a mut [Lanes],
+    loads: &'a mut [[Lanes; 6]],
+    lanes: &'a mut [[Lanes; 12]],
+    /// The group's instances' palettes, instance-major (fewer than LANES in a last group).
+    out: &'a mut [Palette],
+}
+
+/// Step one group, vectorised with the widest instruction set the CPU has.
+fn step_group(
     sp: &SwaySpecies,
     tr: &[Transition],
     blend: f32,
-    budget: u32,
-    u: [f32; 3],
-    theta: &mut [[f32; 2]],
-    rate: &mut [[f32; 2]],
-    weight: &mut [f32],
-    loads: &mut [[f32; 6]],
-    pal: &mut [Palette],
+    bud: &[u32; LANES],
+    u: &[Lanes; 3],
+    st: &mut Group<'_>,
 ) {
-    let n = theta.len();
+    #[cfg(target_arch = "x86_64")]
+    {
+        #[target_feature(enable = "avx512f,avx512dq,avx512vl,avx2")]
+        fn wide(
+            sp: &SwaySpecies,
+            tr: &[Transition],
+            b: f32,
+            bud: &[u32; LANES],
+            u: &[Lanes; 3],
+            st: &mut Group<'_>,
+        ) {
+            step_group_impl(sp, tr, b, bud, u, st)
+        }
+        #[target_feature(enable = "avx2")]
+        fn avx2(
+            sp: &SwaySpecies,
+            tr: &[Transition],
+            b: f32,
+            bud: &[u32; LANES],
+            u: &[Lanes; 3],
+            st: &mut Group<'_>,
+        ) {
+            step_group_impl(sp, tr, b, bud, u, st)
+        }
+        if std::arch::is_x86_feature_detected!("avx512dq")
+            && std::arch::is_x86_feature_detected!("avx512vl")
+        {
+            // SAFETY: the CPU has these AVX-512 subsets, checked just above.
+            return unsafe { wide(sp, tr, blend, bud, u, st) };
+        }
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2, checked just above.
+            return unsafe { avx2(sp, tr, blend, bud, u, st) };
+        }
+    }
+    step_group_impl(sp, tr, blend, bud, u, st)
+}
+
+#[inline(always)]
+fn step_group_impl(
+    sp: &SwaySpecies,
+    tr: &[Transition],
+    blend: f32,
+    bud: &[u32; LANES],
+    u: &[Lanes; 3],
+    st: &mut Group<'_>,
+) {
+    let n = st.theta.len();
     // (1) Loads, tips inwards: loads[i] = (force on the subtree, moment about joint i).
-    for l in loads.iter_mut() {
-        *l = [0.0; 6];
+    for l in st.loads.iter_mut() {
+        *l = [ZERO; 6];
     }
     for i in (0..n).rev() {
         let [ax, ay] = sp.axes[i];
-        let w = weight[i];
-        let om = [
-            w * (rate[i][0] * ax[0] + rate[i][1] * ay[0]),
-            w * (rate[i][0] * ax[1] + rate[i][1] * ay[1]),
-            w * (rate[i][0] * ax[2] + rate[i][1] * ay[2]),
-        ];
         let arm = sp.arm[i];
-        let v = cross(om, arm);
-        let rel = [u[0] - v[0], u[1] - v[1], u[2] - v[2]];
-        let k = sp.drag[i] * dot(rel, rel).sqrt();
-        let f = [k * rel[0], k * rel[1], k * rel[2]];
-        let m = cross(arm, f);
-        let l = &mut loads[i];
-        for c in 0..3 {
-            l[c] += f[c];
-            l[3 + c] += m[c];
+        let drag = sp.drag[i];
+        let (ra, w) = (&st.rate[i], &st.weight[i]);
+        let li = &mut st.loads[i];
+        for l in 0..LANES {
+            let (r0, r1) = (w[l] * ra[0][l], w[l] * ra[1][l]);
+            let om = [r0 * ax[0] + r1 * ay[0], r0 * ax[1] + r1 * ay[1], r0 * ax[2] + r1 * ay[2]];
+            let v = cross(om, arm);
+            let rel = [u[0][l] - v[0], u[1][l] - v[1], u[2][l] - v[2]];
+            let k = drag * dot(rel, rel).sqrt();
+            let f = [k * rel[0], k * rel[1], k * rel[2]];
+            let m = cross(arm, f);
+            for c in 0..3 {
+                li[c][l] += f[c];
+                li[3 + c][l] += m[c];
+            }
         }
         let p = sp.parent[i];
         if p != sylva_tree::NO_PARENT {
             let p = p as usize;
-            let fi = [loads[i][0], loads[i][1], loads[i][2]];
-            let mi = [loads[i][3], loads[i][4], loads[i][5]];
-            let o = sp.origin[i];
-            let op = sp.origin[p];
+            let (o, op) = (sp.origin[i], sp.origin[p]);
             let r = [o[0] - op[0], o[1] - op[1], o[2] - op[2]];
-            let rf = cross(r, fi);
-            let lp = &mut loads[p];
-            for c in 0..3 {
-                lp[c] += fi[c];
-                lp[3 + c] += mi[c] + rf[c];
+            let (lp, li) = {
+                let (a, b) = st.loads.split_at_mut(i);
+                (&mut a[p], &b[0])
+            };
+            for l in 0..LANES {
+                let fi = [li[0][l], li[1][l], li[2][l]];
+                let rf = cross(r, fi);
+                for c in 0..3 {
+                    lp[c][l] += fi[c];
+                    lp[3 + c][l] += li[3 + c][l] + rf[c];
+                }
             }
         }
     }
     // (2) Springs of the active joints; blend weights.
     for i in 0..n {
-        let active = sp.rank[i] < budget;
-        if active {
-            let t = &tr[i];
-            let mom = [loads[i][3], loads[i][4], loads[i][5]];
-            let restart = weight[i] == 0.0;
-            for (a, axis) in sp.axes[i].iter().enumerate() {
+        let t = &tr[i];
+        let rank = sp.rank[i];
+        let [ax, ay] = sp.axes[i];
+        let li = &st.loads[i];
+        let (th, ra, w) = (&mut st.theta[i], &mut st.rate[i], &mut st.weight[i]);
+        for l in 0..LANES {
+            let active = rank < bud[l];
+            let restart = active && w[l] == 0.0;
+            let mom = [li[3][l], li[4][l], li[5][l]];
+            for (a, axis) in [ax, ay].iter().enumerate() {
                 let eq = dot(mom, *axis) * t.inv_k;
-                if restart {
-                    // Back from fully off: start at rest under the present load, so the
-                    // joint fades in without a step response.
-                    theta[i][a] = eq;
-                    rate[i][a] = 0.0;
-                }
-                let x = theta[i][a] - eq;
-                let v = rate[i][a];
-                theta[i][a] = t.a11 * x + t.a12 * v + eq;
-                rate[i][a] = t.a21 * x + t.a22 * v;
+                // Back from fully off: start at rest under the present load, so the joint
+                // fades in without a step response.
+                let x = if restart { 0.0 } else { th[a][l] - eq };
+                let v = if restart { 0.0 } else { ra[a][l] };
+                let (nx, nv) = (t.a11 * x + t.a12 * v + eq, t.a21 * x + t.a22 * v);
+                th[a][l] = if active { nx } else { th[a][l] };
+                ra[a][l] = if active { nv } else { ra[a][l] };
             }
-            weight[i] = (weight[i] + blend).min(1.0);
-        } else {
-            weight[i] = (weight[i] - blend).max(0.0);
+            w[l] = if active { (w[l] + blend).min(1.0) } else { (w[l] - blend).max(0.0) };
         }
     }
     // (3) Palettes, root outwards: M_i = M_parent · (T(o) R_i T(−o)).
     for i in 0..n {
         let [ax, ay] = sp.axes[i];
-        let w = weight[i];
-        let (t0, t1) = (w * theta[i][0], w * theta[i][1]);
-        let r =
-            rotation([t0 * ax[0] + t1 * ay[0], t0 * ax[1] + t1 * ay[1], t0 * ax[2] + t1 * ay[2]]);
         let o = sp.origin[i];
+        let (th, w) = (&st.theta[i], &st.weight[i]);
+        let mut phi = [ZERO; 3];
+        let mut small = true;
+        for l in 0..LANES {
+            let (t0, t1) = (w[l] * th[0][l], w[l] * th[1][l]);
+            for c in 0..3 {
+                phi[c][l] = t0 * ax[c] + t1 * ay[c];
+            }
+            small &= phi[0][l] * phi[0][l] + phi[1][l] * phi[1][l] + phi[2][l] * phi[2][l] < 0.25;
+        }
+        let p = sp.parent[i];
+        let (before, rest) = st.lanes.split_at_mut(i);
+        let parent = (p != sylva_tree::NO_PARENT).then(|| &before[p as usize]);
+        // Two copies of the lane loop: the common all-small-angle one vectorises fully.
+        if small {
+            palette_lanes(&phi, o, parent, &mut rest[0], small_angle);
+        } else {
+            palette_lanes(&phi, o, parent, &mut rest[0], |a2| {
+                if a2 < 0.25 { small_angle(a2) } else { large_angle(a2) }
+            });
+        }
+        // Instance-major copy for the renderer.
+        let lanes = &rest[0];
+        for (l, pal) in st.out.chunks_mut(n).enumerate() {
+            pal[i] = std::array::from_fn(|e| lanes[e][l]);
+        }
+    }
+}
+
+/// Joint palettes of all lanes from their rotation vectors φ, the rest position `o` of the
+/// joint and the parent's palettes.
+#[inline(always)]
+fn palette_lanes(
+    phi: &[Lanes; 3],
+    o: [f32; 3],
+    parent: Option<&[Lanes; 12]>,
+    out: &mut [Lanes; 12],
+    sc: impl Fn(f32) -> (f32, f32),
+) {
+    for l in 0..LANES {
+        let ph = [phi[0][l], phi[1][l], phi[2][l]];
+        let (s, c) = sc(dot(ph, ph));
+        let r = rodrigues(ph, s, c);
         let t = [
             o[0] - (r[0][0] * o[0] + r[0][1] * o[1] + r[0][2] * o[2]),
             o[1] - (r[1][0] * o[0] + r[1][1] * o[1] + r[1][2] * o[2]),
@@ -268,8 +405,13 @@ fn step_instance(
             r[0][0], r[0][1], r[0][2], t[0], r[1][0], r[1][1], r[1][2], t[1], r[2][0], r[2][1],
             r[2][2], t[2],
         ];
-        let p = sp.parent[i];
-        pal[i] = if p == sylva_tree::NO_PARENT { local } else { compose(&pal[p as usize], &local) };
+        let m = match parent {
+            None => local,
+            Some(pm) => compose(&std::array::from_fn(|e| pm[e][l]), &local),
+        };
+        for e in 0..12 {
+            out[e][l] = m[e];
+        }
     }
 }
 
