@@ -293,18 +293,31 @@ fn step_group_impl(
         let drag = sp.drag[i];
         let (ra, w) = (&st.rate[i], &st.weight[i]);
         let li = &mut st.loads[i];
+        // Simple lane loops, one quantity each, so they vectorise.
+        let mut rel = [ZERO; 3];
         for l in 0..LANES {
             let (r0, r1) = (w[l] * ra[0][l], w[l] * ra[1][l]);
             let om = [r0 * ax[0] + r1 * ay[0], r0 * ax[1] + r1 * ay[1], r0 * ax[2] + r1 * ay[2]];
             let v = cross(om, arm);
-            let rel = [u[0][l] - v[0], u[1][l] - v[1], u[2][l] - v[2]];
-            let k = drag * dot(rel, rel).sqrt();
-            let f = [k * rel[0], k * rel[1], k * rel[2]];
-            let m = cross(arm, f);
-            for c in 0..3 {
-                li[c][l] += f[c];
-                li[3 + c][l] += m[c];
-            }
+            rel[0][l] = u[0][l] - v[0];
+            rel[1][l] = u[1][l] - v[1];
+            rel[2][l] = u[2][l] - v[2];
+        }
+        let mut f = [ZERO; 3];
+        for l in 0..LANES {
+            let k = drag
+                * (rel[0][l] * rel[0][l] + rel[1][l] * rel[1][l] + rel[2][l] * rel[2][l]).sqrt();
+            f[0][l] = k * rel[0][l];
+            f[1][l] = k * rel[1][l];
+            f[2][l] = k * rel[2][l];
+        }
+        for l in 0..LANES {
+            li[0][l] += f[0][l];
+            li[1][l] += f[1][l];
+            li[2][l] += f[2][l];
+            li[3][l] += arm[1] * f[2][l] - arm[2] * f[1][l];
+            li[4][l] += arm[2] * f[0][l] - arm[0] * f[2][l];
+            li[5][l] += arm[0] * f[1][l] - arm[1] * f[0][l];
         }
         let p = sp.parent[i];
         if p != sylva_tree::NO_PARENT {
@@ -317,11 +330,12 @@ fn step_group_impl(
             };
             for l in 0..LANES {
                 let fi = [li[0][l], li[1][l], li[2][l]];
-                let rf = cross(r, fi);
-                for c in 0..3 {
-                    lp[c][l] += fi[c];
-                    lp[3 + c][l] += li[3 + c][l] + rf[c];
-                }
+                lp[0][l] += fi[0];
+                lp[1][l] += fi[1];
+                lp[2][l] += fi[2];
+                lp[3][l] += li[3][l] + (r[1] * fi[2] - r[2] * fi[1]);
+                lp[4][l] += li[4][l] + (r[2] * fi[0] - r[0] * fi[2]);
+                lp[5][l] += li[5][l] + (r[0] * fi[1] - r[1] * fi[0]);
             }
         }
     }
