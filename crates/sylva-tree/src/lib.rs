@@ -1,10 +1,16 @@
 //! Weber–Penn parametric trees in the paper's hybrid representation (paper §4.1).
 //!
-//! Today this crate holds the [`Skeleton`]: the joint hierarchy that the branch mesh, the
-//! leaf clusters and the animation share. Species parameters, generation, meshes, leaves,
-//! the geometry LOD chain and glTF export are still to come (see `ARCHITECTURE.md`).
+//! Today this crate holds the [`Species`] parameters (Weber & Penn's full set under their
+//! names, TOML species files, validation naming the key and line, six shipped presets) and
+//! the [`Skeleton`]: the joint hierarchy that the branch mesh, the leaf clusters and the
+//! animation share. Generation, meshes, leaves, the geometry LOD chain and glTF export are
+//! still to come (see `ARCHITECTURE.md`).
 #![warn(missing_docs)]
 
+pub mod generate;
 pub mod skeleton;
+pub mod species;
 
+pub use generate::{Tree, TreeStats, shape_ratio};
 pub use skeleton::{Joint, NO_PARENT, Skeleton, SkeletonError};
+pub use species::{LevelParams, PARAMS, PRESETS, Species, SpeciesError};

@@ -1,0 +1,516 @@
+//! Tree generation after Weber & Penn (1995), producing the skeleton of the hybrid
+//! representation: every stem split into `nCurveRes` rigid segments, one joint each.
+//!
+//! Implemented as WP95 describes: tree scale and trunk length/radius from Scale/ScaleV,
+//! 0Length and Ratio·0Scale; stem curvature (nCurve, nCurveBack for S-curves, nCurveV random,
+//! negative nCurveV as a helix); base splits (0BaseSplits) and segment splits (nSegSplits
+//! with the error-carrying rule) spreading clones by nSplitAngle; children (nBranches) spaced
+//! along the parent above BaseSize, their length from the crown ShapeRatio (level 1) or the
+//! parent's remaining length, down angles (negative nDownAngleV varying along the parent),
+//! rotations (negative nRotate alternating sides); radii from Ratio/RatioPower with nTaper
+//! and the trunk Flare; AttractionUp bending stems of level ≥ 2 towards the sky; leaves on
+//! the last level, counted by Leaves·ShapeRatio(4, ·)·LeafQuality and enlarged by
+//! 1/√LeafQuality. Not yet: the pruning envelope (PruneRatio > 0 is ignored) and the
+//! periodic tapers (nTaper > 2 is treated as 2).
+//!
+//! Masses: wood [`WOOD_DENSITY`], leaves [`LEAF_MASS_PER_AREA`]. Same species and seed give
+//! the same tree, bit for bit.
+
+use std::f32::consts::PI;
+
+use crate::skeleton::{Joint, NO_PARENT, Skeleton, SkeletonError};
+use crate::species::Species;
+
+/// Density of green wood, kg/m³ (green hardwoods ≈ 700–1000; USDA Wood Handbook).
+pub const WOOD_DENSITY: f32 = 800.0;
+/// Fresh leaf mass per one-sided leaf area, kg/m² (broadleaves ≈ 0.1–0.3).
+pub const LEAF_MASS_PER_AREA: f32 = 0.15;
+/// Area of a leaf of length 1 and width 1 for WP95's default (elliptic) outline: π/4.
+const LEAF_SHAPE_AREA: f32 = PI / 4.0;
+
+/// Deterministic generator: SplitMix64.
+#[derive(Debug, Clone)]
+struct Rng(u64);
+
+impl Rng {
+    fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    }
+    /// Uniform in [−1, 1).
+    fn sym(&mut self) -> f32 {
+        (self.next_u64() >> 40) as f32 / (1u64 << 23) as f32 - 1.0
+    }
+}
+
+type V3 = [f32; 3];
+
+fn add(a: V3, b: V3) -> V3 {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+fn scale(a: V3, s: f32) -> V3 {
+    [a[0] * s, a[1] * s, a[2] * s]
+}
+fn dot(a: V3, b: V3) -> f32 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+fn cross(a: V3, b: V3) -> V3 {
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+}
+fn norm(a: V3) -> V3 {
+    scale(a, 1.0 / dot(a, a).sqrt().max(1e-20))
+}
+/// Rotate `v` about the unit axis `k` by `angle` radians (Rodrigues).
+fn rotate(v: V3, k: V3, angle: f32) -> V3 {
+    let (s, c) = angle.sin_cos();
+    add(add(scale(v, c), scale(cross(k, v), s)), scale(k, dot(k, v) * (1.0 - c)))
+}
+
+/// WP95's crown shape ratio for `shape` at relative position `r` ∈ [0, 1].
+pub fn shape_ratio(shape: u32, r: f32) -> f32 {
+    let r = r.clamp(0.0, 1.0);
+    match shape {
+        0 => 0.2 + 0.8 * r,
+        1 => 0.2 + 0.8 * (PI * r).sin(),
+        2 => 0.2 + 0.8 * (0.5 * PI * r).sin(),
+        3 => 1.0,
+        4 => 0.5 + 0.5 * r,
+        5 if r <= 0.7 => r / 0.7,
+        5 => (1.0 - r) / 0.3,
+        6 => 1.0 - 0.8 * r,
+        7 if r <= 0.7 => 0.5 + 0.5 * r / 0.7,
+        7 => 0.5 + 0.5 * (1.0 - r) / 0.3,
+        _ => 1.0,
+    }
+}
+
+/// Summary figures of a generated tree.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TreeStats {
+    /// Tree height (highest joint tip), m.
+    pub height: f32,
+    /// Trunk length, m.
+    pub trunk_length: f32,
+    /// Trunk base radius (before flare), m.
+    pub trunk_radius: f32,
+    /// Stems generated.
+    pub stems: usize,
+    /// Leaves generated.
+    pub leaves: usize,
+    /// One-sided leaf area, m².
+    pub leaf_area: f32,
+}
+
+/// A generated tree: its skeleton and figures.
+#[derive(Debug, Clone)]
+pub struct Tree {
+    /// The joint hierarchy.
+    pub skeleton: Skeleton,
+    /// Summary figures.
+    pub stats: TreeStats,
+}
+
+struct Gen<'a> {
+    sp: &'a Species,
+    rng: Rng,
+    joints: Vec<Joint>,
+    stems: usize,
+    leaves: usize,
+    leaf_area: f32,
+    leaf_size: f32,
+    trunk_length: f32,
+    base_length: f32,
+    split_error: [f32; 4],
+    /// Stem levels actually grown: `Levels`, less trailing levels of zero length.
+    levels: usize,
+}
+
+/// A stem to grow: where, which way, how long and thick.
+#[derive(Clone, Copy)]
+struct StemSeed {
+    level: usize,
+    parent_joint: u32,
+    origin: V3,
+    dir: V3,
+    /// A unit vector ⟂ dir fixing the stem's roll (the bending plane of nCurve).
+    side: V3,
+    length: f32,
+    radius: f32,
+    /// Offset of this stem along its parent, m, and the parent's length (level ≥ 1).
+    offset: f32,
+    parent_length: f32,
+    /// First segment index to generate (clones of a split continue mid-stem).
+    first_segment: u32,
+    /// Share of the stem's children and leaves this piece carries: a split divides them
+    /// among the clones, so splitting does not multiply the crown's density.
+    share: f32,
+}
+
+impl Species {
+    /// Generate the tree of this species for `seed`.
+    pub fn generate(&self, seed: u64) -> Result<Tree, SkeletonError> {
+        let mut rng = Rng(seed ^ 0x5175_a000_0000_0000);
+        let sp = self;
+        let tree_scale = sp.scale + sp.scale_v * rng.sym();
+        let l0 = &sp.level[0];
+        let trunk_length = (l0.length + l0.length_v * rng.sym()).max(0.01) * tree_scale.max(0.1);
+        let trunk_radius =
+            trunk_length * sp.ratio * (sp.scale0 + sp.scale0_v * rng.sym()).max(0.01);
+        let mut g = Gen {
+            sp,
+            rng,
+            joints: Vec::new(),
+            stems: 0,
+            leaves: 0,
+            leaf_area: 0.0,
+            leaf_size: sp.leaf_scale / sp.leaf_quality.sqrt(),
+            trunk_length,
+            base_length: sp.base_size * trunk_length,
+            split_error: [0.0; 4],
+            levels: (1..sp.levels.clamp(1, 4) as usize)
+                .take_while(|&n| sp.level[n].length + sp.level[n].length_v > 0.0)
+                .count()
+                + 1,
+        };
+        let seed = StemSeed {
+            level: 0,
+            parent_joint: NO_PARENT,
+            origin: [0.0; 3],
+            dir: [0.0, 0.0, 1.0],
+            side: [1.0, 0.0, 0.0],
+            length: trunk_length,
+            radius: trunk_radius,
+            offset: 0.0,
+            parent_length: trunk_length,
+            first_segment: 0,
+            share: 1.0,
+        };
+        g.stem(seed);
+        let height = g.joints.iter().map(|j| j.tip()[2]).fold(0.0, f32::max);
+        let stats = TreeStats {
+            height,
+            trunk_length,
+            trunk_radius,
+            stems: g.stems,
+            leaves: g.leaves,
+            leaf_area: g.leaf_area,
+        };
+        Ok(Tree { skeleton: Skeleton::new(g.joints)?, stats })
+    }
+}
+
+impl Gen<'_> {
+    /// Radius at relative position z ∈ [0, 1] along a stem of base radius `r0`.
+    fn radius_at(&self, level: usize, r0: f32, z: f32) -> f32 {
+        let taper = self.sp.level[level].taper.min(2.0);
+        let unit = if taper <= 1.0 { taper } else { 2.0 - taper };
+        let mut r = r0 * (1.0 - unit * z);
+        if taper > 1.0 {
+            // Rounded tip: blend towards a sphere of the stem's tip radius.
+            let t = (1.0 - z).max(0.0);
+            r = r.max(r0 * (1.0 - unit) * (1.0 - (1.0 - t).powi(2)).sqrt() * (taper - 1.0));
+        }
+        if level == 0 {
+            let y = (1.0 - 8.0 * z).max(0.0);
+            r *= 1.0 + self.sp.flare * (100f32.powf(y) - 1.0) / 100.0;
+        }
+        r.max(0.001 * r0).max(1e-4)
+    }
+
+    fn stem(&mut self, s: StemSeed) {
+        let lp = self.sp.level[s.level];
+        let res = lp.curve_res.max(1);
+        let seg_len = s.length / res as f32;
+        self.stems += 1;
+        let mut dir = s.dir;
+        let side = s.side;
+        let mut pos = s.origin;
+        let mut parent = s.parent_joint;
+        // Random curvature per stem; a negative nCurveV makes a helix (constant twist).
+        let curve_v = lp.curve_v.abs().to_radians();
+        let helix = lp.curve_v < 0.0;
+        let helix_step = if helix { curve_v / res as f32 } else { 0.0 };
+        // Children of this stem, spaced along it. Leaves grow on the last level that has
+        // stems (a last level of zero length leaves them on the one above).
+        let last_level = s.level + 1 >= self.levels;
+        let children = if last_level { 0.0 } else { self.child_count(&s) };
+        let leaves = if last_level { self.leaf_count(&s) } else { 0.0 };
+        let (start, span) = if s.level == 0 {
+            (self.base_length, (s.length - self.base_length).max(0.0))
+        } else {
+            (0.0, s.length)
+        };
+        let mut rot_acc = self.rng.sym() * PI;
+        let n_children = children.round() as usize;
+        let n_leaves = leaves.round() as usize;
+        // A clone continues mid-stem: it carries only the children and leaves of the
+        // segments it grows.
+        let clone_start = s.first_segment as f32 * seg_len;
+        let mut next_child = (0..n_children)
+            .take_while(|&k| start + span * (k as f32 + 0.5) / (n_children as f32) < clone_start)
+            .count();
+        let mut next_leaf = (s.first_segment as usize * n_leaves) / res as usize;
+        let mut share = s.share;
+        let mut leaf_carry = 0.0f32;
+        for seg in s.first_segment..res {
+            // Curvature of this segment.
+            let half = res as f32 / 2.0;
+            let bend = if lp.curve_back == 0.0 {
+                lp.curve / res as f32
+            } else if (seg as f32) < half {
+                lp.curve / half
+            } else {
+                lp.curve_back / half
+            };
+            let mut angle = bend.to_radians();
+            if !helix {
+                angle += curve_v / res as f32 * self.rng.sym();
+            }
+            if seg > 0 || s.level == 0 {
+                let axis = norm(cross(dir, side));
+                if seg > 0 {
+                    dir = norm(rotate(dir, axis, angle));
+                }
+                if helix {
+                    dir = norm(rotate(dir, s.dir, helix_step));
+                }
+            }
+            if s.level >= 2 && self.sp.attraction_up != 0.0 {
+                // WP95: bend towards (or away from) the vertical in proportion to the
+                // segment's declination.
+                let decl = dir[2].clamp(-1.0, 1.0).acos();
+                let horiz = norm(cross(dir, [0.0, 0.0, 1.0]));
+                if dot(horiz, horiz) > 0.5 {
+                    let up = self.sp.attraction_up * decl / res as f32;
+                    dir = norm(rotate(dir, horiz, -up.clamp(-0.5, 0.5)));
+                }
+            }
+            let z0 = seg as f32 / res as f32;
+            let r = self.radius_at(s.level, s.radius, z0 + 0.5 / res as f32);
+            let leaf_here = {
+                let upto = ((seg + 1) as usize * n_leaves) / res as usize;
+                let n = upto.saturating_sub(next_leaf) as f32 * share + leaf_carry;
+                next_leaf = upto;
+                leaf_carry = n - n.floor();
+                n.floor() as usize
+            };
+            let area = leaf_here as f32
+                * self.leaf_size
+                * self.leaf_size
+                * self.sp.leaf_scale_x
+                * LEAF_SHAPE_AREA;
+            self.leaves += leaf_here;
+            self.leaf_area += area;
+            self.joints.push(Joint {
+                parent,
+                origin: pos,
+                axis: dir,
+                length: seg_len,
+                radius: r,
+                own_mass: WOOD_DENSITY * PI * r * r * seg_len,
+                leaf_area: area,
+                leaf_mass: LEAF_MASS_PER_AREA * area,
+            });
+            let me = (self.joints.len() - 1) as u32;
+            // Children whose offset falls on this segment.
+            let seg_start = seg as f32 * seg_len;
+            while next_child < n_children {
+                let off = start + span * (next_child as f32 + 0.5) / n_children as f32;
+                if off >= seg_start + seg_len && seg + 1 < res {
+                    break;
+                }
+                // Thinning by the share: child k is kept when ⌊(k+1)·share⌋ > ⌊k·share⌋.
+                let k = next_child as f32;
+                if ((k + 1.0) * share).floor() > (k * share).floor() {
+                    let at = add(pos, scale(dir, (off - seg_start).clamp(0.0, seg_len)));
+                    self.child(&s, me, at, dir, side, off, &mut rot_acc, next_child);
+                }
+                next_child += 1;
+            }
+            pos = add(pos, scale(dir, seg_len));
+            parent = me;
+            // Splits: base splits on the trunk's first segment, else the error-carrying rule.
+            let splits = if s.level == 0 && seg == 0 && self.sp.base_splits > 0 {
+                self.sp.base_splits as f32
+            } else {
+                let want = lp.seg_splits + self.split_error[s.level];
+                let n = want.round();
+                self.split_error[s.level] = want - n;
+                n
+            };
+            if splits >= 1.0 && seg + 1 < res {
+                let clones = splits as usize;
+                share /= clones as f32 + 1.0;
+                let spread = (lp.split_angle + lp.split_angle_v * self.rng.sym()).to_radians();
+                for c in 0..clones {
+                    let around =
+                        2.0 * PI * (c as f32 + 1.0) / (clones as f32 + 1.0) + self.rng.sym() * 0.3;
+                    let axis = norm(rotate(norm(cross(dir, side)), dir, around));
+                    let cdir = norm(rotate(dir, axis, spread));
+                    let clone = StemSeed {
+                        origin: pos,
+                        dir: cdir,
+                        side: norm(cross(axis, cdir)),
+                        parent_joint: me,
+                        first_segment: seg + 1,
+                        radius: s.radius / (clones as f32 + 1.0).sqrt(),
+                        share,
+                        ..s
+                    };
+                    self.stem(clone);
+                }
+                // The original bends the other way by half the angle.
+                let axis = norm(cross(dir, side));
+                dir = norm(rotate(dir, axis, -0.5 * spread));
+            }
+        }
+    }
+
+    fn child_count(&mut self, s: &StemSeed) -> f32 {
+        // WP95: the trunk carries 1Branches; a first-level branch carries fewer the shorter
+        // it is relative to its largest possible length; deeper stems fewer the nearer
+        // they sit to their parent's tip.
+        let lc = self.sp.level[s.level + 1];
+        let factor = match s.level {
+            0 => 1.0,
+            1 => {
+                let max_len = self.sp.level[1].length.max(1e-3);
+                0.2 + 0.8 * (s.length / s.parent_length / max_len).min(1.0)
+            }
+            _ => 1.0 - 0.5 * s.offset / s.parent_length,
+        };
+        lc.branches * factor.max(0.0)
+    }
+
+    fn leaf_count(&mut self, s: &StemSeed) -> f32 {
+        let l = self.sp.leaves.abs();
+        let r = if s.parent_length > 0.0 { s.offset / s.parent_length } else { 1.0 };
+        l * shape_ratio(4, r) * self.sp.leaf_quality
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn child(
+        &mut self,
+        s: &StemSeed,
+        joint: u32,
+        at: V3,
+        dir: V3,
+        side: V3,
+        off: f32,
+        rot_acc: &mut f32,
+        k: usize,
+    ) {
+        let lc = self.sp.level[s.level + 1];
+        let len_max = lc.length + lc.length_v * self.rng.sym();
+        let length = if s.level == 0 {
+            let r = (self.trunk_length - off) / (self.trunk_length - self.base_length).max(1e-3);
+            s.length * len_max * shape_ratio(self.sp.shape, r)
+        } else {
+            len_max * (s.length - 0.6 * off)
+        };
+        if length <= 1e-3 {
+            return;
+        }
+        let r_parent_here = self.radius_at(s.level, s.radius, off / s.length);
+        let radius =
+            (s.radius * (length / s.length).powf(self.sp.ratio_power)).min(r_parent_here).max(1e-4);
+        // Rotation about the parent: nRotate per child, or for a negative nRotate children
+        // alternating sides (180° apart), each pair advanced by |nRotate|.
+        let angle = if lc.rotate >= 0.0 {
+            *rot_acc += (lc.rotate + lc.rotate_v * self.rng.sym()).to_radians();
+            *rot_acc
+        } else {
+            let pair = (k / 2) as f32 * lc.rotate.abs() + if k % 2 == 1 { 180.0 } else { 0.0 };
+            *rot_acc + (pair + lc.rotate_v * self.rng.sym()).to_radians()
+        };
+        let down = if lc.down_angle_v >= 0.0 {
+            lc.down_angle + lc.down_angle_v * self.rng.sym()
+        } else {
+            let r = (s.length - off)
+                / (s.length - if s.level == 0 { self.base_length } else { 0.0 }).max(1e-3);
+            lc.down_angle + lc.down_angle_v * (1.0 - 2.0 * shape_ratio(0, r))
+        };
+        let perp = norm(rotate(side, dir, angle));
+        let tilt_axis = norm(cross(dir, perp));
+        let cdir = norm(rotate(dir, tilt_axis, down.to_radians()));
+        let cside = norm(cross(tilt_axis, cdir));
+        let seed = StemSeed {
+            level: s.level + 1,
+            parent_joint: joint,
+            origin: at,
+            dir: cdir,
+            side: if dot(cside, cside) > 0.5 { cside } else { perp },
+            length,
+            radius,
+            offset: off,
+            parent_length: s.length,
+            first_segment: 0,
+            share: 1.0,
+        };
+        self.stem(seed);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::species::PRESETS;
+
+    #[test]
+    fn same_seed_same_tree_and_another_seed_another() {
+        let sp = Species::preset("quaking_aspen").expect("preset");
+        let a = sp.generate(7).expect("valid");
+        let b = sp.generate(7).expect("valid");
+        assert_eq!(a.skeleton, b.skeleton);
+        let c = sp.generate(8).expect("valid");
+        assert_ne!(a.skeleton, c.skeleton);
+    }
+
+    #[test]
+    fn every_preset_gives_a_valid_finite_tree() {
+        for (name, _) in PRESETS {
+            let sp = Species::preset(name).expect("preset");
+            let t = sp.generate(1).expect("valid skeleton");
+            let sk = &t.skeleton;
+            for (i, j) in sk.joints().iter().enumerate() {
+                assert!(j.origin.iter().chain(&j.axis).all(|v| v.is_finite()), "{name} joint {i}");
+                assert!(j.parent == NO_PARENT || (j.parent as usize) < i);
+            }
+            assert!(t.stats.leaves > 0, "{name}: no leaves");
+            assert!(sk.len() > 20, "{name}: only {} joints", sk.len());
+        }
+    }
+
+    #[test]
+    fn height_and_trunk_radius_follow_scale_and_ratio() {
+        // WP95: trunk length = (0Length ± 0LengthV)·(Scale ± ScaleV); trunk radius =
+        // length·Ratio·(0Scale ± 0ScaleV).
+        for (name, _) in PRESETS {
+            let sp = Species::preset(name).expect("preset");
+            for seed in 0..8 {
+                let t = sp.generate(seed).expect("valid");
+                let l0 = sp.level[0];
+                let lo = (l0.length - l0.length_v) * (sp.scale - sp.scale_v);
+                let hi = (l0.length + l0.length_v) * (sp.scale + sp.scale_v);
+                assert!(
+                    t.stats.trunk_length >= lo - 1e-3 && t.stats.trunk_length <= hi + 1e-3,
+                    "{name}"
+                );
+                let r = t.stats.trunk_length * sp.ratio;
+                assert!(
+                    (t.stats.trunk_radius / r - 1.0).abs() <= sp.scale0_v / sp.scale0 + 1e-4,
+                    "{name}"
+                );
+                // The crown rises from the trunk (curvature bends it; upturned branches of
+                // up to 1.5× their parent, as the willow's, reach above it).
+                assert!(
+                    t.stats.height > 0.5 * t.stats.trunk_length && t.stats.height < 2.5 * hi,
+                    "{name}"
+                );
+            }
+        }
+    }
+}
