@@ -3,13 +3,17 @@
 //! Joint i bends about the two axes x_i, y_i of its local frame (z along its segment):
 //! I θ'' + c θ' + k θ = τ per axis.
 //!
-//! * Inertia about the joint: the segment as a uniform rod, m L²/3, plus everything it
-//!   carries downstream lumped at the segment tip, (M_carried − m) L².
-//! * Stiffness from the natural frequency a cantilever of the segment's size would have,
+//! * Inertia about the joint: every mass it carries (wood and leaves of each downstream
+//!   segment, at the segment's centre), Σ m r².
+//! * Stiffness from the natural frequency of the cantilever the joint roots: the rest of
+//!   its stem from the joint to the stem's tip (length L, base diameter d),
 //!   f_bare = 0.14 √(E/ρ_w) d/L² (first mode of a uniform circular cantilever:
-//!   (1.875²/2π)·√(E I_A/(ρ_w A))/L², radius of gyration d/4), lowered by the carried mass
-//!   as a tip mass on the rod's effective mass 33/140 m (Rayleigh):
-//!   f = f_bare √(0.2357 m / (0.2357 m + M_tip)); then k = I (2πf)².
+//!   (1.875²/2π)·√(E I_A/(ρ_w A))/L², radius of gyration d/4), lowered by everything else it
+//!   carries (side branches, leaves) through the modal mass (Rayleigh): each mass m at
+//!   relative height ξ along the stem counts as m φ(ξ)², φ(ξ) = ξ²(3 − ξ)/2 the cantilever's
+//!   first-mode shape (a bare uniform stem sums to 33/140 of its mass, the textbook value),
+//!   f = f_bare √(0.2357 m_stem / M_modal); then k = I (2πf)².
+//!   So a trunk sways at a fraction of a hertz and a twig at several hertz, as measured.
 //! * Damping c = 2ζ√(kI) with one damping ratio ζ (structural + aerodynamic).
 //! * Drag area: the segment's projected area d·L (C_d of a cylinder) plus its leaves
 //!   (C_d per one-sided leaf area), at the segment's mid point.
@@ -52,6 +56,9 @@ pub struct SwaySpecies {
     pub(crate) arm: Vec<[f32; 3]>,
     /// ½ ρ C_d A of the segment and its leaves, kg/m.
     pub(crate) drag: Vec<f32>,
+    /// Linearised aerodynamic damping rate per unit wind speed, 2·drag·(L/2)²/I, 1/m: the
+    /// relative-wind drag damps the joint at about this rate × |U|.
+    pub(crate) aero: Vec<f32>,
     pub(crate) springs: Vec<JointSpring>,
     /// Joints ordered by priority (carried mass, descending); a prefix of any length is
     /// closed under taking parents.
@@ -73,11 +80,54 @@ impl SwaySpecies {
             axes: Vec::with_capacity(n),
             arm: Vec::with_capacity(n),
             drag: Vec::with_capacity(n),
+            aero: Vec::with_capacity(n),
             springs: Vec::with_capacity(n),
             priority: Vec::new(),
             rank: vec![0; n],
         };
         let cbar = (params.youngs_modulus / params.wood_density).sqrt();
+        // Rest of each joint's stem (tip inwards): length and wood mass along the longest
+        // continuation.
+        let mut rest_len = vec![0.0f32; n];
+        let mut rest_mass = vec![0.0f32; n];
+        for i in (0..n).rev() {
+            rest_len[i] += joints[i].length;
+            rest_mass[i] += joints[i].own_mass;
+            let p = joints[i].parent;
+            if joints[i].continues && p != sylva_tree::NO_PARENT {
+                let p = p as usize;
+                // Children come after parents: a parent's own terms are added at its turn.
+                if rest_len[i] > rest_len[p] {
+                    rest_len[p] = rest_len[i];
+                    rest_mass[p] = rest_mass[i];
+                }
+            }
+        }
+        // Inertia about each joint, Σ m r², and modal mass of the stem it roots,
+        // Σ m φ(ξ)² with the cantilever's first-mode shape φ(ξ) = ξ²(3 − ξ)/2 at the
+        // relative height ξ where each mass sits along that stem (a uniform stem alone gives
+        // 33/140 of its mass, the textbook value).
+        let mut inertia = vec![0.0f32; n];
+        let mut modal = vec![0.0f32; n];
+        for (k, jk) in joints.iter().enumerate() {
+            let m = jk.own_mass + jk.leaf_mass;
+            let c = [
+                jk.origin[0] + 0.5 * jk.length * jk.axis[0],
+                jk.origin[1] + 0.5 * jk.length * jk.axis[1],
+                jk.origin[2] + 0.5 * jk.length * jk.axis[2],
+            ];
+            let mut a = k as u32;
+            while a != sylva_tree::NO_PARENT {
+                let ja = &joints[a as usize];
+                let d = [c[0] - ja.origin[0], c[1] - ja.origin[1], c[2] - ja.origin[2]];
+                inertia[a as usize] += m * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+                let along = d[0] * ja.axis[0] + d[1] * ja.axis[1] + d[2] * ja.axis[2];
+                let xi = (along / rest_len[a as usize]).clamp(0.0, 1.0);
+                let phi = 0.5 * xi * xi * (3.0 - xi);
+                modal[a as usize] += m * phi * phi;
+                a = ja.parent;
+            }
+        }
         for (i, j) in joints.iter().enumerate() {
             let [x, y, _] = j.frame();
             sp.axes.push([x, y]);
@@ -86,16 +136,16 @@ impl SwaySpecies {
             let d = 2.0 * j.radius;
             let area = params.wood_drag * d * j.length + params.leaf_drag * j.leaf_area;
             sp.drag.push(0.5 * params.air_density * area);
-            let m = j.own_mass.max(1e-6);
-            let tip = (skeleton.carried_mass(i) - j.own_mass).max(0.0);
-            let l2 = j.length * j.length;
-            let inertia = m * l2 / 3.0 + tip * l2;
-            let f_bare = 0.14 * cbar * d / l2;
-            let meff = CANTILEVER_TIP_MASS_FRACTION * m;
-            let frequency = f_bare * (meff / (meff + tip)).sqrt();
+            let l = rest_len[i];
+            let m_stem = rest_mass[i].max(1e-6);
+            let inertia = inertia[i].max(1e-9);
+            let f_bare = 0.14 * cbar * d / (l * l);
+            let meff = CANTILEVER_TIP_MASS_FRACTION * m_stem;
+            let frequency = f_bare * (meff / modal[i].max(meff)).sqrt();
             let w = 2.0 * PI * frequency;
             let stiffness = inertia * w * w;
             let damping = 2.0 * params.damping_ratio * (stiffness * inertia).sqrt();
+            sp.aero.push(2.0 * sp.drag[i] * h * h / inertia);
             sp.springs.push(JointSpring { inertia, stiffness, damping, frequency });
         }
         let mut order: Vec<u32> = (0..n as u32).collect();

@@ -38,6 +38,7 @@ fn steady_state_steps_do_not_allocate() {
             own_mass: 20.0,
             leaf_area: 1.0,
             leaf_mass: 0.3,
+            continues: i > 0,
         })
         .collect();
     let sp = SwaySpecies::new(&Skeleton::new(joints).expect("valid"), SwayParams::default())

@@ -22,6 +22,7 @@ fn pole(n: usize, height: f32, r0: f32, leaf: f32) -> Skeleton {
                 own_mass: 800.0 * std::f32::consts::PI * r * r * l,
                 leaf_area: if i + 1 == n { leaf } else { 0.0 },
                 leaf_mass: if i + 1 == n { 0.3 * leaf } else { 0.0 },
+                continues: i > 0,
             }
         })
         .collect();
@@ -69,8 +70,8 @@ fn free_decay_has_the_analytic_frequency_and_damping_ratio() {
     let delta = (peaks[0] / peaks[peaks.len() - 1]).ln() / cycles;
     let zeta_meas = delta / (4.0 * std::f64::consts::PI.powi(2) + delta * delta).sqrt();
     assert!((zeta_meas / zeta - 1.0).abs() < 0.01, "damping ratio {zeta_meas}, expected {zeta}");
-    // A bare 5 cm × 2 m branch swings at several hertz (measured: about 5–7 Hz).
-    assert!(spring.frequency > 3.0 && spring.frequency < 9.0, "{} Hz", spring.frequency);
+    // A bare 5 cm × 2 m branch swings at 5–7 Hz, as measured.
+    assert!(spring.frequency > 5.0 && spring.frequency < 7.0, "{} Hz", spring.frequency);
 }
 
 #[test]

@@ -313,6 +313,7 @@ impl Gen<'_> {
                 own_mass: WOOD_DENSITY * PI * r * r * seg_len,
                 leaf_area: area,
                 leaf_mass: LEAF_MASS_PER_AREA * area,
+                continues: seg > s.first_segment || s.first_segment > 0,
             });
             let me = (self.joints.len() - 1) as u32;
             // Children whose offset falls on this segment.

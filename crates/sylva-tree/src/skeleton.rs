@@ -33,6 +33,9 @@ pub struct Joint {
     pub leaf_area: f32,
     /// Mass of the leaves attached to this segment, kg.
     pub leaf_mass: f32,
+    /// Whether this segment continues its parent's stem (a later segment of the same stem,
+    /// or a clone of a split) rather than starting a new stem on it.
+    pub continues: bool,
 }
 
 impl Joint {
@@ -189,6 +192,7 @@ mod tests {
             own_mass: mass,
             leaf_area: 0.0,
             leaf_mass: 0.5,
+            continues: parent != NO_PARENT,
         }
     }
 

@@ -12,110 +12,69 @@ pub enum BenchCommand {
     /// Wind synthesis: 100×100 cells on one core, Separable vs Cholesky at 40×40, and
     /// (with --large) 1000×1000 cells × 1024 frames with peak memory.
     Wind(WindBench),
-    /// Sway: joint updates per second on one core (springs and palette composition) for
-    /// 1000 instances of a synthetic 710-joint tree.
+    /// Sway: per-step cost of stepping many instances of each preset on one core, springs
+    /// and palette composition included, and joint updates per second.
     Sway(SwayBench),
 }
 
 #[derive(Debug, Args)]
 pub struct SwayBench {
-    /// Instances stepped together.
+    /// Instances of each species stepped together.
     #[arg(long, default_value_t = 1000)]
     instances: usize,
-    /// Steps timed (the median step is reported).
-    #[arg(long, default_value_t = 30)]
+    /// Steps timed per species (the median step is reported).
+    #[arg(long, default_value_t = 10)]
     steps: usize,
-}
-
-/// A deterministic synthetic tree: a 10-segment trunk, two 5-segment branches per trunk
-/// segment, two 3-segment twigs per branch segment (710 joints). Stands in for the
-/// Weber–Penn presets until they land.
-fn synthetic_tree() -> anyhow::Result<sylva_tree::Skeleton> {
-    use sylva_tree::{Joint, NO_PARENT};
-    let mut joints: Vec<Joint> = Vec::new();
-    let mut push =
-        |parent: u32, origin: [f32; 3], axis: [f32; 3], length: f32, radius: f32, leaf: f32| {
-            let n = (axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]).sqrt();
-            let axis = [axis[0] / n, axis[1] / n, axis[2] / n];
-            joints.push(Joint {
-                parent,
-                origin,
-                axis,
-                length,
-                radius,
-                own_mass: 800.0 * std::f32::consts::PI * radius * radius * length,
-                leaf_area: leaf,
-                leaf_mass: 0.3 * leaf,
-            });
-            joints.len() as u32 - 1
-        };
-    let add =
-        |o: [f32; 3], a: [f32; 3], l: f32| [o[0] + a[0] * l, o[1] + a[1] * l, o[2] + a[2] * l];
-    let mut trunk_parent = NO_PARENT;
-    for t in 0..10 {
-        let o = [0.0, 0.0, t as f32 * 1.5];
-        let tj = push(trunk_parent, o, [0.0, 0.0, 1.0], 1.5, 0.2 * (1.0 - 0.07 * t as f32), 0.0);
-        trunk_parent = tj;
-        for b in 0..2 {
-            let ang = (t * 2 + b) as f32 * 2.4;
-            let dir = [ang.cos(), ang.sin(), 0.6];
-            let mut bp = tj;
-            let mut bo = add(o, [0.0, 0.0, 1.0], 0.75);
-            for s in 0..5 {
-                let bj = push(bp, bo, dir, 0.8, 0.05 * (1.0 - 0.15 * s as f32), 0.0);
-                let dn = (dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]).sqrt();
-                let unit = [dir[0] / dn, dir[1] / dn, dir[2] / dn];
-                for w in 0..2 {
-                    let a2 = ang + if w == 0 { 0.8 } else { -0.8 };
-                    let td = [a2.cos(), a2.sin(), 0.3];
-                    let mut tp = bj;
-                    let mut to = add(bo, unit, 0.4);
-                    for _ in 0..3 {
-                        tp = push(tp, to, td, 0.3, 0.012, 0.4);
-                        let tn = (td[0] * td[0] + td[1] * td[1] + td[2] * td[2]).sqrt();
-                        to = add(to, [td[0] / tn, td[1] / tn, td[2] / tn], 0.3);
-                    }
-                }
-                bp = bj;
-                bo = add(bo, unit, 0.8);
-            }
-        }
-    }
-    Ok(sylva_tree::Skeleton::new(joints)?)
+    /// Species to run, comma-separated (default: every preset).
+    #[arg(long, value_delimiter = ',')]
+    species: Option<Vec<String>>,
+    /// Seed of the generated trees.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
 }
 
 fn sway(a: SwayBench) -> anyhow::Result<()> {
     use sylva_sway::{SwayBatch, SwayParams, SwaySpecies};
+    use sylva_tree::{PRESETS, Species};
     println!("machine: {}", machine());
-    let sk = synthetic_tree()?;
-    let n = sk.len();
-    let sp = SwaySpecies::new(&sk, SwayParams::default())?;
-    let mut batch = SwayBatch::new(sp, a.instances);
-    let winds: Vec<[f32; 3]> =
-        (0..a.instances).map(|i| [6.0 + (i % 5) as f32, (i % 3) as f32 - 1.0, 0.0]).collect();
+    let names: Vec<String> =
+        a.species.clone().unwrap_or_else(|| PRESETS.iter().map(|(n, _)| n.to_string()).collect());
     let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().context("thread pool")?;
-    let times = one.install(|| {
-        batch.step(1.0 / 60.0, &winds);
-        (0..a.steps.max(1))
-            .map(|_| {
-                let t0 = Instant::now();
-                batch.step(1.0 / 60.0, &winds);
-                t0.elapsed().as_secs_f64()
-            })
-            .collect::<Vec<f64>>()
-    });
-    std::hint::black_box(batch.all_palettes());
-    let step = median(times);
-    let joints = (n * a.instances) as f64;
     println!(
-        "{} instances × {} joints, 1 core: {:.2} ms per step (median of {}) → {:.1} ns per joint, {:.1} million joint updates per second",
-        a.instances,
-        n,
-        step * 1e3,
-        a.steps,
-        step * 1e9 / joints,
-        joints / step / 1e6
+        "{:<22}{:>9}{:>11}{:>14}{:>14}{:>16}",
+        "species", "joints", "instances", "ms per step", "ns per joint", "M joints / s"
     );
+    for name in names {
+        let species = Species::preset(&name).with_context(|| format!("no preset named {name}"))?;
+        let tree = species.generate(a.seed)?;
+        let n = tree.skeleton.len();
+        let sp = SwaySpecies::new(&tree.skeleton, SwayParams::default())?;
+        let mut batch = SwayBatch::new(sp, a.instances);
+        let winds: Vec<[f32; 3]> =
+            (0..a.instances).map(|i| [6.0 + (i % 5) as f32, (i % 3) as f32 - 1.0, 0.0]).collect();
+        let times = one.install(|| {
+            batch.step(1.0 / 60.0, &winds);
+            (0..a.steps.max(1))
+                .map(|_| {
+                    let t0 = Instant::now();
+                    batch.step(1.0 / 60.0, &winds);
+                    t0.elapsed().as_secs_f64()
+                })
+                .collect::<Vec<f64>>()
+        });
+        std::hint::black_box(batch.all_palettes());
+        let step = median(times);
+        let joints = (n * a.instances) as f64;
+        println!(
+            "{:<22}{:>9}{:>11}{:>14.1}{:>14.1}{:>16.1}",
+            name,
+            n,
+            a.instances,
+            step * 1e3,
+            step * 1e9 / joints,
+            joints / step / 1e6
+        );
+    }
     Ok(())
 }
 
