@@ -1,9 +1,10 @@
-//! The `sylva` command: wind fields now; trees, animation and the forest viewer as they land.
+//! The `sylva` command: wind fields, trees and their sway now; the forest viewer as it lands.
 //!
 //! Arguments are parsed in two stages (raw clap flags -> validated settings in `wind.rs`),
 //! so every check happens once, at the edge, with an error that names the flag.
 
 mod bench;
+mod tree;
 mod wind;
 
 use clap::{Parser, Subcommand};
@@ -24,16 +25,39 @@ enum Command {
     /// Generate, inspect, plot and export stochastic wind fields.
     #[command(subcommand)]
     Wind(Box<wind::WindCommand>),
+    /// Weber–Penn species: list, document, generate and inspect trees.
+    #[command(subcommand)]
+    Tree(tree::TreeCommand),
+    /// Branch sway: probe how a tree moves in wind.
+    #[command(subcommand)]
+    Sway(tree::SwayCommand),
     /// Benchmarks (figures with the machine they ran on).
     #[command(subcommand)]
     Bench(bench::BenchCommand),
 }
 
-fn main() -> anyhow::Result<()> {
-    let cli = Cli::parse();
+fn main() -> std::process::ExitCode {
+    // Piping into `head` must end the program quietly, as for any Unix tool.
+    #[cfg(unix)]
+    // SAFETY: restoring the default disposition of SIGPIPE before any thread starts.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+    match run(Cli::parse()) {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Demo(a) => wind::demo(a),
         Command::Wind(c) => wind::run(*c),
+        Command::Tree(c) => tree::run_tree(c),
+        Command::Sway(c) => tree::run_sway(c),
         Command::Bench(c) => bench::run(c),
     }
 }

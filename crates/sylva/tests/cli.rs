@@ -54,3 +54,38 @@ fn generate_then_stats_and_a_cut_file_is_refused() {
     assert!(text.contains("truncated") && text.contains("byte"), "{text}");
     assert!(!text.contains("panicked"), "{text}");
 }
+
+#[test]
+fn tree_and_sway_commands_work_and_refuse_bad_species_files() {
+    let (ok, text) = sylva(&["tree", "list"]);
+    assert!(ok && text.contains("quaking_aspen") && text.contains("douglas_fir"), "{text}");
+    let (ok, text) = sylva(&["tree", "stats", "--species", "quaking_aspen", "--seed", "3"]);
+    assert!(ok && text.contains("joints") && text.contains("height"), "{text}");
+    let bad = temp("bad_species.toml");
+    std::fs::write(&bad, "Shape = 7\n\n1DownAngle = 500\n").expect("write");
+    let (ok, text) = sylva(&["tree", "stats", "--species", bad.to_str().expect("utf-8 path")]);
+    assert!(!ok && text.contains("1DownAngle") && text.contains("line 3"), "{text}");
+    assert!(!text.contains("panicked"), "{text}");
+    let csv = temp("probe.csv");
+    let c = csv.to_str().expect("utf-8 path");
+    let (ok, text) = sylva(&[
+        "sway",
+        "probe",
+        "--species",
+        "douglas_fir",
+        "--release",
+        "--seconds",
+        "12",
+        "--fps",
+        "30",
+        "--csv",
+        c,
+    ]);
+    assert!(ok && text.contains("frequency") && text.contains("damping ratio"), "{text}");
+    let rows = std::fs::read_to_string(&csv).expect("csv");
+    assert!(
+        rows.starts_with("time_s,wind_u") && rows.lines().count() > 900,
+        "{}",
+        rows.lines().count()
+    );
+}
