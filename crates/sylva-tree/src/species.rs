@@ -109,6 +109,12 @@ pub struct Species {
     pub level: [LevelParams; 4],
 }
 
+/// Mutable storage of one parameter.
+enum Slot<'a> {
+    F(&'a mut f32),
+    U(&'a mut u32),
+}
+
 /// Where a parameter lives.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Scope {
@@ -428,60 +434,78 @@ impl Species {
         s
     }
 
-    /// Set a parameter by WP95 name (per-level names without the digit). Unknown names are
-    /// ignored (callers check against [`PARAMS`] first).
-    pub fn set(&mut self, level: Option<usize>, name: &str, v: f32) {
-        let u = v as u32;
+    /// The storage of a parameter, by WP95 name (per-level names without the digit).
+    fn slot(&mut self, level: Option<usize>, name: &str) -> Option<Slot<'_>> {
+        use Slot::{F, U};
         if let Some(n) = level {
-            let lp = &mut self.level[n];
-            match name {
-                "Length" => lp.length = v,
-                "LengthV" => lp.length_v = v,
-                "Taper" => lp.taper = v,
-                "SegSplits" => lp.seg_splits = v,
-                "SplitAngle" => lp.split_angle = v,
-                "SplitAngleV" => lp.split_angle_v = v,
-                "CurveRes" => lp.curve_res = u,
-                "Curve" => lp.curve = v,
-                "CurveBack" => lp.curve_back = v,
-                "CurveV" => lp.curve_v = v,
-                "DownAngle" => lp.down_angle = v,
-                "DownAngleV" => lp.down_angle_v = v,
-                "Rotate" => lp.rotate = v,
-                "RotateV" => lp.rotate_v = v,
-                "Branches" => lp.branches = v,
-                _ => {}
-            }
-            return;
+            let lp = self.level.get_mut(n)?;
+            return Some(match name {
+                "Length" => F(&mut lp.length),
+                "LengthV" => F(&mut lp.length_v),
+                "Taper" => F(&mut lp.taper),
+                "SegSplits" => F(&mut lp.seg_splits),
+                "SplitAngle" => F(&mut lp.split_angle),
+                "SplitAngleV" => F(&mut lp.split_angle_v),
+                "CurveRes" => U(&mut lp.curve_res),
+                "Curve" => F(&mut lp.curve),
+                "CurveBack" => F(&mut lp.curve_back),
+                "CurveV" => F(&mut lp.curve_v),
+                "DownAngle" => F(&mut lp.down_angle),
+                "DownAngleV" => F(&mut lp.down_angle_v),
+                "Rotate" => F(&mut lp.rotate),
+                "RotateV" => F(&mut lp.rotate_v),
+                "Branches" => F(&mut lp.branches),
+                _ => return None,
+            });
         }
-        match name {
-            "Shape" => self.shape = u,
-            "BaseSize" => self.base_size = v,
-            "Scale" => self.scale = v,
-            "ScaleV" => self.scale_v = v,
-            "ZScale" => self.z_scale = v,
-            "ZScaleV" => self.z_scale_v = v,
-            "Levels" => self.levels = u,
-            "Ratio" => self.ratio = v,
-            "RatioPower" => self.ratio_power = v,
-            "Lobes" => self.lobes = u,
-            "LobeDepth" => self.lobe_depth = v,
-            "Flare" => self.flare = v,
-            "0Scale" => self.scale0 = v,
-            "0ScaleV" => self.scale0_v = v,
-            "0BaseSplits" => self.base_splits = u,
-            "Leaves" => self.leaves = v,
-            "LeafShape" => self.leaf_shape = u,
-            "LeafScale" => self.leaf_scale = v,
-            "LeafScaleX" => self.leaf_scale_x = v,
-            "AttractionUp" => self.attraction_up = v,
-            "PruneRatio" => self.prune_ratio = v,
-            "PruneWidth" => self.prune_width = v,
-            "PruneWidthPeak" => self.prune_width_peak = v,
-            "PrunePowerLow" => self.prune_power_low = v,
-            "PrunePowerHigh" => self.prune_power_high = v,
-            "LeafQuality" => self.leaf_quality = v,
-            _ => {}
+        Some(match name {
+            "Shape" => U(&mut self.shape),
+            "BaseSize" => F(&mut self.base_size),
+            "Scale" => F(&mut self.scale),
+            "ScaleV" => F(&mut self.scale_v),
+            "ZScale" => F(&mut self.z_scale),
+            "ZScaleV" => F(&mut self.z_scale_v),
+            "Levels" => U(&mut self.levels),
+            "Ratio" => F(&mut self.ratio),
+            "RatioPower" => F(&mut self.ratio_power),
+            "Lobes" => U(&mut self.lobes),
+            "LobeDepth" => F(&mut self.lobe_depth),
+            "Flare" => F(&mut self.flare),
+            "0Scale" => F(&mut self.scale0),
+            "0ScaleV" => F(&mut self.scale0_v),
+            "0BaseSplits" => U(&mut self.base_splits),
+            "Leaves" => F(&mut self.leaves),
+            "LeafShape" => U(&mut self.leaf_shape),
+            "LeafScale" => F(&mut self.leaf_scale),
+            "LeafScaleX" => F(&mut self.leaf_scale_x),
+            "AttractionUp" => F(&mut self.attraction_up),
+            "PruneRatio" => F(&mut self.prune_ratio),
+            "PruneWidth" => F(&mut self.prune_width),
+            "PruneWidthPeak" => F(&mut self.prune_width_peak),
+            "PrunePowerLow" => F(&mut self.prune_power_low),
+            "PrunePowerHigh" => F(&mut self.prune_power_high),
+            "LeafQuality" => F(&mut self.leaf_quality),
+            _ => return None,
+        })
+    }
+
+    /// Set a parameter by WP95 name (per-level names without the digit; level 0–3).
+    /// Unknown names are ignored (callers check against [`PARAMS`] first).
+    pub fn set(&mut self, level: Option<usize>, name: &str, v: f32) {
+        match self.slot(level, name) {
+            Some(Slot::F(f)) => *f = v,
+            Some(Slot::U(u)) => *u = v as u32,
+            None => {}
+        }
+    }
+
+    /// Read a parameter by WP95 name (0 for an unknown name).
+    pub fn get(&self, level: Option<usize>, name: &str) -> f32 {
+        // One name table (`slot`) serves reading and writing; a species is small to copy.
+        match self.clone().slot(level, name) {
+            Some(Slot::F(f)) => *f,
+            Some(Slot::U(u)) => *u as f32,
+            None => 0.0,
         }
     }
 
@@ -553,60 +577,6 @@ impl Species {
             }
         }
         out
-    }
-
-    /// Read a parameter by WP95 name (0 for an unknown name).
-    pub fn get(&self, level: Option<usize>, name: &str) -> f32 {
-        if let Some(n) = level {
-            let lp = &self.level[n];
-            return match name {
-                "Length" => lp.length,
-                "LengthV" => lp.length_v,
-                "Taper" => lp.taper,
-                "SegSplits" => lp.seg_splits,
-                "SplitAngle" => lp.split_angle,
-                "SplitAngleV" => lp.split_angle_v,
-                "CurveRes" => lp.curve_res as f32,
-                "Curve" => lp.curve,
-                "CurveBack" => lp.curve_back,
-                "CurveV" => lp.curve_v,
-                "DownAngle" => lp.down_angle,
-                "DownAngleV" => lp.down_angle_v,
-                "Rotate" => lp.rotate,
-                "RotateV" => lp.rotate_v,
-                "Branches" => lp.branches,
-                _ => 0.0,
-            };
-        }
-        match name {
-            "Shape" => self.shape as f32,
-            "BaseSize" => self.base_size,
-            "Scale" => self.scale,
-            "ScaleV" => self.scale_v,
-            "ZScale" => self.z_scale,
-            "ZScaleV" => self.z_scale_v,
-            "Levels" => self.levels as f32,
-            "Ratio" => self.ratio,
-            "RatioPower" => self.ratio_power,
-            "Lobes" => self.lobes as f32,
-            "LobeDepth" => self.lobe_depth,
-            "Flare" => self.flare,
-            "0Scale" => self.scale0,
-            "0ScaleV" => self.scale0_v,
-            "0BaseSplits" => self.base_splits as f32,
-            "Leaves" => self.leaves,
-            "LeafShape" => self.leaf_shape as f32,
-            "LeafScale" => self.leaf_scale,
-            "LeafScaleX" => self.leaf_scale_x,
-            "AttractionUp" => self.attraction_up,
-            "PruneRatio" => self.prune_ratio,
-            "PruneWidth" => self.prune_width,
-            "PruneWidthPeak" => self.prune_width_peak,
-            "PrunePowerLow" => self.prune_power_low,
-            "PrunePowerHigh" => self.prune_power_high,
-            "LeafQuality" => self.leaf_quality,
-            _ => 0.0,
-        }
     }
 }
 
