@@ -14,6 +14,7 @@
 pub mod batch;
 pub mod leaves;
 pub mod params;
+pub mod probe;
 pub mod species;
 
 pub use batch::{Palette, SwayBatch, transform};

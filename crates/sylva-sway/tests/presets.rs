@@ -6,43 +6,12 @@
 use sylva_sway::{SwayBatch, SwayParams, SwaySpecies, transform};
 use sylva_tree::{PRESETS, Skeleton, Species};
 
-/// The trunk's top joint: from the root, follow the heaviest continuing child.
-fn trunk_top(sk: &Skeleton) -> usize {
-    let mut j = 0usize;
-    loop {
-        let next = sk
-            .children(j)
-            .iter()
-            .map(|&c| c as usize)
-            .filter(|&c| sk.joints()[c].continues)
-            .max_by(|&a, &b| sk.carried_mass(a).total_cmp(&sk.carried_mass(b)));
-        match next {
-            Some(c) => j = c,
-            None => return j,
-        }
-    }
-}
-
-/// Length of the stem starting at joint `j` (along its heaviest continuation).
-fn stem_length(sk: &Skeleton, j: usize) -> f32 {
-    let mut len = sk.joints()[j].length;
-    let mut k = j;
-    while let Some(c) =
-        sk.children(k).iter().map(|&c| c as usize).find(|&c| sk.joints()[c].continues)
-    {
-        len += sk.joints()[c].length;
-        k = c;
-    }
-    len
-}
-
 /// Frequency (Hz) of the trunk top's free oscillation after release from a steady bend:
-/// the peak of its spectrum between 0.1 and 3 Hz (after removing a linear trend: swaying
-/// branches load the trunk through their drag and add a slow drift).
+/// [`sylva_sway::probe::free_decay`] of the trunk top's motion.
 fn release_frequency(sk: &Skeleton) -> f64 {
     let sp = SwaySpecies::new(sk, SwayParams::default()).expect("valid params");
     let mut b = SwayBatch::new(sp, 1);
-    let top = trunk_top(sk);
+    let top = sk.trunk_top();
     let tip = sk.joints()[top].tip();
     let dt = 1.0 / 25.0; // exact integrator: any step works
     for _ in 0..(10.0 / dt) as usize {
@@ -54,30 +23,8 @@ fn release_frequency(sk: &Skeleton) -> f64 {
         let p = transform(&b.palettes(0)[top], tip);
         xs.push(((p[0] - tip[0]) as f64, (p[1] - tip[1]) as f64));
     }
-    let n = xs.len() as f64;
-    let detrend = |v: Vec<f64>| {
-        let tm = (n - 1.0) / 2.0;
-        let vm = v.iter().sum::<f64>() / n;
-        let slope = v.iter().enumerate().map(|(k, x)| (k as f64 - tm) * (x - vm)).sum::<f64>()
-            / (0..v.len()).map(|k| (k as f64 - tm).powi(2)).sum::<f64>();
-        v.iter().enumerate().map(|(k, x)| x - vm - slope * (k as f64 - tm)).collect::<Vec<f64>>()
-    };
-    let (x, y) =
-        (detrend(xs.iter().map(|p| p.0).collect()), detrend(xs.iter().map(|p| p.1).collect()));
-    let power = |f: f64| {
-        let w = 2.0 * std::f64::consts::PI * f * dt as f64;
-        let (mut c, mut s) = ((0.0, 0.0), (0.0, 0.0));
-        for k in 0..x.len() {
-            let (sn, cs) = (w * k as f64).sin_cos();
-            c = (c.0 + x[k] * cs, c.1 + y[k] * cs);
-            s = (s.0 + x[k] * sn, s.1 + y[k] * sn);
-        }
-        c.0 * c.0 + s.0 * s.0 + c.1 * c.1 + s.1 * s.1
-    };
-    (0..=580)
-        .map(|k| 0.1 + 0.005 * k as f64)
-        .max_by(|a, b| power(*a).total_cmp(&power(*b)))
-        .unwrap_or(0.0)
+    let (x, y): (Vec<f64>, Vec<f64>) = xs.into_iter().unzip();
+    sylva_sway::probe::free_decay(&x, &y, dt as f64).0
 }
 
 #[test]
@@ -119,7 +66,7 @@ fn trunks_sway_in_the_measured_envelope_and_twigs_at_several_hertz() {
             .filter(|&j| {
                 !sk.joints()[j].continues
                     && (0.005..=0.015).contains(&sk.joints()[j].radius)
-                    && stem_length(sk, j) <= 1.0
+                    && sk.stem_length(j) <= 1.0
             })
             .map(|j| sp.spring(j).frequency)
             .collect();

@@ -176,6 +176,39 @@ impl Skeleton {
     pub fn children(&self, i: usize) -> &[u32] {
         &self.children[i]
     }
+
+    /// The heaviest child of `i` that continues its stem, if any.
+    fn continuation(&self, i: usize) -> Option<usize> {
+        self.children[i]
+            .iter()
+            .map(|&c| c as usize)
+            .filter(|&c| self.joints[c].continues)
+            .max_by(|&a, &b| self.carried[a].total_cmp(&self.carried[b]))
+    }
+
+    /// The last segment of the stem that starts at (or passes through) joint `i`,
+    /// following the heaviest continuation at splits.
+    pub fn stem_end(&self, mut i: usize) -> usize {
+        while let Some(c) = self.continuation(i) {
+            i = c;
+        }
+        i
+    }
+
+    /// Length of the stem from joint `i` to [`Skeleton::stem_end`], m.
+    pub fn stem_length(&self, mut i: usize) -> f32 {
+        let mut len = self.joints[i].length;
+        while let Some(c) = self.continuation(i) {
+            len += self.joints[c].length;
+            i = c;
+        }
+        len
+    }
+
+    /// The trunk's top segment: the end of the root's stem.
+    pub fn trunk_top(&self) -> usize {
+        self.stem_end(0)
+    }
 }
 
 #[cfg(test)]

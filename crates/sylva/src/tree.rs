@@ -8,7 +8,7 @@ use std::time::Instant;
 use anyhow::{Context, bail};
 use clap::{Args, Subcommand};
 use sylva_sway::{SwayBatch, SwayParams, SwaySpecies, transform};
-use sylva_tree::{PARAMS, PRESETS, Skeleton, Species, species::Scope};
+use sylva_tree::{PARAMS, PRESETS, Species, species::Scope};
 use sylva_wind::{Grid, Preset, SynthParams, WindField};
 
 #[derive(Debug, Subcommand)]
@@ -147,31 +147,6 @@ pub fn run_tree(cmd: TreeCommand) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The trunk's top joint: from the root, follow the heaviest continuing child.
-fn trunk_top(sk: &Skeleton) -> usize {
-    let mut j = 0usize;
-    while let Some(c) = sk
-        .children(j)
-        .iter()
-        .map(|&c| c as usize)
-        .filter(|&c| sk.joints()[c].continues)
-        .max_by(|&a, &b| sk.carried_mass(a).total_cmp(&sk.carried_mass(b)))
-    {
-        j = c;
-    }
-    j
-}
-
-/// The last segment of the stem that starts at `j` (heaviest continuation).
-fn stem_end(sk: &Skeleton, mut j: usize) -> usize {
-    while let Some(c) =
-        sk.children(j).iter().map(|&c| c as usize).find(|&c| sk.joints()[c].continues)
-    {
-        j = c;
-    }
-    j
-}
-
 pub fn run_sway(cmd: SwayCommand) -> anyhow::Result<()> {
     let SwayCommand::Probe(a) = cmd;
     if !(a.seconds > 0.0 && a.fps > 0.0) {
@@ -214,12 +189,12 @@ pub fn run_sway(cmd: SwayCommand) -> anyhow::Result<()> {
     };
     let sp = SwaySpecies::new(sk, SwayParams::default())?;
     let mut batch = SwayBatch::new(sp, 1);
-    let top = trunk_top(sk);
+    let top = sk.trunk_top();
     // Named branches: the three heaviest stems that start on the trunk.
     let mut branches: Vec<usize> = (1..sk.len()).filter(|&j| !sk.joints()[j].continues).collect();
     branches.sort_by(|&x, &y| sk.carried_mass(y).total_cmp(&sk.carried_mass(x)));
     branches.truncate(3);
-    let ends: Vec<usize> = branches.iter().map(|&b| stem_end(sk, b)).collect();
+    let ends: Vec<usize> = branches.iter().map(|&b| sk.stem_end(b)).collect();
     if let Some(dir) = a.csv.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir)?;
     }
@@ -269,56 +244,11 @@ pub fn run_sway(cmd: SwayCommand) -> anyhow::Result<()> {
         steps + if a.release { release_at } else { 0 }
     );
     if a.release {
-        let (f, zeta) = free_decay(&xs, &ys, dt);
+        let (f, zeta) = sylva_sway::probe::free_decay(&xs, &ys, dt);
         println!(
             "trunk free decay: frequency {f:.3} Hz, damping ratio {zeta:.3} (structural ζ = {:.3} plus aerodynamic)",
             SwayParams::default().damping_ratio
         );
     }
     Ok(())
-}
-
-/// Frequency (spectral peak in 0.05–5 Hz of the linearly detrended signal) and damping
-/// ratio (logarithmic decrement of the successive peaks of the displacement along the
-/// direction of largest motion) of a free decay.
-fn free_decay(xs: &[f64], ys: &[f64], dt: f64) -> (f64, f64) {
-    let n = xs.len() as f64;
-    let detrend = |v: &[f64]| {
-        let tm = (n - 1.0) / 2.0;
-        let vm = v.iter().sum::<f64>() / n;
-        let den: f64 = (0..v.len()).map(|k| (k as f64 - tm).powi(2)).sum();
-        let slope =
-            v.iter().enumerate().map(|(k, x)| (k as f64 - tm) * (x - vm)).sum::<f64>() / den;
-        v.iter().enumerate().map(|(k, x)| x - vm - slope * (k as f64 - tm)).collect::<Vec<f64>>()
-    };
-    let (x, y) = (detrend(xs), detrend(ys));
-    let power = |f: f64| {
-        let w = 2.0 * std::f64::consts::PI * f * dt;
-        let (mut a, mut b) = ([0.0; 2], [0.0; 2]);
-        for k in 0..x.len() {
-            let (s, c) = (w * k as f64).sin_cos();
-            a = [a[0] + x[k] * c, a[1] + y[k] * c];
-            b = [b[0] + x[k] * s, b[1] + y[k] * s];
-        }
-        a[0] * a[0] + a[1] * a[1] + b[0] * b[0] + b[1] * b[1]
-    };
-    let f = (0..=990)
-        .map(|k| 0.05 + 0.005 * k as f64)
-        .max_by(|a, b| power(*a).total_cmp(&power(*b)))
-        .unwrap_or(0.0);
-    // Along the direction of largest variance.
-    let (sxx, syy) = (x.iter().map(|v| v * v).sum::<f64>(), y.iter().map(|v| v * v).sum::<f64>());
-    let d: Vec<f64> = if sxx >= syy { x } else { y };
-    let peaks: Vec<f64> = (1..d.len() - 1)
-        .filter(|&k| d[k] > d[k - 1] && d[k] >= d[k + 1] && d[k] > 0.0)
-        .map(|k| d[k])
-        .collect();
-    let zeta = if peaks.len() >= 3 {
-        let m = (peaks.len() - 1).min(4);
-        let delta = (peaks[0] / peaks[m]).ln() / m as f64;
-        delta / (4.0 * std::f64::consts::PI.powi(2) + delta * delta).sqrt()
-    } else {
-        f64::NAN
-    };
-    (f, zeta)
 }

@@ -1,0 +1,71 @@
+//! Measuring a sway record the way a field test does: the frequency and damping ratio of a
+//! free decay (a tree bent by a steady load and let go).
+
+/// Frequency (Hz) and damping ratio of a free decay sampled every `dt` seconds as the
+/// horizontal displacements `xs`, `ys` of a point (the trunk top).
+///
+/// Frequency: the peak of the spectrum between 0.05 and 5 Hz after a linear trend is
+/// removed (swaying branches load the trunk through their drag and add a slow drift).
+/// Damping: the logarithmic decrement δ over up to four periods of the detrended motion along
+/// its main direction, ζ = δ/√(4π² + δ²); NaN when fewer than three peaks show.
+pub fn free_decay(xs: &[f64], ys: &[f64], dt: f64) -> (f64, f64) {
+    let n = xs.len() as f64;
+    let detrend = |v: &[f64]| {
+        let tm = (n - 1.0) / 2.0;
+        let vm = v.iter().sum::<f64>() / n;
+        let den: f64 = (0..v.len()).map(|k| (k as f64 - tm).powi(2)).sum();
+        let slope =
+            v.iter().enumerate().map(|(k, x)| (k as f64 - tm) * (x - vm)).sum::<f64>() / den;
+        v.iter().enumerate().map(|(k, x)| x - vm - slope * (k as f64 - tm)).collect::<Vec<f64>>()
+    };
+    let (x, y) = (detrend(xs), detrend(ys));
+    let power = |f: f64| {
+        let w = 2.0 * std::f64::consts::PI * f * dt;
+        let (mut a, mut b) = ([0.0; 2], [0.0; 2]);
+        for k in 0..x.len() {
+            let (s, c) = (w * k as f64).sin_cos();
+            a = [a[0] + x[k] * c, a[1] + y[k] * c];
+            b = [b[0] + x[k] * s, b[1] + y[k] * s];
+        }
+        a[0] * a[0] + a[1] * a[1] + b[0] * b[0] + b[1] * b[1]
+    };
+    let f = (0..=990)
+        .map(|k| 0.05 + 0.005 * k as f64)
+        .max_by(|a, b| power(*a).total_cmp(&power(*b)))
+        .unwrap_or(0.0);
+    let (sxx, syy) = (x.iter().map(|v| v * v).sum::<f64>(), y.iter().map(|v| v * v).sum::<f64>());
+    let d = if sxx >= syy { x } else { y };
+    let peaks: Vec<f64> = (1..d.len().saturating_sub(1))
+        .filter(|&k| d[k] > d[k - 1] && d[k] >= d[k + 1] && d[k] > 0.0)
+        .map(|k| d[k])
+        .collect();
+    let zeta = if peaks.len() >= 3 {
+        let m = (peaks.len() - 1).min(4);
+        let delta = (peaks[0] / peaks[m]).ln() / m as f64;
+        delta / (4.0 * std::f64::consts::PI.powi(2) + delta * delta).sqrt()
+    } else {
+        f64::NAN
+    };
+    (f, zeta)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_damped_sine_gives_back_its_frequency_and_damping() {
+        let (f0, zeta) = (0.5f64, 0.05f64);
+        let w = 2.0 * std::f64::consts::PI * f0;
+        let wd = w * (1.0 - zeta * zeta).sqrt();
+        let dt = 0.02;
+        let xs: Vec<f64> = (0..2000)
+            .map(|k| k as f64 * dt)
+            .map(|t| (-zeta * w * t).exp() * (wd * t).cos() + 0.01 * t)
+            .collect();
+        let ys = vec![0.0; xs.len()];
+        let (f, z) = free_decay(&xs, &ys, dt);
+        assert!((f - f0 * (1.0 - zeta * zeta).sqrt()).abs() < 0.01, "{f}");
+        assert!((z / zeta - 1.0).abs() < 0.2, "{z}");
+    }
+}
