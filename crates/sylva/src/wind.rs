@@ -402,7 +402,12 @@ fn print_stats(field: &WindField, s: &FieldStats) {
     for (k, row) in s.components[0].coherence.iter().enumerate() {
         print!("{:<12}", format!("d{} {:.1} m", row.axis, row.metres));
         for c in &s.components {
-            print!("{:>9.4}", c.coherence[k].max_abs_error(0.1));
+            let row = &c.coherence[k];
+            if row.bands.iter().any(|b| b.model > 0.1 && !b.low_biased) {
+                print!("{:>9.4}", row.max_abs_error(0.1));
+            } else {
+                print!("{:>9}", "—"); // eq. 5 below 0.1 at every band checked
+            }
         }
         println!();
     }
