@@ -354,8 +354,9 @@ const EMIT_COLUMNS: usize = 32;
 
 /// Turns columns of coefficients into records and writes them frame-major.
 ///
-/// Each column (all points at one x, already advected) is scaled per line and height and
-/// inverse-FFT'd point by point into a staging buffer; every [`EMIT_COLUMNS`] columns the
+/// Each column (all points at one x) is multiplied per line and height by its factor
+/// (√Δω·√S0 and the column's advection) and inverse-FFT'd point by point into a staging
+/// buffer; every [`EMIT_COLUMNS`] columns the
 /// buffer is transposed into the output in tiles of frames, so reads and writes stay in cache.
 struct Emitter<'a, T> {
     grid: &'a Grid,
