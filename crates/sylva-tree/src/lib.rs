@@ -8,9 +8,13 @@
 #![warn(missing_docs)]
 
 pub mod generate;
+pub mod mesh;
 pub mod skeleton;
 pub mod species;
+pub mod texture;
 
 pub use generate::{Tree, TreeStats, shape_ratio};
+pub use mesh::{BranchMesh, LeafCluster, TreeLod, TreeModel};
 pub use skeleton::{Joint, NO_PARENT, Skeleton, SkeletonError};
 pub use species::{LevelParams, PARAMS, PRESETS, Species, SpeciesError};
+pub use texture::{Image, LeafAtlas};

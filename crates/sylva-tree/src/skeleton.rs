@@ -205,6 +205,22 @@ impl Skeleton {
         len
     }
 
+    /// Radius of the trunk at height `z` above its base, m: the radius of the trunk segment
+    /// spanning that height (the top segment's above the trunk). `radius_at_height(1.3)` is
+    /// half the diameter at breast height (DBH).
+    pub fn radius_at_height(&self, z: f32) -> f32 {
+        let mut i = 0;
+        loop {
+            let j = &self.joints[i];
+            let next =
+                self.children[i].iter().copied().rev().find(|&c| self.joints[c as usize].continues);
+            match next {
+                Some(c) if j.tip()[2] < z => i = c as usize,
+                _ => return j.radius,
+            }
+        }
+    }
+
     /// The trunk's top segment: the end of the root's stem.
     pub fn trunk_top(&self) -> usize {
         self.stem_end(0)

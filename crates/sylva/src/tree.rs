@@ -117,8 +117,9 @@ pub fn run_tree(cmd: TreeCommand) -> anyhow::Result<()> {
         TreeCommand::Stats(a) => {
             let sp = load_species(&a.species)?;
             let t0 = Instant::now();
-            let tree = sp.generate(a.seed)?;
+            let model = sp.model(a.seed, sylva_tree::mesh::LOD_LEVELS)?;
             let secs = t0.elapsed().as_secs_f64();
+            let tree = &model.tree;
             let sk = &tree.skeleton;
             let (mut lo, mut hi) = ([f32::MAX; 2], [f32::MIN; 2]);
             for j in sk.joints() {
@@ -135,13 +136,29 @@ pub fn run_tree(cmd: TreeCommand) -> anyhow::Result<()> {
             println!("leaves           {} ({:.1} m² one-sided)", s.leaves, s.leaf_area);
             println!("height           {:.2} m", s.height);
             println!(
-                "trunk            {:.2} m long, {:.1} cm base diameter",
+                "trunk            {:.2} m long, {:.1} cm base diameter, DBH {:.1} cm",
                 s.trunk_length,
-                200.0 * s.trunk_radius
+                200.0 * s.trunk_radius,
+                200.0 * sk.radius_at_height(1.3)
             );
             println!("crown width      {:.2} m × {:.2} m", hi[0] - lo[0], hi[1] - lo[1]);
             println!("mass             {:.0} kg", sk.carried_mass(0));
-            println!("generation       {:.2} ms", secs * 1e3);
+            println!(
+                "generation       {:.2} ms (skeleton, meshes, LOD chain, textures)",
+                secs * 1e3
+            );
+            println!("LOD  triangles  branch tris  clusters  leaf area m²  min radius cm");
+            for l in &model.lods {
+                println!(
+                    "{:<4} {:>9}  {:>11}  {:>8}  {:>12.1}  {:>13.2}",
+                    l.level,
+                    l.triangles(),
+                    l.branches.triangles(),
+                    l.clusters.len(),
+                    l.leaf_area(),
+                    100.0 * l.min_radius
+                );
+            }
         }
     }
     Ok(())

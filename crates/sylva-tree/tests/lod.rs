@@ -1,0 +1,147 @@
+//! The hybrid model's invariants at every level of detail, for every preset.
+
+use sylva_tree::mesh::{LOD_LEVELS, TreeModel};
+use sylva_tree::{NO_PARENT, PRESETS, Species};
+
+fn model(name: &str, seed: u64) -> TreeModel {
+    Species::preset(name).expect("preset").model(seed, LOD_LEVELS).expect("valid tree")
+}
+
+/// Axis-aligned box around every segment of the skeleton, widened by the thickest radius.
+fn skeleton_bounds(m: &TreeModel) -> ([f32; 3], [f32; 3]) {
+    let js = m.tree.skeleton.joints();
+    let r = js.iter().map(|j| j.radius).fold(0.0, f32::max);
+    let (mut lo, mut hi) = ([f32::MAX; 3], [f32::MIN; 3]);
+    for j in js {
+        for p in [j.origin, j.tip()] {
+            for c in 0..3 {
+                lo[c] = lo[c].min(p[c] - r);
+                hi[c] = hi[c].max(p[c] + r);
+            }
+        }
+    }
+    (lo, hi)
+}
+
+fn inside(p: [f32; 3], (lo, hi): ([f32; 3], [f32; 3]), margin: f32) -> bool {
+    (0..3).all(|c| p[c] >= lo[c] - margin && p[c] <= hi[c] + margin)
+}
+
+#[test]
+fn every_preset_at_every_lod_is_well_formed() {
+    for (name, _) in PRESETS {
+        let m = model(name, 3);
+        let js = m.tree.skeleton.joints();
+        assert!(m.lods.len() >= 4, "{name}: {} LOD levels", m.lods.len());
+        for (i, j) in js.iter().enumerate() {
+            assert!(
+                j.parent == NO_PARENT || (j.parent as usize) < i,
+                "{name}: joint {i} parent order"
+            );
+        }
+        let bounds = skeleton_bounds(&m);
+        // Leaf billboards hang outside the wood by at most a branch radius and half their
+        // own size; merged ones sit at the area-weighted centre of their members.
+        let leaf_margin = m.lods[0].clusters.iter().map(|c| c.size).fold(0.0, f32::max);
+        let area0 = m.lods[0].leaf_area();
+        assert!((area0 / m.tree.stats.leaf_area - 1.0).abs() < 0.01, "{name}: LOD 0 leaf area");
+        let mut last_tris = usize::MAX;
+        for lod in &m.lods {
+            let b = &lod.branches;
+            let n = b.positions.len();
+            assert!(n > 0, "{name} LOD {}: empty branch mesh", lod.level);
+            assert_eq!(b.normals.len(), n);
+            assert_eq!(b.uvs.len(), n);
+            assert_eq!(b.joints.len(), n);
+            assert_eq!(b.weights.len(), n);
+            for v in 0..n {
+                let p = b.positions[v];
+                assert!(
+                    p.iter().chain(&b.normals[v]).chain(&b.uvs[v]).all(|x| x.is_finite()),
+                    "{name}: NaN"
+                );
+                assert!(
+                    inside(p, bounds, 1e-4),
+                    "{name} LOD {}: vertex {v} at {p:?} outside",
+                    lod.level
+                );
+                let w: f32 = b.weights[v].iter().sum();
+                assert!((w - 1.0).abs() < 1e-6, "{name}: weights sum to {w}");
+                assert!(b.weights[v].iter().all(|&w| (0.0..=1.0).contains(&w)));
+                assert!(
+                    b.joints[v].iter().all(|&j| (j as usize) < js.len()),
+                    "{name}: joint index"
+                );
+                let len = b.normals[v].iter().map(|x| x * x).sum::<f32>().sqrt();
+                assert!((len - 1.0).abs() < 1e-3, "{name}: normal length {len}");
+            }
+            assert!(b.indices.iter().all(|&i| (i as usize) < n), "{name}: index out of range");
+            for c in &lod.clusters {
+                assert!((c.joint as usize) < js.len());
+                assert!(c.size > 0.0 && c.size.is_finite() && c.leaf_area > 0.0);
+                assert!(c.center.iter().chain(&c.hang).all(|x| x.is_finite()));
+                assert!(inside(c.center, bounds, leaf_margin), "{name}: cluster outside the crown");
+            }
+            let tris = lod.triangles();
+            assert!(tris < last_tris, "{name}: LOD {} has {tris} triangles, not fewer", lod.level);
+            if lod.level > 0 {
+                // Roughly ×3 per level: between ×2 and ×5.
+                let ratio = last_tris as f32 / tris as f32;
+                assert!((2.0..5.0).contains(&ratio), "{name}: LOD {} ratio {ratio}", lod.level);
+            }
+            last_tris = tris;
+            let area = lod.leaf_area();
+            assert!(
+                (area / area0 - 1.0).abs() < 0.10,
+                "{name} LOD {}: leaf area {area} vs {area0}",
+                lod.level
+            );
+        }
+    }
+}
+
+#[test]
+fn same_seed_same_model_and_another_seed_another() {
+    let a = model("douglas_fir", 11);
+    let b = model("douglas_fir", 11);
+    assert_eq!(a.lods, b.lods);
+    assert_eq!(a.bark, b.bark);
+    assert_eq!(a.leaves, b.leaves);
+    let c = model("douglas_fir", 12);
+    assert_ne!(a.lods[0].branches.positions, c.lods[0].branches.positions);
+    assert_ne!(a.leaves.image, c.leaves.image);
+}
+
+#[test]
+fn thin_stems_are_dropped_first_and_their_leaves_rehung_on_kept_joints() {
+    let m = model("black_tupelo", 5);
+    let js = m.tree.skeleton.joints();
+    for pair in m.lods.windows(2) {
+        assert!(pair[1].min_radius >= pair[0].min_radius, "threshold falls");
+    }
+    for lod in &m.lods[1..] {
+        // Every joint a vertex or a cluster uses is kept: no geometry on dropped joints.
+        let mut used = vec![false; js.len()];
+        for v in &lod.branches.joints {
+            used[v[0] as usize] = true;
+        }
+        for c in &lod.clusters {
+            assert!(used[c.joint as usize], "LOD {}: cluster on a joint without wood", lod.level);
+        }
+    }
+}
+
+#[test]
+fn textures_are_opaque_bark_and_alpha_masked_leaves() {
+    let m = model("quaking_aspen", 1);
+    assert!(m.bark.rgba.chunks(4).all(|p| p[3] == 255), "bark is opaque");
+    let distinct: std::collections::HashSet<_> = m.bark.rgba.chunks(4).map(|p| p[0]).collect();
+    assert!(distinct.len() > 20, "bark has texture, not a flat colour");
+    for &c in &m.leaves.coverage {
+        assert!((0.15..0.9).contains(&c), "leaf cell coverage {c}");
+    }
+    let opaque_green =
+        m.leaves.image.rgba.chunks(4).filter(|p| p[3] == 255 && p[1] > p[0] && p[1] > p[2]).count();
+    let clear = m.leaves.image.rgba.chunks(4).filter(|p| p[3] == 0).count();
+    assert!(opaque_green > 1000 && clear > 1000, "leaves green on a transparent ground");
+}
