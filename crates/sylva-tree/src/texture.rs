@@ -37,6 +37,9 @@ pub struct LeafAtlas {
     pub coverage: Vec<f32>,
 }
 
+/// One painted leaf: base point, unit direction, length, width, tint (cell units).
+type LeafStroke = ([f32; 2], [f32; 2], f32, f32, f32);
+
 /// Cells per side of the leaf atlas.
 pub const ATLAS_CELLS: u32 = 2;
 
@@ -119,7 +122,7 @@ pub fn leaf_atlas(species: &Species, seed: u64, size: u32) -> LeafAtlas {
             let c = (cy * ATLAS_CELLS + cx) as u64;
             // Leaves of this cell: base point, direction, length, width, tint.
             let count = if needle { 18 } else { 7 };
-            let leaves: Vec<([f32; 2], [f32; 2], f32, f32, f32)> = (0..count)
+            let leaves: Vec<LeafStroke> = (0..count)
                 .map(|k| {
                     let r = |m: u64| unit(seed ^ c << 32, k as u64 * 8 + m);
                     let spread = if needle { 2.0 * PI } else { 1.9 * PI / 1.0 };
