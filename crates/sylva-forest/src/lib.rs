@@ -1,6 +1,14 @@
-//! The forest scene (paper §4.3, §5.2): layout, camera, the three LOD policies, instance
-//! groups and the per-frame driver that produces `FrameData` (plain Pod arrays).
+//! The scene: a deterministic forest layout, the camera, and the per-frame driver that turns
+//! wind into [`FrameData`] (paper §4.3, §5.2).
 //!
-//! Documented placeholder: exports nothing yet. Architecture invariant: this crate never
-//! depends on a GPU or windowing crate.
+//! GPU-free: the renderer reads [`FrameData`] (plain `Pod` arrays) and the tree models; it
+//! never calls back into the simulation.
 #![warn(missing_docs)]
+
+pub mod camera;
+pub mod driver;
+pub mod scene;
+
+pub use camera::{Camera, Mat4};
+pub use driver::{Bucket, Forest, ForestError, FrameData, FrameStats, Instance, SpeciesRuntime};
+pub use scene::{Placement, SCENES, SceneError, SceneSpec, Terrain, layout};

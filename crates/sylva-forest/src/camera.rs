@@ -1,0 +1,142 @@
+//! A perspective camera: world z up, right-handed; clip depth 0 … 1 (wgpu's convention).
+//! Matrices are column-major `[[f32; 4]; 4]` (`m[column][row]`), as WGSL reads them.
+
+/// A 4×4 matrix, column-major.
+pub type Mat4 = [[f32; 4]; 4];
+
+/// Where the viewer stands and looks.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Camera {
+    /// Eye position, world m.
+    pub eye: [f32; 3],
+    /// Point looked at, world m.
+    pub target: [f32; 3],
+    /// Vertical field of view, degrees.
+    pub fov_deg: f32,
+    /// Near and far clip distances, m.
+    pub near: f32,
+    /// Far clip distance, m.
+    pub far: f32,
+}
+
+fn sub(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+fn dot(a: [f32; 3], b: [f32; 3]) -> f32 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+fn cross(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+}
+fn norm(a: [f32; 3]) -> [f32; 3] {
+    let n = dot(a, a).sqrt().max(1e-20);
+    [a[0] / n, a[1] / n, a[2] / n]
+}
+
+/// a · b.
+pub fn mul(a: &Mat4, b: &Mat4) -> Mat4 {
+    let mut m = [[0.0; 4]; 4];
+    for c in 0..4 {
+        for r in 0..4 {
+            m[c][r] = (0..4).map(|k| a[k][r] * b[c][k]).sum();
+        }
+    }
+    m
+}
+
+impl Camera {
+    /// Unit viewing direction.
+    pub fn forward(&self) -> [f32; 3] {
+        norm(sub(self.target, self.eye))
+    }
+
+    /// World → view matrix (view space: x right, y up, looking down −z).
+    pub fn view(&self) -> Mat4 {
+        let f = self.forward();
+        let up = if f[2].abs() > 0.999 { [0.0, 1.0, 0.0] } else { [0.0, 0.0, 1.0] };
+        let s = norm(cross(f, up));
+        let u = cross(s, f);
+        let e = self.eye;
+        [
+            [s[0], u[0], -f[0], 0.0],
+            [s[1], u[1], -f[1], 0.0],
+            [s[2], u[2], -f[2], 0.0],
+            [-dot(s, e), -dot(u, e), dot(f, e), 1.0],
+        ]
+    }
+
+    /// View → clip matrix for `aspect` = width / height.
+    pub fn projection(&self, aspect: f32) -> Mat4 {
+        let t = 1.0 / (0.5 * self.fov_deg.to_radians()).tan();
+        let (n, f) = (self.near, self.far);
+        [
+            [t / aspect, 0.0, 0.0, 0.0],
+            [0.0, t, 0.0, 0.0],
+            [0.0, 0.0, f / (n - f), -1.0],
+            [0.0, 0.0, n * f / (n - f), 0.0],
+        ]
+    }
+
+    /// World → clip.
+    pub fn view_projection(&self, aspect: f32) -> Mat4 {
+        mul(&self.projection(aspect), &self.view())
+    }
+
+    /// Fraction of the image height that an object of `size` m at `p` covers (0 behind the
+    /// eye).
+    pub fn screen_fraction(&self, p: [f32; 3], size: f32) -> f32 {
+        let depth = dot(sub(p, self.eye), self.forward());
+        if depth <= 0.0 {
+            return 0.0;
+        }
+        size / (2.0 * depth * (0.5 * self.fov_deg.to_radians()).tan())
+    }
+
+    /// Whether a sphere of `radius` at `c` may be in view (conservative cone test).
+    pub fn may_see(&self, c: [f32; 3], radius: f32, aspect: f32) -> bool {
+        let d = sub(c, self.eye);
+        let dist = dot(d, d).sqrt();
+        if dist <= radius {
+            return true;
+        }
+        let half_v = 0.5 * self.fov_deg.to_radians();
+        let half_diag = (half_v.tan() * (1.0 + aspect * aspect).sqrt()).atan();
+        let angle = (dot(d, self.forward()) / dist).clamp(-1.0, 1.0).acos();
+        angle - (radius / dist).clamp(-1.0, 1.0).asin() <= half_diag && dist - radius < self.far
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn apply(m: &Mat4, p: [f32; 3]) -> [f32; 4] {
+        let mut o = [0.0; 4];
+        for r in 0..4 {
+            o[r] = m[0][r] * p[0] + m[1][r] * p[1] + m[2][r] * p[2] + m[3][r];
+        }
+        o
+    }
+
+    #[test]
+    fn target_lands_mid_screen_and_depth_runs_zero_to_one() {
+        let c = Camera {
+            eye: [0.0, -10.0, 2.0],
+            target: [0.0, 0.0, 2.0],
+            fov_deg: 60.0,
+            near: 0.5,
+            far: 100.0,
+        };
+        let vp = c.view_projection(1.5);
+        let t = apply(&vp, c.target);
+        assert!((t[0] / t[3]).abs() < 1e-5 && (t[1] / t[3]).abs() < 1e-5);
+        let near = apply(&vp, [0.0, -9.5, 2.0]);
+        let far = apply(&vp, [0.0, 90.0, 2.0]);
+        assert!((near[2] / near[3]).abs() < 1e-4 && (far[2] / far[3] - 1.0).abs() < 1e-4);
+        // World up is screen up; world +x is screen right (looking along +y).
+        let up = apply(&vp, [0.0, 0.0, 3.0]);
+        let right = apply(&vp, [1.0, 0.0, 2.0]);
+        assert!(up[1] / up[3] > 0.0 && right[0] / right[3] > 0.0);
+        assert!(c.may_see([0.0, 0.0, 2.0], 1.0, 1.5) && !c.may_see([0.0, -20.0, 2.0], 1.0, 1.5));
+    }
+}

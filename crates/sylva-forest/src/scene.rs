@@ -1,0 +1,389 @@
+//! Scene descriptions (TOML) and the deterministic forest layout: Poisson-disk spacing, a
+//! weighted species mix, random rotation and scale per tree, on gentle terrain.
+
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+use crate::camera::Camera;
+
+/// A scene file that could not be used.
+#[derive(Debug, Error)]
+pub enum SceneError {
+    /// TOML syntax or a wrong type; the message names the key and line.
+    #[error("{file}: {message}")]
+    Parse {
+        /// File name.
+        file: String,
+        /// What toml reported (key, line and column).
+        message: String,
+    },
+    /// A value out of its range.
+    #[error("{file}: `{field}` = {value} is invalid ({expected})")]
+    Value {
+        /// File name.
+        file: String,
+        /// Key.
+        field: &'static str,
+        /// Value found.
+        value: String,
+        /// What is allowed.
+        expected: &'static str,
+    },
+    /// No scene of that name.
+    #[error("no scene named `{0}` (built in: small, A; or give a .toml file)")]
+    Unknown(String),
+}
+
+/// One species of the mix.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SpeciesShare {
+    /// Preset name (see `sylva tree list`) or path of a species file.
+    pub name: String,
+    /// Relative share of the trees (> 0).
+    #[serde(default = "one")]
+    pub weight: f32,
+}
+
+fn one() -> f32 {
+    1.0
+}
+
+/// Viewpoint of a scene.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraSpec {
+    /// Eye, world m.
+    pub eye: [f32; 3],
+    /// Target, world m.
+    pub target: [f32; 3],
+    /// Vertical field of view, degrees (1 … 150). Default 55.
+    #[serde(default = "fov")]
+    pub fov_deg: f32,
+}
+
+fn fov() -> f32 {
+    55.0
+}
+
+/// Everything that defines a scene. All fields but `name`, `trees` and `species` have
+/// defaults.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneSpec {
+    /// Scene name.
+    pub name: String,
+    /// Seed of the layout, the trees and the wind.
+    #[serde(default)]
+    pub seed: u64,
+    /// Number of trees (1 … 1 000 000).
+    pub trees: usize,
+    /// Poisson-disk minimum distance between trunks, m (> 0). Default 7.
+    #[serde(default = "spacing")]
+    pub spacing: f32,
+    /// Species mix.
+    pub species: Vec<SpeciesShare>,
+    /// Relative scale variation per tree: scale = 1 ± this (0 … 0.9). Default 0.15.
+    #[serde(default = "scale_v")]
+    pub scale_variation: f32,
+    /// Terrain: height amplitude, m (≥ 0). Default 2.
+    #[serde(default = "amp")]
+    pub terrain_amplitude: f32,
+    /// Terrain: wavelength of the hills, m (> 0). Default 150.
+    #[serde(default = "wavelength")]
+    pub terrain_wavelength: f32,
+    /// Wind preset: calm, breeze, strong or storm. Default breeze.
+    #[serde(default = "breeze")]
+    pub wind: String,
+    /// Direction the wind blows towards, degrees counter-clockwise from +x. Default 20.
+    #[serde(default = "wind_dir")]
+    pub wind_direction_deg: f32,
+    /// Joint updates the simulation may spend per frame, across the forest. Trees of one
+    /// species beyond what fits share simulations (instance groups). Default 1 000 000.
+    #[serde(default = "budget")]
+    pub sim_joint_budget: usize,
+    /// Viewpoint; default: from the forest's south-west edge, looking across it.
+    #[serde(default)]
+    pub camera: Option<CameraSpec>,
+}
+
+fn spacing() -> f32 {
+    7.0
+}
+fn scale_v() -> f32 {
+    0.15
+}
+fn amp() -> f32 {
+    2.0
+}
+fn wavelength() -> f32 {
+    150.0
+}
+fn breeze() -> String {
+    "breeze".into()
+}
+fn wind_dir() -> f32 {
+    20.0
+}
+fn budget() -> usize {
+    1_000_000
+}
+
+const SMALL: &str = include_str!("../scenes/small.toml");
+const SCENE_A: &str = include_str!("../scenes/A.toml");
+
+/// Built-in scenes: (name, TOML).
+pub const SCENES: [(&str, &str); 2] = [("small", SMALL), ("A", SCENE_A)];
+
+impl SceneSpec {
+    /// A built-in scene.
+    pub fn builtin(name: &str) -> Result<SceneSpec, SceneError> {
+        let (n, text) = SCENES
+            .iter()
+            .find(|(n, _)| n.eq_ignore_ascii_case(name))
+            .ok_or_else(|| SceneError::Unknown(name.to_string()))?;
+        SceneSpec::from_toml(n, text)
+    }
+
+    /// Parse and validate a scene file; `file` names it in errors.
+    pub fn from_toml(file: &str, text: &str) -> Result<SceneSpec, SceneError> {
+        let spec: SceneSpec = toml::from_str(text)
+            .map_err(|e| SceneError::Parse { file: file.to_string(), message: e.to_string() })?;
+        spec.validate(file)?;
+        Ok(spec)
+    }
+
+    fn validate(&self, file: &str) -> Result<(), SceneError> {
+        let bad = |field, value: String, expected| SceneError::Value {
+            file: file.to_string(),
+            field,
+            value,
+            expected,
+        };
+        if !(1..=1_000_000).contains(&self.trees) {
+            return Err(bad("trees", self.trees.to_string(), "1 … 1000000"));
+        }
+        if !(self.spacing > 0.0 && self.spacing.is_finite()) {
+            return Err(bad("spacing", self.spacing.to_string(), "> 0 m"));
+        }
+        if self.species.is_empty() {
+            return Err(bad("species", "[]".into(), "at least one species"));
+        }
+        if let Some(s) = self.species.iter().find(|s| !(s.weight > 0.0 && s.weight.is_finite())) {
+            return Err(bad("species.weight", s.weight.to_string(), "> 0"));
+        }
+        if !(0.0..=0.9).contains(&self.scale_variation) {
+            return Err(bad("scale_variation", self.scale_variation.to_string(), "0 … 0.9"));
+        }
+        if !(self.terrain_amplitude >= 0.0 && self.terrain_amplitude.is_finite()) {
+            return Err(bad("terrain_amplitude", self.terrain_amplitude.to_string(), "≥ 0 m"));
+        }
+        if !(self.terrain_wavelength > 0.0 && self.terrain_wavelength.is_finite()) {
+            return Err(bad("terrain_wavelength", self.terrain_wavelength.to_string(), "> 0 m"));
+        }
+        if sylva_wind::Preset::from_name(&self.wind).is_none() {
+            return Err(bad("wind", self.wind.clone(), "calm, breeze, strong or storm"));
+        }
+        if !self.wind_direction_deg.is_finite() {
+            return Err(bad("wind_direction_deg", self.wind_direction_deg.to_string(), "finite"));
+        }
+        if self.sim_joint_budget == 0 {
+            return Err(bad("sim_joint_budget", "0".into(), "≥ 1"));
+        }
+        if let Some(c) = &self.camera {
+            if !(1.0..=150.0).contains(&c.fov_deg) {
+                return Err(bad("camera.fov_deg", c.fov_deg.to_string(), "1 … 150"));
+            }
+            if c.eye == c.target || c.eye.iter().chain(&c.target).any(|v| !v.is_finite()) {
+                return Err(bad("camera.eye", format!("{:?}", c.eye), "finite, not the target"));
+            }
+        }
+        Ok(())
+    }
+
+    /// Side of the square the trees are laid out in, m.
+    pub fn side(&self) -> f32 {
+        // Poisson-disk sampling packs about one point per 1.5 r²; leave room to choose from.
+        self.spacing * (self.trees as f32 * 1.5).sqrt() * 1.2 + self.spacing
+    }
+}
+
+/// Deterministic generator: SplitMix64.
+#[derive(Debug, Clone)]
+pub(crate) struct Rng(pub(crate) u64);
+
+impl Rng {
+    pub(crate) fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    }
+    /// Uniform in [0, 1).
+    pub(crate) fn unit(&mut self) -> f32 {
+        (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32
+    }
+}
+
+/// Gentle terrain: a sum of three seeded sinusoidal hill fields.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Terrain {
+    /// Height amplitude, m.
+    pub amplitude: f32,
+    /// Wavelength, m.
+    pub wavelength: f32,
+    phases: [[f32; 3]; 3],
+}
+
+impl Terrain {
+    /// The terrain of `spec`.
+    pub fn new(spec: &SceneSpec) -> Terrain {
+        let mut rng = Rng(spec.seed ^ 0x7e44_a1b0);
+        let mut phases = [[0.0; 3]; 3];
+        for p in &mut phases {
+            *p = [rng.unit() * 6.283, rng.unit() * 6.283, rng.unit() * 3.1416];
+        }
+        Terrain { amplitude: spec.terrain_amplitude, wavelength: spec.terrain_wavelength, phases }
+    }
+
+    /// Ground height at (x, y), m.
+    pub fn height(&self, x: f32, y: f32) -> f32 {
+        let k = std::f32::consts::TAU / self.wavelength;
+        let mut h = 0.0;
+        for (i, p) in self.phases.iter().enumerate() {
+            let f = k * (1.0 + 0.7 * i as f32);
+            let (s, c) = p[2].sin_cos();
+            let u = f * (x * c + y * s);
+            let v = f * (-x * s + y * c);
+            h += (u + p[0]).sin() * (v + p[1]).cos() / (1.0 + i as f32);
+        }
+        self.amplitude * h / 1.83
+    }
+
+    /// Unit normal at (x, y) (central differences).
+    pub fn normal(&self, x: f32, y: f32) -> [f32; 3] {
+        let e = 0.5;
+        let dx = (self.height(x + e, y) - self.height(x - e, y)) / (2.0 * e);
+        let dy = (self.height(x, y + e) - self.height(x, y - e)) / (2.0 * e);
+        let n = (1.0 + dx * dx + dy * dy).sqrt();
+        [-dx / n, -dy / n, 1.0 / n]
+    }
+}
+
+/// One tree of the layout.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Placement {
+    /// Trunk base, world m (on the terrain).
+    pub position: [f32; 3],
+    /// Rotation about z, rad.
+    pub yaw: f32,
+    /// Uniform scale.
+    pub scale: f32,
+    /// Index into the scene's species list.
+    pub species: u32,
+}
+
+/// Bridson's Poisson-disk sampling in the square [−side/2, side/2]², minimum distance `r`.
+fn poisson_disk(rng: &mut Rng, side: f32, r: f32) -> Vec<[f32; 2]> {
+    let cell = r / std::f32::consts::SQRT_2;
+    let n = (side / cell).ceil() as usize;
+    let mut grid = vec![u32::MAX; n * n];
+    let idx = |p: [f32; 2]| {
+        let gx = (((p[0] + side / 2.0) / cell) as usize).min(n - 1);
+        let gy = (((p[1] + side / 2.0) / cell) as usize).min(n - 1);
+        (gx, gy)
+    };
+    let mut pts: Vec<[f32; 2]> = vec![[0.0, 0.0]];
+    let (gx, gy) = idx(pts[0]);
+    grid[gy * n + gx] = 0;
+    let mut active = vec![0usize];
+    while !active.is_empty() {
+        let k = (rng.unit() * active.len() as f32) as usize % active.len();
+        let base = pts[active[k]];
+        let mut found = false;
+        for _ in 0..30 {
+            let a = rng.unit() * std::f32::consts::TAU;
+            let d = r * (1.0 + rng.unit());
+            let p = [base[0] + d * a.cos(), base[1] + d * a.sin()];
+            if p[0].abs() >= side / 2.0 || p[1].abs() >= side / 2.0 {
+                continue;
+            }
+            let (gx, gy) = idx(p);
+            let mut ok = true;
+            'near: for y in gy.saturating_sub(2)..(gy + 3).min(n) {
+                for x in gx.saturating_sub(2)..(gx + 3).min(n) {
+                    let q = grid[y * n + x];
+                    if q != u32::MAX {
+                        let o = pts[q as usize];
+                        if (o[0] - p[0]).powi(2) + (o[1] - p[1]).powi(2) < r * r {
+                            ok = false;
+                            break 'near;
+                        }
+                    }
+                }
+            }
+            if ok {
+                grid[gy * n + gx] = pts.len() as u32;
+                active.push(pts.len());
+                pts.push(p);
+                found = true;
+                break;
+            }
+        }
+        if !found {
+            active.swap_remove(k);
+        }
+    }
+    pts
+}
+
+/// The layout of `spec`: `trees` placements, the ones nearest the centre of a Poisson-disk
+/// sample, each with a species drawn by weight, a yaw and a scale.
+pub fn layout(spec: &SceneSpec, terrain: &Terrain) -> Vec<Placement> {
+    let mut rng = Rng(spec.seed ^ 0x1a70_0u64);
+    let mut side = spec.side();
+    let mut pts = poisson_disk(&mut rng, side, spec.spacing);
+    while pts.len() < spec.trees {
+        side *= 1.3;
+        pts = poisson_disk(&mut rng, side, spec.spacing);
+    }
+    pts.sort_by(|a, b| (a[0] * a[0] + a[1] * a[1]).total_cmp(&(b[0] * b[0] + b[1] * b[1])));
+    pts.truncate(spec.trees);
+    let total: f32 = spec.species.iter().map(|s| s.weight).sum();
+    pts.iter()
+        .map(|&[x, y]| {
+            let mut pick = rng.unit() * total;
+            let mut species = spec.species.len() - 1;
+            for (i, s) in spec.species.iter().enumerate() {
+                if pick < s.weight {
+                    species = i;
+                    break;
+                }
+                pick -= s.weight;
+            }
+            Placement {
+                position: [x, y, terrain.height(x, y)],
+                yaw: rng.unit() * std::f32::consts::TAU,
+                scale: 1.0 + spec.scale_variation * (2.0 * rng.unit() - 1.0),
+                species: species as u32,
+            }
+        })
+        .collect()
+}
+
+/// The default viewpoint of a scene whose trees lie within `radius` of the origin.
+pub fn default_camera(spec: &SceneSpec, radius: f32) -> Camera {
+    let c = spec.camera.unwrap_or(CameraSpec {
+        eye: [-0.9 * radius - 10.0, -1.1 * radius - 12.0, 0.35 * radius + 10.0],
+        target: [0.0, 0.0, 6.0],
+        fov_deg: 55.0,
+    });
+    Camera {
+        eye: c.eye,
+        target: c.target,
+        fov_deg: c.fov_deg,
+        near: 0.5,
+        far: 20.0 * radius + 400.0,
+    }
+}

@@ -1,0 +1,84 @@
+//! Layout and frame-driver behaviour.
+
+use sylva_forest::{Forest, FrameData, SceneSpec, Terrain, layout};
+
+#[test]
+fn layout_is_deterministic_poisson_spaced_and_follows_the_mix() {
+    let spec = SceneSpec::builtin("A").expect("scene A");
+    let terrain = Terrain::new(&spec);
+    let a = layout(&spec, &terrain);
+    assert_eq!(a, layout(&spec, &terrain), "same seed, same layout");
+    assert_eq!(a.len(), 1000);
+    // No two trunks closer than the Poisson-disk distance.
+    for (i, p) in a.iter().enumerate() {
+        for q in &a[i + 1..] {
+            let d = ((p.position[0] - q.position[0]).powi(2)
+                + (p.position[1] - q.position[1]).powi(2))
+            .sqrt();
+            assert!(d >= spec.spacing * 0.999, "trunks {d} m apart");
+        }
+        assert!(
+            (p.position[2] - terrain.height(p.position[0], p.position[1])).abs() < 1e-6,
+            "on the ground"
+        );
+        assert!((p.scale - 1.0).abs() <= spec.scale_variation + 1e-6);
+    }
+    // Species shares within a few percent of the weights (3:2:3:1:0.3 of 9.3).
+    let share = |s: u32| a.iter().filter(|p| p.species == s).count() as f32 / 1000.0;
+    assert!((share(0) - 3.0 / 9.3).abs() < 0.05 && (share(4) - 0.3 / 9.3).abs() < 0.03);
+    let mut other = spec.clone();
+    other.seed += 1;
+    assert_ne!(layout(&other, &Terrain::new(&other)), a, "another seed, another layout");
+}
+
+#[test]
+fn bad_scene_files_name_the_field() {
+    let e = SceneSpec::from_toml(
+        "x.toml",
+        "name = \"x\"\ntrees = 0\nspecies = [{ name = \"quaking_aspen\" }]\n",
+    )
+    .expect_err("zero trees");
+    assert!(e.to_string().contains("`trees`"), "{e}");
+    let e = SceneSpec::from_toml(
+        "x.toml",
+        "name = \"x\"\ntrees = 3\nspecies = []\nwind = \"hurricane\"\n",
+    )
+    .expect_err("bad");
+    assert!(e.to_string().contains("species") || e.to_string().contains("wind"), "{e}");
+    let e = SceneSpec::from_toml(
+        "x.toml",
+        "name = \"x\"\ntrees = 3\nspecies = [{ name = \"a\" }]\nsprecies = 1\n",
+    )
+    .expect_err("unknown key");
+    assert!(e.to_string().contains("sprecies") && e.to_string().contains("line 4"), "{e}");
+}
+
+#[test]
+fn frames_draw_every_visible_tree_once_with_valid_palettes_and_trees_move() {
+    let spec = SceneSpec::builtin("small").expect("small");
+    let mut forest = Forest::new(&spec).expect("forest");
+    let cam = forest.default_camera();
+    let mut f = FrameData::default();
+    forest.step(1.0 / 30.0);
+    forest.frame(&cam, 4.0 / 3.0, &mut f);
+    assert_eq!(f.stats.drawn, 5, "the small scene is all in view");
+    assert_eq!(f.buckets.iter().map(|b| b.count).sum::<u32>() as usize, f.instances.len());
+    for b in &f.buckets {
+        let sp = &forest.species[b.species as usize];
+        for inst in &f.instances[b.first as usize..(b.first + b.count) as usize] {
+            assert!((inst.palette as usize + sp.model.tree.skeleton.len()) <= f.palettes.len());
+        }
+    }
+    let before = f.palettes.clone();
+    for _ in 0..30 {
+        forest.step(1.0 / 30.0);
+    }
+    forest.frame(&cam, 4.0 / 3.0, &mut f);
+    let moved = before.iter().zip(&f.palettes).filter(|(a, b)| a != b).count();
+    assert!(
+        moved > before.len() / 2,
+        "only {moved} of {} palettes changed in 1 s of wind",
+        before.len()
+    );
+    assert!(f.palettes.iter().flatten().all(|v| v.is_finite()));
+}
