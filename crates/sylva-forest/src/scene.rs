@@ -1,6 +1,8 @@
 //! Scene descriptions (TOML) and the deterministic forest layout: Poisson-disk spacing, a
 //! weighted species mix, random rotation and scale per tree, on gentle terrain.
 
+use std::f32::consts::{PI, TAU};
+
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
@@ -242,7 +244,7 @@ impl Terrain {
         let mut rng = Rng(spec.seed ^ 0x7e44_a1b0);
         let mut phases = [[0.0; 3]; 3];
         for p in &mut phases {
-            *p = [rng.unit() * 6.283, rng.unit() * 6.283, rng.unit() * 3.1416];
+            *p = [rng.unit() * TAU, rng.unit() * TAU, rng.unit() * PI];
         }
         Terrain { amplitude: spec.terrain_amplitude, wavelength: spec.terrain_wavelength, phases }
     }
@@ -341,7 +343,7 @@ fn poisson_disk(rng: &mut Rng, side: f32, r: f32) -> Vec<[f32; 2]> {
 /// The layout of `spec`: `trees` placements, the ones nearest the centre of a Poisson-disk
 /// sample, each with a species drawn by weight, a yaw and a scale.
 pub fn layout(spec: &SceneSpec, terrain: &Terrain) -> Vec<Placement> {
-    let mut rng = Rng(spec.seed ^ 0x1a70_0u64);
+    let mut rng = Rng(spec.seed ^ 0x0001_a700_u64);
     let mut side = spec.side();
     let mut pts = poisson_disk(&mut rng, side, spec.spacing);
     while pts.len() < spec.trees {
