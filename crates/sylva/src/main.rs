@@ -4,6 +4,7 @@
 //! so every check happens once, at the edge, with an error that names the flag.
 
 mod bench;
+mod render;
 mod tree;
 mod wind;
 
@@ -25,6 +26,8 @@ enum Command {
     /// Generate, inspect, plot and export stochastic wind fields.
     #[command(subcommand)]
     Wind(Box<wind::WindCommand>),
+    /// Render a scene headless: PNG frames, an animated GIF (and MP4 with ffmpeg).
+    Render(render::RenderArgs),
     /// Weber–Penn species: list, document, generate and inspect trees.
     #[command(subcommand)]
     Tree(tree::TreeCommand),
@@ -56,6 +59,11 @@ fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Demo(a) => wind::demo(a),
         Command::Wind(c) => wind::run(*c),
+        Command::Render(a) => {
+            let r = render::render(&a)?;
+            render::print_report(&a, &r);
+            Ok(())
+        }
         Command::Tree(c) => tree::run_tree(c),
         Command::Sway(c) => tree::run_sway(c),
         Command::Bench(c) => bench::run(c),

@@ -1,0 +1,108 @@
+//! Offscreen rendering to RGBA8 images.
+
+use sylva_forest::{Camera, Forest, FrameData};
+
+use crate::gpu::{Gpu, RenderError};
+use crate::renderer::Renderer;
+
+/// A renderer with its own offscreen target and read-back buffer.
+#[derive(Debug)]
+pub struct Headless {
+    /// Adapter, device and queue.
+    pub gpu: Gpu,
+    renderer: Renderer,
+    target: wgpu::Texture,
+    view: wgpu::TextureView,
+    readback: wgpu::Buffer,
+    width: u32,
+    height: u32,
+    padded_row: u32,
+}
+
+/// Colour format of captured frames (sRGB-encoded RGBA8).
+const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+
+impl Headless {
+    /// Open an adapter and prepare to draw `forest` at `width × height`.
+    pub fn new(forest: &Forest, width: u32, height: u32) -> Result<Headless, RenderError> {
+        let gpu = Gpu::headless()?;
+        let max = gpu.device.limits().max_texture_dimension_2d;
+        if width == 0 || height == 0 || width > max || height > max {
+            return Err(RenderError::Size(width, height, max));
+        }
+        let renderer = Renderer::new(&gpu, forest, FORMAT, width, height);
+        let target = gpu.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("capture"),
+            size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: FORMAT,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        });
+        let view = target.create_view(&wgpu::TextureViewDescriptor::default());
+        let padded_row = (width * 4).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
+        let readback = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback"),
+            size: (padded_row * height) as u64,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        Ok(Headless { gpu, renderer, target, view, readback, width, height, padded_row })
+    }
+
+    /// The renderer (sample count, format).
+    pub fn renderer(&self) -> &Renderer {
+        &self.renderer
+    }
+
+    /// Draw `frame` from `camera` and return the image, RGBA8 rows top first.
+    pub fn render(&mut self, frame: &FrameData, camera: &Camera) -> Result<Vec<u8>, RenderError> {
+        self.renderer.render(&self.gpu, frame, camera, &self.view);
+        let mut enc = self
+            .gpu
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("copy") });
+        enc.copy_texture_to_buffer(
+            wgpu::TexelCopyTextureInfo {
+                texture: &self.target,
+                mip_level: 0,
+                origin: wgpu::Origin3d::ZERO,
+                aspect: wgpu::TextureAspect::All,
+            },
+            wgpu::TexelCopyBufferInfo {
+                buffer: &self.readback,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(self.padded_row),
+                    rows_per_image: Some(self.height),
+                },
+            },
+            wgpu::Extent3d { width: self.width, height: self.height, depth_or_array_layers: 1 },
+        );
+        self.gpu.queue.submit([enc.finish()]);
+        let slice = self.readback.slice(..);
+        let (tx, rx) = std::sync::mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send(r);
+        });
+        self.gpu
+            .device
+            .poll(wgpu::PollType::Wait { submission_index: None, timeout: None })
+            .map_err(|e| RenderError::Readback(e.to_string()))?;
+        rx.recv()
+            .map_err(|e| RenderError::Readback(e.to_string()))?
+            .map_err(|e| RenderError::Readback(e.to_string()))?;
+        let mut out = Vec::with_capacity((self.width * self.height * 4) as usize);
+        {
+            let data =
+                slice.get_mapped_range().map_err(|e| RenderError::Readback(e.to_string()))?;
+            for row in data.chunks(self.padded_row as usize) {
+                out.extend_from_slice(&row[..(self.width * 4) as usize]);
+            }
+        }
+        self.readback.unmap();
+        Ok(out)
+    }
+}

@@ -1,0 +1,53 @@
+// Branches: generalized cylinders skinned to the joint palette of their instance
+// (up to four joints per vertex), bark-textured, lit and fogged.
+
+struct BranchIn {
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) uv: vec2<f32>,
+    @location(3) joints: vec4<u32>,
+    @location(4) weights: vec4<f32>,
+    // Instance: trunk base and yaw, scale, first palette, leaf flutter (phase, amplitude).
+    @location(5) base: vec4<f32>,
+    @location(6) scale: f32,
+    @location(7) palette: u32,
+    @location(8) leaf: vec2<f32>,
+};
+
+struct BranchOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) world: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) uv: vec2<f32>,
+};
+
+@group(1) @binding(0) var bark_texture: texture_2d<f32>;
+@group(1) @binding(1) var leaf_texture: texture_2d<f32>;
+
+@vertex
+fn vs_main(v: BranchIn) -> BranchOut {
+    var p = vec3<f32>(0.0);
+    var n = vec3<f32>(0.0);
+    for (var k = 0u; k < 4u; k = k + 1u) {
+        let w = v.weights[k];
+        if (w > 0.0) {
+            let j = v.palette + v.joints[k];
+            p = p + w * palette_apply(j, v.position);
+            n = n + w * palette_rotate(j, v.normal);
+        }
+    }
+    let world = tree_to_world(p, v.base, v.scale);
+    var out: BranchOut;
+    out.clip = globals.view_proj * vec4<f32>(world, 1.0);
+    out.world = world;
+    out.normal = rotate_z(n, v.base.w);
+    out.uv = v.uv;
+    return out;
+}
+
+@fragment
+fn fs_main(in: BranchOut) -> @location(0) vec4<f32> {
+    let albedo = textureSample(bark_texture, linear_sampler, in.uv).rgb;
+    let lit = albedo * lighting(normalize(in.normal));
+    return vec4<f32>(apply_fog(lit, in.world), 1.0);
+}

@@ -1,0 +1,211 @@
+//! `sylva render` and the forest half of `sylva demo`: headless frames of a scene.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, bail};
+use clap::Args;
+use sylva_forest::{Forest, FrameData, SceneSpec};
+use sylva_render::Headless;
+
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    /// Scene: a built-in name (small, A) or a scene file (.toml).
+    #[arg(long, default_value = "A")]
+    pub scene: String,
+    /// Seconds of simulated time to render.
+    #[arg(long, default_value_t = 5.0)]
+    pub seconds: f64,
+    /// Frames per second (the fixed simulation step is 1/fps).
+    #[arg(long, default_value_t = 12.0)]
+    pub fps: f64,
+    /// Image size, WIDTHxHEIGHT.
+    #[arg(long, default_value = "1024x768")]
+    pub size: String,
+    /// Output folder: frame_0000.png …, forest.gif (and forest.mp4 with ffmpeg).
+    #[arg(long, default_value = "out/render")]
+    pub out: PathBuf,
+    /// Wind preset instead of the scene's: calm, breeze, strong, storm.
+    #[arg(long)]
+    pub wind: Option<String>,
+    /// Skip the animated GIF.
+    #[arg(long)]
+    pub no_gif: bool,
+}
+
+pub fn load_scene(s: &str) -> anyhow::Result<SceneSpec> {
+    if let Ok(spec) = SceneSpec::builtin(s) {
+        return Ok(spec);
+    }
+    if Path::new(s).exists() || s.ends_with(".toml") {
+        let text = std::fs::read_to_string(s).with_context(|| format!("reading {s}"))?;
+        return Ok(SceneSpec::from_toml(s, &text)?);
+    }
+    bail!("no scene named `{s}` (built in: small, A) and no such file")
+}
+
+pub fn parse_size(s: &str) -> anyhow::Result<(u32, u32)> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .with_context(|| format!("--size `{s}`: expected WIDTHxHEIGHT, e.g. 1024x768"))?;
+    let w: u32 =
+        w.trim().parse().with_context(|| format!("--size `{s}`: width is not a whole number"))?;
+    let h: u32 =
+        h.trim().parse().with_context(|| format!("--size `{s}`: height is not a whole number"))?;
+    if !(16..=8192).contains(&w) || !(16..=8192).contains(&h) {
+        bail!("--size `{s}`: each side must be 16 … 8192");
+    }
+    Ok((w, h))
+}
+
+fn median(v: &mut [f64]) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+pub fn write_png(path: &Path, w: u32, h: u32, rgba: &[u8]) -> anyhow::Result<()> {
+    let file =
+        std::fs::File::create(path).with_context(|| format!("creating {}", path.display()))?;
+    let mut enc = png::Encoder::new(std::io::BufWriter::new(file), w, h);
+    enc.set_color(png::ColorType::Rgba);
+    enc.set_depth(png::BitDepth::Eight);
+    enc.write_header()?.write_image_data(rgba)?;
+    Ok(())
+}
+
+/// Half-size (or smaller) copy for the GIF: box filter by `k`.
+fn shrink(rgba: &[u8], w: u32, h: u32, k: u32) -> (Vec<u8>, u32, u32) {
+    let (nw, nh) = (w / k, h / k);
+    let mut out = vec![0u8; (nw * nh * 4) as usize];
+    for y in 0..nh {
+        for x in 0..nw {
+            for c in 0..4 {
+                let mut s = 0u32;
+                for dy in 0..k {
+                    for dx in 0..k {
+                        s += rgba[(((y * k + dy) * w + x * k + dx) * 4 + c) as usize] as u32;
+                    }
+                }
+                out[((y * nw + x) * 4 + c) as usize] = (s / (k * k)) as u8;
+            }
+        }
+    }
+    (out, nw, nh)
+}
+
+/// What a render run measured.
+pub struct RenderReport {
+    pub frames: usize,
+    pub sim_ms: f64,
+    pub render_ms: f64,
+    pub triangles: f64,
+    pub adapter: String,
+    pub gif: Option<PathBuf>,
+    pub mp4: Option<PathBuf>,
+}
+
+pub fn render(a: &RenderArgs) -> anyhow::Result<RenderReport> {
+    let mut spec = load_scene(&a.scene)?;
+    if let Some(w) = &a.wind {
+        if sylva_wind::Preset::from_name(w).is_none() {
+            bail!("--wind `{w}`: use calm, breeze, strong or storm");
+        }
+        spec.wind = w.clone();
+    }
+    if !(a.fps > 0.0 && a.fps <= 1000.0) {
+        bail!("--fps {}: must be in (0, 1000]", a.fps);
+    }
+    if !(a.seconds > 0.0 && a.seconds <= 3600.0) {
+        bail!("--seconds {}: must be in (0, 3600]", a.seconds);
+    }
+    let (w, h) = parse_size(&a.size)?;
+    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    let t0 = Instant::now();
+    let mut forest = Forest::new(&spec)?;
+    println!(
+        "scene {}: {} trees, {} species, built in {:.2} s",
+        spec.name,
+        forest.trees(),
+        forest.species.len(),
+        t0.elapsed().as_secs_f64()
+    );
+    let mut gpu = Headless::new(&forest, w, h)?;
+    let adapter = gpu.gpu.describe();
+    println!("adapter {adapter}, {}× MSAA, {w}×{h}", gpu.renderer().samples());
+    let camera = forest.default_camera();
+    let frames = (a.seconds * a.fps).round().max(1.0) as usize;
+    let dt = (1.0 / a.fps) as f32;
+    let gif_path = a.out.join("forest.gif");
+    let k = (w / 480).max(1);
+    let mut gif = if a.no_gif {
+        None
+    } else {
+        let f = std::fs::File::create(&gif_path)
+            .with_context(|| format!("creating {}", gif_path.display()))?;
+        let mut e =
+            gif::Encoder::new(std::io::BufWriter::new(f), (w / k) as u16, (h / k) as u16, &[])?;
+        e.set_repeat(gif::Repeat::Infinite)?;
+        Some(e)
+    };
+    let mut frame = FrameData::default();
+    let (mut sim, mut draw, mut tris) = (Vec::new(), Vec::new(), 0.0);
+    let bar = indicatif::ProgressBar::new(frames as u64);
+    for i in 0..frames {
+        let t = Instant::now();
+        forest.step(dt);
+        forest.frame(&camera, w as f32 / h as f32, &mut frame);
+        sim.push(t.elapsed().as_secs_f64() * 1e3);
+        let t = Instant::now();
+        let rgba = gpu.render(&frame, &camera)?;
+        draw.push(t.elapsed().as_secs_f64() * 1e3);
+        tris += frame.stats.triangles as f64;
+        write_png(&a.out.join(format!("frame_{i:04}.png")), w, h, &rgba)?;
+        if let Some(e) = gif.as_mut() {
+            let (mut small, sw, sh) = shrink(&rgba, w, h, k);
+            let mut f = gif::Frame::from_rgba_speed(sw as u16, sh as u16, &mut small, 20);
+            f.delay = (100.0 / a.fps).round() as u16;
+            e.write_frame(&f)?;
+        }
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    drop(gif);
+    let mp4 = a.out.join("forest.mp4");
+    let made_mp4 = std::process::Command::new("ffmpeg")
+        .args(["-y", "-loglevel", "error", "-framerate"])
+        .arg(format!("{}", a.fps))
+        .arg("-i")
+        .arg(a.out.join("frame_%04d.png"))
+        .args(["-pix_fmt", "yuv420p", "-vf", "scale=trunc(iw/2)*2:trunc(ih/2)*2"])
+        .arg(&mp4)
+        .status()
+        .map(|s| s.success())
+        .unwrap_or(false);
+    Ok(RenderReport {
+        frames,
+        sim_ms: median(&mut sim),
+        render_ms: median(&mut draw),
+        triangles: tris / frames as f64,
+        adapter,
+        gif: (!a.no_gif).then_some(gif_path),
+        mp4: made_mp4.then_some(mp4),
+    })
+}
+
+pub fn print_report(a: &RenderArgs, r: &RenderReport) {
+    println!(
+        "{} frames: simulation {:.1} ms, rendering {:.1} ms per frame (medians), {:.0} triangles per frame",
+        r.frames, r.sim_ms, r.render_ms, r.triangles
+    );
+    println!("adapter {}", r.adapter);
+    println!("wrote {}/frame_0000.png … frame_{:04}.png", a.out.display(), r.frames - 1);
+    if let Some(g) = &r.gif {
+        println!("wrote {}", g.display());
+    }
+    if let Some(m) = &r.mp4 {
+        println!("wrote {}", m.display());
+    }
+}
