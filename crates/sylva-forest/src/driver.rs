@@ -9,8 +9,9 @@
 //! Trees that share a simulation share its yaw, so the wind bends them all downwind.
 //!
 //! **Geometry LOD.** A tree's level comes from the fraction `h` of the image height its
-//! crown covers: level 0 while `h ≥ 0.5`, then one level coarser per factor 3 smaller
-//! (`⌈log₃(0.5 / h)⌉`), down to the chain's last. Trees outside the view cone are culled.
+//! crown covers: level 0 while `h ≥ h₀`, then one level coarser per factor 3 smaller
+//! (`⌈log₃(h₀ / h)⌉`), down to the chain's last; `h₀` is [`Forest::set_lod_fraction`]
+//! (default [`DEFAULT_LOD_FRACTION`]: full detail only for a tree as tall as the image). Trees outside the view cone are culled.
 
 use std::time::Instant;
 
@@ -149,7 +150,11 @@ pub struct Forest {
     gain: f32,
     turn: f32,
     last_sim_ms: f64,
+    lod_fraction: f32,
 }
+
+/// Default image-height fraction above which a tree is drawn at full detail.
+pub const DEFAULT_LOD_FRACTION: f32 = 1.0;
 
 fn morton(x: f32, y: f32, side: f32) -> u64 {
     let q = |v: f32| (((v / side + 0.5).clamp(0.0, 1.0)) * 65535.0) as u64;
@@ -266,12 +271,20 @@ impl Forest {
             gain: 1.0,
             turn: 0.0,
             last_sim_ms: 0.0,
+            lod_fraction: DEFAULT_LOD_FRACTION,
         })
     }
 
     /// The scene's default viewpoint.
     pub fn default_camera(&self) -> Camera {
         default_camera(&self.spec, self.radius)
+    }
+
+    /// Geometry-LOD threshold: the image-height fraction `h₀` above which a tree is drawn at
+    /// full detail (larger: coarser everywhere). Clamped to 0.01 … 100.
+    pub fn set_lod_fraction(&mut self, h0: f32) {
+        self.lod_fraction =
+            if h0.is_finite() { h0.clamp(0.01, 100.0) } else { DEFAULT_LOD_FRACTION };
     }
 
     /// Simulation time, s.
@@ -349,10 +362,12 @@ impl Forest {
             }
             let frac = camera.screen_fraction(c, h);
             let last = sp.model.lods.len() as u32 - 1;
-            let lod = if frac >= 0.5 {
+            let lod = if frac >= self.lod_fraction {
                 0
             } else {
-                ((0.5 / frac.max(1e-9)).ln() / 3f32.ln()).ceil().clamp(0.0, last as f32) as u32
+                ((self.lod_fraction / frac.max(1e-9)).ln() / 3f32.ln())
+                    .ceil()
+                    .clamp(0.0, last as f32) as u32
             };
             out.keys.push(((p.species << 8) | lod, i as u32));
         }

@@ -569,7 +569,7 @@ impl Renderer {
             sun: [sun[0], sun[1], sun[2], 1.1],
             sky_zenith: [0.18, 0.36, 0.72, 1.0],
             sky_horizon: horizon,
-            fog: [horizon[0], horizon[1], horizon[2], 0.0022],
+            fog: [horizon[0], horizon[1], horizon[2], 0.0011],
             misc: [frame.time as f32, self.atlas_cells as f32, 0.0, 0.0],
         };
         gpu.queue.write_buffer(&self.globals, 0, bytemuck::bytes_of(&g));

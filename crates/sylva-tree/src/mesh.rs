@@ -40,7 +40,7 @@ pub const LEAVES_PER_CLUSTER: f32 = 8.0;
 /// Triangle ratio between consecutive LOD levels.
 pub const LOD_RATIO: f32 = 3.0;
 /// Number of levels in the default LOD chain.
-pub const LOD_LEVELS: usize = 4;
+pub const LOD_LEVELS: usize = 6;
 
 /// A skinned triangle mesh of a tree's branches, structure of arrays.
 #[derive(Debug, Clone, Default, PartialEq)]

@@ -28,6 +28,10 @@ pub struct RenderArgs {
     /// Wind preset instead of the scene's: calm, breeze, strong, storm.
     #[arg(long)]
     pub wind: Option<String>,
+    /// Geometry-LOD threshold h₀: full detail only for trees taller than this fraction of
+    /// the image; one level coarser per factor 3 smaller. Larger is coarser and faster.
+    #[arg(long, default_value_t = sylva_forest::driver::DEFAULT_LOD_FRACTION)]
+    pub lod_fraction: f32,
     /// Skip the animated GIF.
     #[arg(long)]
     pub no_gif: bool,
@@ -125,6 +129,10 @@ pub fn render(a: &RenderArgs) -> anyhow::Result<RenderReport> {
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     let t0 = Instant::now();
     let mut forest = Forest::new(&spec)?;
+    if !(a.lod_fraction > 0.0 && a.lod_fraction.is_finite()) {
+        bail!("--lod-fraction {}: must be > 0", a.lod_fraction);
+    }
+    forest.set_lod_fraction(a.lod_fraction);
     println!(
         "scene {}: {} trees, {} species, built in {:.2} s",
         spec.name,

@@ -1,0 +1,141 @@
+//! Rendering on whatever adapter the machine has (lavapipe in CI): golden image, motion,
+//! colours where they belong.
+
+use std::path::{Path, PathBuf};
+
+use sylva_forest::{Camera, Forest, FrameData, SceneSpec};
+use sylva_render::Headless;
+
+const W: u32 = 256;
+const H: u32 = 192;
+
+/// The small scene after `steps` steps of 1/30 s in `wind`, and its image.
+fn render(wind: &str, steps: &[usize]) -> Vec<Vec<u8>> {
+    let mut spec = SceneSpec::builtin("small").expect("small scene");
+    spec.wind = wind.to_string();
+    let mut forest = Forest::new(&spec).expect("forest");
+    let camera: Camera = forest.default_camera();
+    let mut gpu = Headless::new(&forest, W, H).unwrap_or_else(|e| panic!("{e}"));
+    let mut frame = FrameData::default();
+    let mut out = Vec::new();
+    let mut done = 0;
+    for &s in steps {
+        while done < s {
+            forest.step(1.0 / 30.0);
+            done += 1;
+        }
+        forest.frame(&camera, W as f32 / H as f32, &mut frame);
+        out.push(gpu.render(&frame, &camera).expect("render"));
+    }
+    out
+}
+
+fn px(img: &[u8], x: u32, y: u32) -> [i32; 3] {
+    let i = ((y * W + x) * 4) as usize;
+    [img[i] as i32, img[i + 1] as i32, img[i + 2] as i32]
+}
+
+fn mean_abs_diff(a: &[u8], b: &[u8]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| (*x as i32 - *y as i32).unsigned_abs() as f64).sum::<f64>()
+        / a.len() as f64
+}
+
+fn write_png(path: &Path, rgba: &[u8]) {
+    let f = std::fs::File::create(path).expect("create png");
+    let mut e = png::Encoder::new(std::io::BufWriter::new(f), W, H);
+    e.set_color(png::ColorType::Rgba);
+    e.set_depth(png::BitDepth::Eight);
+    e.write_header().expect("header").write_image_data(rgba).expect("png data");
+}
+
+fn read_png(path: &Path) -> Option<Vec<u8>> {
+    let d = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).ok()?));
+    let mut r = d.read_info().ok()?;
+    let mut buf = vec![0; r.output_buffer_size()];
+    let info = r.next_frame(&mut buf).ok()?;
+    (info.width == W && info.height == H && info.color_type == png::ColorType::Rgba).then_some(buf)
+}
+
+#[test]
+fn small_scene_matches_its_golden_image() {
+    let img = render("strong", &[15]).remove(0);
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/golden");
+    let golden = dir.join("small.png");
+    if std::env::var_os("SYLVA_BLESS").is_some() {
+        write_png(&golden, &img);
+    }
+    let want = read_png(&golden).expect("tests/golden/small.png (SYLVA_BLESS=1 writes it)");
+    // Tolerance: rasterisers differ in the last bit of coverage and filtering; a changed
+    // scene, camera or shader moves far more than this.
+    let mean = mean_abs_diff(&img, &want);
+    let far = img
+        .chunks(4)
+        .zip(want.chunks(4))
+        .filter(|(a, b)| (0..3).any(|c| (a[c] as i32 - b[c] as i32).abs() > 48))
+        .count();
+    let far_share = far as f64 / (W * H) as f64;
+    if mean > 3.0 || far_share > 0.02 {
+        write_png(&dir.join("small-actual.png"), &img);
+        let diff: Vec<u8> = img
+            .chunks(4)
+            .zip(want.chunks(4))
+            .flat_map(|(a, b)| {
+                let d =
+                    (0..3).map(|c| (a[c] as i32 - b[c] as i32).unsigned_abs()).max().unwrap_or(0);
+                let v = (d * 4).min(255) as u8;
+                [v, v, v, 255]
+            })
+            .collect();
+        write_png(&dir.join("small-diff.png"), &diff);
+        panic!(
+            "image differs from golden: mean |Δ| {mean:.2}, {:.2}% pixels off by > 48 (see small-actual.png, small-diff.png)",
+            100.0 * far_share
+        );
+    }
+}
+
+#[test]
+fn trees_move_and_a_storm_moves_them_more_than_a_breeze() {
+    let storm = render("storm", &[30, 31, 45]);
+    let breeze = render("breeze", &[30, 31, 45]);
+    assert!(mean_abs_diff(&storm[0], &storm[1]) > 0.0, "consecutive frames are identical");
+    assert!(mean_abs_diff(&breeze[0], &breeze[1]) > 0.0, "consecutive frames are identical");
+    let s = mean_abs_diff(&storm[0], &storm[2]);
+    let b = mean_abs_diff(&breeze[0], &breeze[2]);
+    assert!(s > 1.5 * b, "half a second of storm changes the image by {s:.3}, of breeze by {b:.3}");
+}
+
+#[test]
+fn sky_ground_bark_and_leaves_appear_where_expected() {
+    let img = render("calm", &[1]).remove(0);
+    // Sky: the top rows are blue-ish and bright.
+    for x in (0..W).step_by(16) {
+        let [r, g, b] = px(&img, x, 2);
+        assert!(b > r && b > 150, "sky at ({x}, 2) is {:?}", [r, g, b]);
+    }
+    // Ground: the bottom rows are green or earth, not blue.
+    for x in (0..W).step_by(16) {
+        let [r, g, b] = px(&img, x, H - 3);
+        assert!(g >= b && r >= b, "ground at ({x}, {}) is {:?}", H - 3, [r, g, b]);
+    }
+    // Leaves (saturated green) and bark (brown: red over green over blue, dark) somewhere in
+    // the middle band where the trees stand.
+    let (mut leaves, mut bark) = (0, 0);
+    for y in H / 8..H * 7 / 8 {
+        for x in 0..W {
+            let [r, g, b] = px(&img, x, y);
+            if g > r + 10 && g > b + 25 && g < 200 {
+                leaves += 1;
+            }
+            if r > g && g > b && r < 150 && r - b > 15 {
+                bark += 1;
+            }
+        }
+    }
+    assert!(leaves > 500, "only {leaves} leaf-green pixels");
+    assert!(bark > 30, "only {bark} bark-brown pixels");
+    // Not a uniform frame.
+    let mean: f64 = img.iter().map(|&v| v as f64).sum::<f64>() / img.len() as f64;
+    let var: f64 = img.iter().map(|&v| (v as f64 - mean).powi(2)).sum::<f64>() / img.len() as f64;
+    assert!(var.sqrt() > 20.0, "image nearly uniform (σ = {:.1})", var.sqrt());
+}
