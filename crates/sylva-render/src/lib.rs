@@ -13,3 +13,4 @@ mod renderer;
 pub use gpu::{Gpu, RenderError};
 pub use headless::Headless;
 pub use renderer::{Renderer, SHADERS, shader_source};
+pub use wgpu;

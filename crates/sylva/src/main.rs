@@ -6,6 +6,7 @@
 mod bench;
 mod render;
 mod tree;
+mod view;
 mod wind;
 
 use clap::{Parser, Subcommand};
@@ -20,9 +21,11 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
-    /// The main job on built-in defaults: generate the default wind field, check it
-    /// against the model and plot it, into `out/`.
-    Demo(wind::DemoArgs),
+    /// The main job on built-in defaults: a forest in wind. Opens the viewer when a display
+    /// exists; otherwise renders a ~5 s clip of scene A headless into `out/demo/`.
+    Demo(DemoArgs),
+    /// A window onto a scene: orbit/fly camera, live wind controls, live figures.
+    View(view::ViewArgs),
     /// Generate, inspect, plot and export stochastic wind fields.
     #[command(subcommand)]
     Wind(Box<wind::WindCommand>),
@@ -37,6 +40,49 @@ enum Command {
     /// Benchmarks (figures with the machine they ran on).
     #[command(subcommand)]
     Bench(bench::BenchCommand),
+}
+
+#[derive(Debug, clap::Args)]
+struct DemoArgs {
+    /// Render the clip even when a display exists.
+    #[arg(long)]
+    headless: bool,
+    /// Output folder of the headless clip.
+    #[arg(long, default_value = "out/demo")]
+    out: std::path::PathBuf,
+}
+
+fn demo(a: DemoArgs) -> anyhow::Result<()> {
+    if !a.headless && view::display_available() {
+        println!(
+            "sylva demo: scene A in the viewer (drag to orbit, WASD to move, arrows for wind)"
+        );
+        match view::view(&view::ViewArgs {
+            scene: "A".into(),
+            lod_fraction: sylva_forest::driver::DEFAULT_LOD_FRACTION,
+        }) {
+            Ok(()) => return Ok(()),
+            Err(e) => eprintln!("viewer unavailable ({e:#}); rendering headless instead"),
+        }
+    }
+    // Headless: scene A, 5 s at 10 frames per second, sized and detailed so that a software
+    // rasteriser finishes in about a minute.
+    let args = render::RenderArgs {
+        scene: "A".into(),
+        seconds: 5.0,
+        fps: 10.0,
+        size: "800x600".into(),
+        out: a.out,
+        wind: None,
+        lod_fraction: 3.0,
+        no_gif: false,
+    };
+    println!(
+        "sylva demo: no display, rendering scene A (1000 trees in strong wind), 5 s at 10 fps, 800×600"
+    );
+    let r = render::render(&args)?;
+    render::print_report(&args, &r);
+    Ok(())
 }
 
 fn main() -> std::process::ExitCode {
@@ -57,7 +103,8 @@ fn main() -> std::process::ExitCode {
 
 fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
-        Command::Demo(a) => wind::demo(a),
+        Command::Demo(a) => demo(a),
+        Command::View(a) => view::view(&a),
         Command::Wind(c) => wind::run(*c),
         Command::Render(a) => {
             let r = render::render(&a)?;

@@ -39,8 +39,8 @@ fn noise2(p: vec2<f32>) -> f32 {
 fn fs_main(in: GroundOut) -> @location(0) vec4<f32> {
     let p = in.world.xy;
     let n = 0.55 * noise2(p * 0.08) + 0.3 * noise2(p * 0.5) + 0.15 * noise2(p * 3.0);
-    let grass = vec3<f32>(0.10, 0.20, 0.05);
-    let dry = vec3<f32>(0.25, 0.24, 0.10);
+    let grass = vec3<f32>(0.07, 0.15, 0.035);
+    let dry = vec3<f32>(0.17, 0.16, 0.07);
     let albedo = mix(grass, dry, smoothstep(0.35, 0.75, n));
     let lit = albedo * lighting(normalize(in.normal));
     return vec4<f32>(apply_fog(lit, in.world), 1.0);
