@@ -8,6 +8,7 @@
 #![warn(missing_docs)]
 
 pub mod generate;
+pub mod gltf;
 pub mod mesh;
 pub mod skeleton;
 pub mod species;

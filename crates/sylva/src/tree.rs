@@ -19,6 +19,9 @@ pub enum TreeCommand {
     Params,
     /// Generate a tree and print its figures.
     Stats(StatsArgs),
+    /// Generate a tree and write it as glTF 2.0 (.glb): skinned branches, alpha-masked
+    /// leaf clusters, textures embedded.
+    Generate(GenerateArgs),
     /// Print a species file (a preset's, to start your own from).
     Show {
         /// Preset name or species file.
@@ -34,6 +37,26 @@ pub struct StatsArgs {
     /// Seed of the random variations.
     #[arg(long, default_value_t = 1)]
     seed: u64,
+}
+
+#[derive(Debug, Args)]
+pub struct GenerateArgs {
+    /// Preset name (see `sylva tree list`) or a species file (.toml).
+    #[arg(long)]
+    species: String,
+    /// Seed of the random variations.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Level of detail to export (0 = full detail); omit for all levels, one glTF scene each.
+    #[arg(long)]
+    lod: Option<usize>,
+    /// Most joints to export (glTF's 16-bit joint indices allow 65535); lighter joints fold
+    /// into their nearest exported ancestor.
+    #[arg(long, default_value_t = sylva_tree::gltf::MAX_GLTF_JOINTS)]
+    max_joints: usize,
+    /// Output file (.glb).
+    #[arg(long, default_value = "out/tree.glb")]
+    out: PathBuf,
 }
 
 #[derive(Debug, Subcommand)]
@@ -111,6 +134,46 @@ pub fn run_tree(cmd: TreeCommand) -> anyhow::Result<()> {
             }
             println!(
                 "\nPer-level keys carry the level digit first: 0Length (trunk), 1DownAngle, …"
+            );
+        }
+        TreeCommand::Generate(a) => {
+            let sp = load_species(&a.species)?;
+            if a.max_joints == 0 || a.max_joints > sylva_tree::gltf::MAX_GLTF_JOINTS {
+                bail!(
+                    "--max-joints {}: must be 1 … {}",
+                    a.max_joints,
+                    sylva_tree::gltf::MAX_GLTF_JOINTS
+                );
+            }
+            let model = sp.model(a.seed, sylva_tree::mesh::LOD_LEVELS)?;
+            if let Some(l) = a.lod
+                && l >= model.lods.len()
+            {
+                bail!("--lod {l}: levels are 0 … {}", model.lods.len() - 1);
+            }
+            let opts = sylva_tree::gltf::GltfOptions {
+                lods: a.lod.map(|l| vec![l]).unwrap_or_default(),
+                max_joints: a.max_joints,
+                name: sp.name.clone(),
+            };
+            let bytes = model.to_glb(&opts);
+            if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
+                std::fs::create_dir_all(dir)
+                    .with_context(|| format!("creating {}", dir.display()))?;
+            }
+            std::fs::write(&a.out, &bytes)
+                .with_context(|| format!("writing {}", a.out.display()))?;
+            let tris: usize = match a.lod {
+                Some(l) => model.lods[l].triangles(),
+                None => model.lods.iter().map(|l| l.triangles()).sum(),
+            };
+            println!(
+                "wrote {} ({:.1} MB, {} joints, {} triangles{})",
+                a.out.display(),
+                bytes.len() as f64 / 1e6,
+                model.tree.skeleton.len().min(a.max_joints),
+                tris,
+                if a.lod.is_none() { ", all LODs" } else { "" }
             );
         }
         TreeCommand::Show { species } => print!("{}", load_species(&species)?.to_toml()),

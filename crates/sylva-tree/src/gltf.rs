@@ -1,0 +1,514 @@
+//! glTF 2.0 binary export (`.glb`): the branch mesh skinned to the skeleton, the leaf
+//! clusters as an alpha-masked primitive, both textures embedded as PNG.
+//!
+//! Layout of the file:
+//! - one node per exported joint, parents first, each with its rest frame (translation and
+//!   rotation relative to its parent; the frame's z runs along the segment) — the joint
+//!   hierarchy an animator poses;
+//! - one skin over those nodes, with inverse bind matrices (the inverse of each joint's
+//!   rest world transform);
+//! - per exported LOD, one mesh of two primitives (bark: `TEXCOORD_0`, `NORMAL`, `JOINTS_0`,
+//!   `WEIGHTS_0`; leaves: one double-sided quad per cluster, `alphaMode: MASK`, weighted to
+//!   its hanging joint) on a root node with the skin; each LOD is its own scene (scene 0 is
+//!   the first exported level), all sharing the joints.
+//!
+//! glTF stores joint indices as unsigned 16-bit numbers, so at most 65 535 joints are
+//! exported: beyond `max_joints`, the lightest joints (least carried mass) are folded into
+//! their nearest exported ancestor. Leaf billboards, camera-facing in the renderer, become
+//! fixed quads facing away from the trunk.
+
+use std::fmt::Write as _;
+
+use crate::mesh::{LeafCluster, TreeModel};
+use crate::skeleton::{NO_PARENT, Skeleton};
+use crate::texture::Image;
+
+/// Most joints glTF's 16-bit `JOINTS_0` can index.
+pub const MAX_GLTF_JOINTS: usize = 65_535;
+
+/// Export options.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GltfOptions {
+    /// LOD levels to export (each its own scene), in order. Empty: all.
+    pub lods: Vec<usize>,
+    /// Most joints to export (1 … 65 535).
+    pub max_joints: usize,
+    /// Name of the tree (the root node's name).
+    pub name: String,
+}
+
+impl Default for GltfOptions {
+    fn default() -> Self {
+        GltfOptions { lods: vec![0], max_joints: MAX_GLTF_JOINTS, name: "tree".into() }
+    }
+}
+
+type V3 = [f32; 3];
+fn sub(a: V3, b: V3) -> V3 {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+fn dot(a: V3, b: V3) -> f32 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+fn cross(a: V3, b: V3) -> V3 {
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+}
+fn norm(a: V3) -> V3 {
+    let n = dot(a, a).sqrt().max(1e-20);
+    [a[0] / n, a[1] / n, a[2] / n]
+}
+/// Rᵀ·v for the frame R with columns f[0], f[1], f[2].
+fn to_local(f: &[V3; 3], v: V3) -> V3 {
+    [dot(f[0], v), dot(f[1], v), dot(f[2], v)]
+}
+
+/// Unit quaternion (x, y, z, w) of the rotation matrix with columns c.
+fn quaternion(c: &[V3; 3]) -> [f32; 4] {
+    // m[row][col]
+    let m = |r: usize, k: usize| c[k][r] as f64;
+    let trace = m(0, 0) + m(1, 1) + m(2, 2);
+    let q = if trace > 0.0 {
+        let s = (trace + 1.0).sqrt() * 2.0;
+        [(m(2, 1) - m(1, 2)) / s, (m(0, 2) - m(2, 0)) / s, (m(1, 0) - m(0, 1)) / s, 0.25 * s]
+    } else if m(0, 0) > m(1, 1) && m(0, 0) > m(2, 2) {
+        let s = (1.0 + m(0, 0) - m(1, 1) - m(2, 2)).sqrt() * 2.0;
+        [0.25 * s, (m(0, 1) + m(1, 0)) / s, (m(0, 2) + m(2, 0)) / s, (m(2, 1) - m(1, 2)) / s]
+    } else if m(1, 1) > m(2, 2) {
+        let s = (1.0 + m(1, 1) - m(0, 0) - m(2, 2)).sqrt() * 2.0;
+        [(m(0, 1) + m(1, 0)) / s, 0.25 * s, (m(1, 2) + m(2, 1)) / s, (m(0, 2) - m(2, 0)) / s]
+    } else {
+        let s = (1.0 + m(2, 2) - m(0, 0) - m(1, 1)).sqrt() * 2.0;
+        [(m(0, 2) + m(2, 0)) / s, (m(1, 2) + m(2, 1)) / s, 0.25 * s, (m(1, 0) - m(0, 1)) / s]
+    };
+    let n = q.iter().map(|v| v * v).sum::<f64>().sqrt();
+    [(q[0] / n) as f32, (q[1] / n) as f32, (q[2] / n) as f32, (q[3] / n) as f32]
+}
+
+/// An orthonormal rest frame per joint (columns x, y, z; z along the segment), made
+/// exactly orthonormal in f64 so the quaternions are unit.
+fn frame(sk: &Skeleton, j: usize) -> [V3; 3] {
+    let f = sk.joints()[j].frame();
+    let z = norm(f[2]);
+    let x = norm(sub(f[0], scale(z, dot(f[0], z))));
+    let y = cross(z, x);
+    [x, y, z]
+}
+fn scale(a: V3, s: f32) -> V3 {
+    [a[0] * s, a[1] * s, a[2] * s]
+}
+
+/// Binary buffer under construction, with one view per accessor.
+struct Bin {
+    data: Vec<u8>,
+    views: String,
+    accessors: String,
+    n_views: usize,
+    n_accessors: usize,
+}
+
+impl Bin {
+    fn view(&mut self, bytes: &[u8], target: Option<u32>) -> usize {
+        while !self.data.len().is_multiple_of(4) {
+            self.data.push(0);
+        }
+        let offset = self.data.len();
+        self.data.extend_from_slice(bytes);
+        if self.n_views > 0 {
+            self.views.push(',');
+        }
+        let _ = write!(
+            self.views,
+            "{{\"buffer\":0,\"byteOffset\":{offset},\"byteLength\":{}",
+            bytes.len()
+        );
+        if let Some(t) = target {
+            let _ = write!(self.views, ",\"target\":{t}");
+        }
+        self.views.push('}');
+        self.n_views += 1;
+        self.n_views - 1
+    }
+
+    /// Accessor over `bytes`: component type, count, type name, optional min/max.
+    fn accessor(
+        &mut self,
+        bytes: &[u8],
+        target: Option<u32>,
+        component: u32,
+        count: usize,
+        ty: &str,
+        bounds: Option<(V3, V3)>,
+    ) -> usize {
+        let view = self.view(bytes, target);
+        if self.n_accessors > 0 {
+            self.accessors.push(',');
+        }
+        let _ = write!(
+            self.accessors,
+            "{{\"bufferView\":{view},\"componentType\":{component},\"count\":{count},\"type\":\"{ty}\""
+        );
+        if let Some((lo, hi)) = bounds {
+            let _ = write!(
+                self.accessors,
+                ",\"min\":[{},{},{}],\"max\":[{},{},{}]",
+                lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]
+            );
+        }
+        self.accessors.push('}');
+        self.n_accessors += 1;
+        self.n_accessors - 1
+    }
+}
+
+fn f32_bytes<const N: usize>(v: &[[f32; N]]) -> Vec<u8> {
+    v.iter().flatten().flat_map(|x| x.to_le_bytes()).collect()
+}
+
+fn bounds(p: &[V3]) -> (V3, V3) {
+    let mut lo = [f32::MAX; 3];
+    let mut hi = [f32::MIN; 3];
+    for v in p {
+        for c in 0..3 {
+            lo[c] = lo[c].min(v[c]);
+            hi[c] = hi[c].max(v[c]);
+        }
+    }
+    (lo, hi)
+}
+
+fn png(img: &Image) -> Vec<u8> {
+    let mut out = Vec::new();
+    {
+        let mut e = png::Encoder::new(&mut out, img.width, img.height);
+        e.set_color(png::ColorType::Rgba);
+        e.set_depth(png::BitDepth::Eight);
+        // Writing into a Vec cannot fail for a well-formed image.
+        if let Ok(mut w) = e.write_header() {
+            let _ = w.write_image_data(&img.rgba);
+        }
+    }
+    out
+}
+
+/// Escape a string for JSON.
+fn json_str(s: &str) -> String {
+    let mut o = String::with_capacity(s.len() + 2);
+    o.push('"');
+    for ch in s.chars() {
+        match ch {
+            '"' => o.push_str("\\\""),
+            '\\' => o.push_str("\\\\"),
+            c if (c as u32) < 0x20 => {
+                let _ = write!(o, "\\u{:04x}", c as u32);
+            }
+            c => o.push(c),
+        }
+    }
+    o.push('"');
+    o
+}
+
+/// The leaf quad of a cluster: four corners, its normal, facing away from the trunk.
+fn leaf_quad(c: &LeafCluster) -> ([V3; 4], V3) {
+    let out = sub(c.center, c.hang);
+    let mut n = [out[0], out[1], 0.0];
+    if dot(n, n) < 1e-12 {
+        n = [c.roll.cos(), c.roll.sin(), 0.0];
+    }
+    let n = norm(n);
+    let side = norm(cross([0.0, 0.0, 1.0], n));
+    let (s, co) = c.roll.sin_cos();
+    // Roll the quad in its plane.
+    let u = norm([side[0] * co, side[1] * co, s]);
+    let v = cross(n, u);
+    let h = 0.5 * c.size;
+    let corner = |a: f32, b: f32| {
+        [
+            c.center[0] + h * (a * u[0] + b * v[0]),
+            c.center[1] + h * (a * u[1] + b * v[1]),
+            c.center[2] + h * (a * u[2] + b * v[2]),
+        ]
+    };
+    ([corner(-1.0, -1.0), corner(1.0, -1.0), corner(1.0, 1.0), corner(-1.0, 1.0)], n)
+}
+
+impl TreeModel {
+    /// The model as a `.glb` file. Same model and options, same bytes.
+    pub fn to_glb(&self, opts: &GltfOptions) -> Vec<u8> {
+        let sk = &self.tree.skeleton;
+        let js = sk.joints();
+        let n = js.len();
+        // Joints to export: the heaviest, a set closed under parents (a parent carries at
+        // least what its child does; ties go to the lower index, which is the parent).
+        let limit = opts.max_joints.clamp(1, MAX_GLTF_JOINTS);
+        let mut order: Vec<usize> = (0..n).collect();
+        order.sort_by(|&a, &b| sk.carried_mass(b).total_cmp(&sk.carried_mass(a)).then(a.cmp(&b)));
+        let mut keep = vec![false; n];
+        for &j in order.iter().take(limit) {
+            keep[j] = true;
+        }
+        for j in 0..n {
+            let p = js[j].parent;
+            if keep[j] && p != NO_PARENT && !keep[p as usize] {
+                keep[j] = false;
+            }
+        }
+        // Exported index of each joint, or of its nearest exported ancestor.
+        let mut index = vec![0u16; n];
+        let mut exported = Vec::new();
+        for j in 0..n {
+            if keep[j] {
+                index[j] = exported.len() as u16;
+                exported.push(j);
+            } else {
+                index[j] = index[js[j].parent as usize];
+            }
+        }
+        let frames: Vec<[V3; 3]> = (0..n).map(|j| frame(sk, j)).collect();
+        let mut bin = Bin {
+            data: Vec::new(),
+            views: String::new(),
+            accessors: String::new(),
+            n_views: 0,
+            n_accessors: 0,
+        };
+        // Joint nodes 0 … k−1 (node i = exported joint i); mesh nodes after them.
+        let mut nodes = String::new();
+        let mut children: Vec<Vec<usize>> = vec![Vec::new(); exported.len()];
+        for (i, &j) in exported.iter().enumerate().skip(1) {
+            children[index[js[j].parent as usize] as usize].push(i);
+        }
+        let mut ibm = Vec::with_capacity(exported.len());
+        for (i, &j) in exported.iter().enumerate() {
+            let f = &frames[j];
+            let (t, r) = if js[j].parent == NO_PARENT {
+                (js[j].origin, quaternion(f))
+            } else {
+                let p = js[j].parent as usize;
+                let pf = &frames[p];
+                let local = [to_local(pf, f[0]), to_local(pf, f[1]), to_local(pf, f[2])];
+                (to_local(pf, sub(js[j].origin, js[p].origin)), quaternion(&local))
+            };
+            if i > 0 {
+                nodes.push(',');
+            }
+            let _ = write!(
+                nodes,
+                "{{\"name\":\"joint{j}\",\"translation\":[{},{},{}],\"rotation\":[{},{},{},{}]",
+                t[0], t[1], t[2], r[0], r[1], r[2], r[3]
+            );
+            if !children[i].is_empty() {
+                let list: Vec<String> = children[i].iter().map(|c| c.to_string()).collect();
+                let _ = write!(nodes, ",\"children\":[{}]", list.join(","));
+            }
+            nodes.push('}');
+            // Inverse bind: [Rᵀ | −Rᵀ o], column-major.
+            let o = js[j].origin;
+            let m = [
+                f[0][0],
+                f[1][0],
+                f[2][0],
+                0.0,
+                f[0][1],
+                f[1][1],
+                f[2][1],
+                0.0,
+                f[0][2],
+                f[1][2],
+                f[2][2],
+                0.0,
+                -dot(f[0], o),
+                -dot(f[1], o),
+                -dot(f[2], o),
+                1.0,
+            ];
+            ibm.push(m);
+        }
+        let ibm_acc = bin.accessor(&f32_bytes(&ibm), None, 5126, ibm.len(), "MAT4", None);
+        let joint_list: Vec<String> = (0..exported.len()).map(|i| i.to_string()).collect();
+        let skin = format!(
+            "{{\"inverseBindMatrices\":{ibm_acc},\"skeleton\":0,\"joints\":[{}]}}",
+            joint_list.join(",")
+        );
+        // Textures: image 0 bark, image 1 leaves.
+        let bark_view = bin.view(&png(&self.bark), None);
+        let leaf_view = bin.view(&png(&self.leaves.image), None);
+        let lods: Vec<usize> = if opts.lods.is_empty() {
+            (0..self.lods.len()).collect()
+        } else {
+            opts.lods.iter().copied().filter(|&l| l < self.lods.len()).collect()
+        };
+        let mut meshes = String::new();
+        let mut scenes = String::new();
+        let cells = self.leaves.cells.max(1);
+        for (k, &l) in lods.iter().enumerate() {
+            let lod = &self.lods[l];
+            let b = &lod.branches;
+            let mut prims = Vec::new();
+            if !b.indices.is_empty() {
+                let pos = bin.accessor(
+                    &f32_bytes(&b.positions),
+                    Some(34962),
+                    5126,
+                    b.positions.len(),
+                    "VEC3",
+                    Some(bounds(&b.positions)),
+                );
+                let nor = bin.accessor(
+                    &f32_bytes(&b.normals),
+                    Some(34962),
+                    5126,
+                    b.normals.len(),
+                    "VEC3",
+                    None,
+                );
+                let uv =
+                    bin.accessor(&f32_bytes(&b.uvs), Some(34962), 5126, b.uvs.len(), "VEC2", None);
+                // Joints folded into the same exported joint add their weights; unused
+                // slots are joint 0 with weight 0, as the specification asks.
+                let mut jb = Vec::with_capacity(8 * b.joints.len());
+                let mut wv = Vec::with_capacity(b.weights.len());
+                for (j, w) in b.joints.iter().zip(&b.weights) {
+                    let mut js4 = [0u16; 4];
+                    let mut ws4 = [0f32; 4];
+                    let mut used = 0;
+                    for s in 0..4 {
+                        if w[s] <= 0.0 {
+                            continue;
+                        }
+                        let e = index[j[s] as usize];
+                        match js4[..used].iter().position(|&x| x == e) {
+                            Some(k) => ws4[k] += w[s],
+                            None => {
+                                js4[used] = e;
+                                ws4[used] = w[s];
+                                used += 1;
+                            }
+                        }
+                    }
+                    for v in js4 {
+                        jb.extend_from_slice(&v.to_le_bytes());
+                    }
+                    wv.push(ws4);
+                }
+                let jnt = bin.accessor(&jb, Some(34962), 5123, b.joints.len(), "VEC4", None);
+                let wts = bin.accessor(&f32_bytes(&wv), Some(34962), 5126, wv.len(), "VEC4", None);
+                let ib: Vec<u8> = b.indices.iter().flat_map(|i| i.to_le_bytes()).collect();
+                let idx = bin.accessor(&ib, Some(34963), 5125, b.indices.len(), "SCALAR", None);
+                prims.push(format!(
+                    "{{\"attributes\":{{\"POSITION\":{pos},\"NORMAL\":{nor},\"TEXCOORD_0\":{uv},\"JOINTS_0\":{jnt},\"WEIGHTS_0\":{wts}}},\"indices\":{idx},\"material\":0}}"
+                ));
+            }
+            if !lod.clusters.is_empty() {
+                let mut p = Vec::with_capacity(4 * lod.clusters.len());
+                let mut nrm = Vec::with_capacity(4 * lod.clusters.len());
+                let mut uv = Vec::with_capacity(4 * lod.clusters.len());
+                let mut jb = Vec::with_capacity(32 * lod.clusters.len());
+                let mut w = Vec::with_capacity(4 * lod.clusters.len());
+                let mut ids: Vec<u32> = Vec::with_capacity(6 * lod.clusters.len());
+                for c in &lod.clusters {
+                    let (corners, normal) = leaf_quad(c);
+                    let first = p.len() as u32;
+                    let cell = [(c.atlas % cells) as f32, (c.atlas / cells) as f32];
+                    for (q, corner) in corners.iter().enumerate() {
+                        p.push(*corner);
+                        nrm.push(normal);
+                        let (a, bb) = [(0.0, 1.0), (1.0, 1.0), (1.0, 0.0), (0.0, 0.0)][q];
+                        uv.push([(cell[0] + a) / cells as f32, (cell[1] + bb) / cells as f32]);
+                        for v in [index[c.joint as usize], 0, 0, 0] {
+                            jb.extend_from_slice(&v.to_le_bytes());
+                        }
+                        w.push([1.0f32, 0.0, 0.0, 0.0]);
+                    }
+                    ids.extend_from_slice(&[
+                        first,
+                        first + 1,
+                        first + 2,
+                        first,
+                        first + 2,
+                        first + 3,
+                    ]);
+                }
+                let pos = bin.accessor(
+                    &f32_bytes(&p),
+                    Some(34962),
+                    5126,
+                    p.len(),
+                    "VEC3",
+                    Some(bounds(&p)),
+                );
+                let nor =
+                    bin.accessor(&f32_bytes(&nrm), Some(34962), 5126, nrm.len(), "VEC3", None);
+                let tex = bin.accessor(&f32_bytes(&uv), Some(34962), 5126, uv.len(), "VEC2", None);
+                let jnt = bin.accessor(&jb, Some(34962), 5123, p.len(), "VEC4", None);
+                let wts = bin.accessor(&f32_bytes(&w), Some(34962), 5126, w.len(), "VEC4", None);
+                let ib: Vec<u8> = ids.iter().flat_map(|i| i.to_le_bytes()).collect();
+                let idx = bin.accessor(&ib, Some(34963), 5125, ids.len(), "SCALAR", None);
+                prims.push(format!(
+                    "{{\"attributes\":{{\"POSITION\":{pos},\"NORMAL\":{nor},\"TEXCOORD_0\":{tex},\"JOINTS_0\":{jnt},\"WEIGHTS_0\":{wts}}},\"indices\":{idx},\"material\":1}}"
+                ));
+            }
+            if k > 0 {
+                meshes.push(',');
+                scenes.push(',');
+                nodes.push(',');
+            } else {
+                nodes.push(',');
+            }
+            let _ = write!(meshes, "{{\"name\":\"lod{l}\",\"primitives\":[{}]}}", prims.join(","));
+            let node = exported.len() + k;
+            let _ = write!(
+                nodes,
+                "{{\"name\":{},\"mesh\":{k},\"skin\":0}}",
+                json_str(&format!("{} lod{l}", opts.name))
+            );
+            let _ = write!(scenes, "{{\"name\":\"lod{l}\",\"nodes\":[0,{node}]}}");
+        }
+        let json = format!(
+            concat!(
+                "{{\"asset\":{{\"version\":\"2.0\",\"generator\":\"sylva\"}},",
+                "\"scene\":0,\"scenes\":[{scenes}],\"nodes\":[{nodes}],\"meshes\":[{meshes}],",
+                "\"skins\":[{skin}],",
+                "\"materials\":[",
+                "{{\"name\":\"bark\",\"pbrMetallicRoughness\":{{\"baseColorTexture\":{{\"index\":0}},\"metallicFactor\":0,\"roughnessFactor\":0.9}}}},",
+                "{{\"name\":\"leaves\",\"pbrMetallicRoughness\":{{\"baseColorTexture\":{{\"index\":1}},\"metallicFactor\":0,\"roughnessFactor\":0.7}},",
+                "\"alphaMode\":\"MASK\",\"alphaCutoff\":0.5,\"doubleSided\":true}}],",
+                "\"samplers\":[{{\"magFilter\":9729,\"minFilter\":9987,\"wrapS\":10497,\"wrapT\":10497}},",
+                "{{\"magFilter\":9729,\"minFilter\":9987,\"wrapS\":33071,\"wrapT\":33071}}],",
+                "\"images\":[{{\"bufferView\":{bark_view},\"mimeType\":\"image/png\"}},{{\"bufferView\":{leaf_view},\"mimeType\":\"image/png\"}}],",
+                "\"textures\":[{{\"sampler\":0,\"source\":0}},{{\"sampler\":1,\"source\":1}}],",
+                "\"accessors\":[{accessors}],\"bufferViews\":[{views}],",
+                "\"buffers\":[{{\"byteLength\":{len}}}]}}"
+            ),
+            scenes = scenes,
+            nodes = nodes,
+            meshes = meshes,
+            skin = skin,
+            bark_view = bark_view,
+            leaf_view = leaf_view,
+            accessors = bin.accessors,
+            views = bin.views,
+            len = bin.data.len().next_multiple_of(4),
+        );
+        let mut json = json.into_bytes();
+        while !json.len().is_multiple_of(4) {
+            json.push(b' ');
+        }
+        let mut data = bin.data;
+        while !data.len().is_multiple_of(4) {
+            data.push(0);
+        }
+        let total = 12 + 8 + json.len() + 8 + data.len();
+        let mut out = Vec::with_capacity(total);
+        out.extend_from_slice(b"glTF");
+        out.extend_from_slice(&2u32.to_le_bytes());
+        out.extend_from_slice(&(total as u32).to_le_bytes());
+        out.extend_from_slice(&(json.len() as u32).to_le_bytes());
+        out.extend_from_slice(b"JSON");
+        out.extend_from_slice(&json);
+        out.extend_from_slice(&(data.len() as u32).to_le_bytes());
+        out.extend_from_slice(b"BIN\0");
+        out.extend_from_slice(&data);
+        out
+    }
+}
