@@ -10,8 +10,9 @@
 //! rotations (negative nRotate alternating sides); radii from Ratio/RatioPower with nTaper
 //! and the trunk Flare; AttractionUp bending stems of level ≥ 2 towards the sky; leaves on
 //! the last level, counted by Leaves·ShapeRatio(4, ·)·LeafQuality and enlarged by
-//! 1/√LeafQuality. Not yet: the pruning envelope (PruneRatio > 0 is ignored) and the
-//! periodic tapers (nTaper > 2 is treated as 2).
+//! 1/√LeafQuality; the pruning envelope (stems of level ≥ 1 that leave it are regrown
+//! shorter, see [`inside_envelope`]). Not yet: the periodic tapers (nTaper > 2 is treated
+//! as 2).
 //!
 //! Masses: wood [`WOOD_DENSITY`], leaves [`LEAF_MASS_PER_AREA`]. Same species and seed give
 //! the same tree, bit for bit.
@@ -124,6 +125,8 @@ struct Gen<'a> {
     trunk_length: f32,
     base_length: f32,
     split_error: [f32; 4],
+    /// Tree scale (WP95 `scale_tree`), m: the pruning envelope's height.
+    tree_scale: f32,
     /// Stem levels actually grown: `Levels`, less trailing levels of zero length.
     levels: usize,
 }
@@ -170,6 +173,7 @@ impl Species {
             trunk_length,
             base_length: sp.base_size * trunk_length,
             split_error: [0.0; 4],
+            tree_scale: tree_scale.max(0.1),
             levels: (1..sp.levels.clamp(1, 4) as usize)
                 .take_while(|&n| sp.level[n].length + sp.level[n].length_v > 0.0)
                 .count()
@@ -451,8 +455,88 @@ impl Gen<'_> {
             first_segment: 0,
             share: 1.0,
         };
+        if self.sp.prune_ratio <= 0.0 {
+            self.stem(seed);
+            return;
+        }
+        // Pruning (WP95): a stem that leaves the envelope is regenerated shorter — the
+        // longest fraction that fits, found by bisection, each try from the same random
+        // state — and its final length is blended by PruneRatio.
+        let snap = self.snapshot();
         self.stem(seed);
+        if self.inside_since(snap.joints) {
+            return;
+        }
+        let (mut lo, mut hi) = (0.0f32, 1.0f32);
+        for _ in 0..6 {
+            let mid = 0.5 * (lo + hi);
+            self.restore(&snap);
+            self.stem(StemSeed { length: length * mid, ..seed });
+            if self.inside_since(snap.joints) {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        self.restore(&snap);
+        let pruned = length * (lo + (1.0 - self.sp.prune_ratio.min(1.0)) * (1.0 - lo));
+        if pruned > 1e-3 {
+            self.stem(StemSeed { length: pruned, ..seed });
+        }
     }
+
+    fn snapshot(&self) -> Snapshot {
+        Snapshot {
+            joints: self.joints.len(),
+            rng: self.rng.clone(),
+            stems: self.stems,
+            leaves: self.leaves,
+            leaf_area: self.leaf_area,
+            split_error: self.split_error,
+        }
+    }
+
+    fn restore(&mut self, s: &Snapshot) {
+        self.joints.truncate(s.joints);
+        self.rng = s.rng.clone();
+        self.stems = s.stems;
+        self.leaves = s.leaves;
+        self.leaf_area = s.leaf_area;
+        self.split_error = s.split_error;
+    }
+
+    /// Whether every segment tip from joint `from` on lies inside the pruning envelope.
+    fn inside_since(&self, from: usize) -> bool {
+        self.joints[from..].iter().all(|j| inside_envelope(self.sp, self.tree_scale, j.tip()))
+    }
+}
+
+/// Generator state to roll back to when a pruned stem is regrown.
+struct Snapshot {
+    joints: usize,
+    rng: Rng,
+    stems: usize,
+    leaves: usize,
+    leaf_area: f32,
+    split_error: [f32; 4],
+}
+
+/// WP95's pruning envelope: a point at height z and distance r from the trunk axis is
+/// inside when r / H < PruneWidth · f(ratio), ratio = (H − z) / (H (1 − BaseSize)) in
+/// [0, 1], f = (ratio / PruneWidthPeak)^PrunePowerHigh below the peak and
+/// ((1 − ratio) / (1 − PruneWidthPeak))^PrunePowerLow above it; H is the tree scale.
+pub fn inside_envelope(sp: &Species, height: f32, p: [f32; 3]) -> bool {
+    let ratio = (height - p[2]) / (height * (1.0 - sp.base_size)).max(1e-6);
+    if !(0.0..=1.0).contains(&ratio) {
+        return false;
+    }
+    let peak = sp.prune_width_peak.clamp(1e-3, 1.0 - 1e-3);
+    let f = if ratio < peak {
+        (ratio / peak).powf(sp.prune_power_high)
+    } else {
+        ((1.0 - ratio) / (1.0 - peak)).powf(sp.prune_power_low)
+    };
+    (p[0] * p[0] + p[1] * p[1]).sqrt() / height < sp.prune_width * f
 }
 
 #[cfg(test)]
@@ -483,6 +567,39 @@ mod tests {
             assert!(t.stats.leaves > 0, "{name}: no leaves");
             assert!(sk.len() > 20, "{name}: only {} joints", sk.len());
         }
+    }
+
+    /// Segment tips outside the envelope, the trunk's own segments exempt.
+    fn outside_envelope(sp: &Species, t: &Tree, height: f32) -> usize {
+        let sk = &t.skeleton;
+        let mut trunk = vec![false; sk.len()];
+        let mut j = sk.trunk_top();
+        loop {
+            trunk[j] = true;
+            match sk.joints()[j].parent {
+                NO_PARENT => break,
+                p => j = p as usize,
+            }
+        }
+        let js = sk.joints().iter().enumerate();
+        js.filter(|(i, jt)| !trunk[*i] && !inside_envelope(sp, height, jt.tip())).count()
+    }
+
+    #[test]
+    fn pruning_keeps_every_branch_inside_the_envelope() {
+        let mut sp = Species::preset("quaking_aspen").expect("preset");
+        sp.level[0].length_v = 0.0;
+        sp.prune_width = 0.25;
+        let free = sp.generate(3).expect("valid");
+        // With 0LengthV = 0 the trunk length is 0Length × the tree scale H.
+        let height = free.stats.trunk_length / sp.level[0].length;
+        let before = outside_envelope(&sp, &free, height);
+        sp.prune_ratio = 1.0;
+        let pruned = sp.generate(3).expect("valid");
+        let after = outside_envelope(&sp, &pruned, height);
+        assert!(before > 100, "the unpruned crown should overflow a narrow envelope ({before})");
+        assert_eq!(after, 0, "{after} segment tips outside the envelope after full pruning");
+        assert!(pruned.stats.leaf_area < free.stats.leaf_area);
     }
 
     #[test]
