@@ -11,8 +11,8 @@
 //! and the trunk Flare; AttractionUp bending stems of level ≥ 2 towards the sky; leaves on
 //! the last level, counted by Leaves·ShapeRatio(4, ·)·LeafQuality and enlarged by
 //! 1/√LeafQuality; the pruning envelope (stems of level ≥ 1 that leave it are regrown
-//! shorter, see [`inside_envelope`]). Not yet: the periodic tapers (nTaper > 2 is treated
-//! as 2).
+//! shorter, see [`inside_envelope`]). Taper follows WP95 for every nTaper in [0, 3], periodic
+//! bulges included (see `radius_at`).
 //!
 //! Masses: wood [`WOOD_DENSITY`], leaves [`LEAF_MASS_PER_AREA`]. Same species and seed give
 //! the same tree, bit for bit.
@@ -207,16 +207,38 @@ impl Species {
 }
 
 impl Gen<'_> {
-    /// Radius at relative position z ∈ [0, 1] along a stem of base radius `r0`.
-    fn radius_at(&self, level: usize, r0: f32, z: f32) -> f32 {
-        let taper = self.sp.level[level].taper.min(2.0);
-        let unit = if taper <= 1.0 { taper } else { 2.0 - taper };
-        let mut r = r0 * (1.0 - unit * z);
-        if taper > 1.0 {
-            // Rounded tip: blend towards a sphere of the stem's tip radius.
-            let t = (1.0 - z).max(0.0);
-            r = r.max(r0 * (1.0 - unit) * (1.0 - (1.0 - t).powi(2)).sqrt() * (taper - 1.0));
-        }
+    /// Radius at relative position z ∈ [0, 1] along a stem of base radius `r0` and length
+    /// `length`, by WP95's taper: nTaper in [0, 1) a cone narrowing to (1 − nTaper) r0,
+    /// [1, 2) a cone ending in a rounded tip, [2, 3] periodic bulges of depth nTaper − 2
+    /// (spherical segments of the local radius); the trunk adds Flare near the ground.
+    fn radius_at(&self, level: usize, r0: f32, length: f32, z: f32) -> f32 {
+        let taper = self.sp.level[level].taper.clamp(0.0, 3.0);
+        let unit = if taper < 1.0 {
+            taper
+        } else if taper < 2.0 {
+            2.0 - taper
+        } else {
+            0.0
+        };
+        let taper_z = r0 * (1.0 - unit * z);
+        let mut r = if taper < 1.0 {
+            taper_z
+        } else {
+            let z2 = (1.0 - z) * length;
+            let depth = if taper < 2.0 || z2 < taper_z { 1.0 } else { taper - 2.0 };
+            let z3 = if taper < 2.0 {
+                z2
+            } else {
+                let period = 2.0 * taper_z.max(1e-6);
+                (z2 - period * (z2 / period + 0.5).floor()).abs()
+            };
+            if taper < 2.0 && z3 >= taper_z {
+                taper_z
+            } else {
+                let d = z3 - taper_z;
+                (1.0 - depth) * taper_z + depth * (taper_z * taper_z - d * d).max(0.0).sqrt()
+            }
+        };
         if level == 0 {
             let y = (1.0 - 8.0 * z).max(0.0);
             r *= 1.0 + self.sp.flare * (100f32.powf(y) - 1.0) / 100.0;
@@ -293,7 +315,7 @@ impl Gen<'_> {
                 }
             }
             let z0 = seg as f32 / res as f32;
-            let r = self.radius_at(s.level, s.radius, z0 + 0.5 / res as f32);
+            let r = self.radius_at(s.level, s.radius, s.length, z0 + 0.5 / res as f32);
             let leaf_here = {
                 let upto = ((seg + 1) as usize * n_leaves) / res as usize;
                 let n = upto.saturating_sub(next_leaf) as f32 * share + leaf_carry;
@@ -419,7 +441,7 @@ impl Gen<'_> {
         if length <= 1e-3 {
             return;
         }
-        let r_parent_here = self.radius_at(s.level, s.radius, off / s.length);
+        let r_parent_here = self.radius_at(s.level, s.radius, s.length, off / s.length);
         let radius =
             (s.radius * (length / s.length).powf(self.sp.ratio_power)).min(r_parent_here).max(1e-4);
         // Rotation about the parent: nRotate per child, or for a negative nRotate children
@@ -600,6 +622,48 @@ mod tests {
         assert!(before > 100, "the unpruned crown should overflow a narrow envelope ({before})");
         assert_eq!(after, 0, "{after} segment tips outside the envelope after full pruning");
         assert!(pruned.stats.leaf_area < free.stats.leaf_area);
+    }
+
+    #[test]
+    fn taper_cones_rounded_tips_and_periodic_bulges() {
+        // Trunk radii along a 60-segment trunk for nTaper 0.5 (cone to half), 1 (cone to a
+        // point) and 2.5 (periodic bulges: the radius rises again between necks).
+        let radii = |taper: f32| {
+            let mut sp = Species::preset("quaking_aspen").expect("preset");
+            sp.level[0].taper = taper;
+            sp.level[0].curve_res = 60;
+            sp.base_splits = 0;
+            sp.level[0].seg_splits = 0.0;
+            sp.flare = 0.0;
+            let t = sp.generate(1).expect("valid");
+            let sk = &t.skeleton;
+            let mut out = vec![sk.joints()[0].radius];
+            let mut j = 0;
+            while j != sk.trunk_top() {
+                j = sk
+                    .children(j)
+                    .iter()
+                    .copied()
+                    .rev()
+                    .find(|&c| sk.joints()[c as usize].continues)
+                    .expect("next") as usize;
+                out.push(sk.joints()[j].radius);
+            }
+            out
+        };
+        let half = radii(0.5);
+        assert!(half.windows(2).all(|w| w[1] <= w[0]), "a cone narrows");
+        let last = *half.last().expect("segments");
+        assert!(
+            (last / half[0] - 0.5).abs() < 0.05,
+            "nTaper 0.5 ends near half the base ({})",
+            last / half[0]
+        );
+        let point = radii(1.0);
+        assert!(*point.last().expect("segments") < 0.05 * point[0], "nTaper 1 ends in a point");
+        let bulges = radii(2.5);
+        let rises = bulges.windows(2).filter(|w| w[1] > w[0] * 1.01).count();
+        assert!(rises >= 3, "nTaper 2.5 should bulge periodically ({rises} rises)");
     }
 
     #[test]
