@@ -420,6 +420,19 @@ pub fn lod_chain(
     seed: u64,
     levels: usize,
 ) -> Vec<TreeLod> {
+    let all: Vec<usize> = (0..levels.max(1)).collect();
+    lod_levels(tree, species, coverage, seed, &all)
+}
+
+/// The given LOD `levels` of `tree` only. Each is built from the skeleton directly, so
+/// level k is the same whether or not the others are built.
+pub fn lod_levels(
+    tree: &Tree,
+    species: &Species,
+    coverage: &[f32],
+    seed: u64,
+    levels: &[usize],
+) -> Vec<TreeLod> {
     let sk = &tree.skeleton;
     let topo = topology(sk);
     let n = sk.len();
@@ -438,9 +451,9 @@ pub fn lod_chain(
         .collect();
     radii.sort_by(f32::total_cmp);
     radii.dedup();
-    let mut out = Vec::with_capacity(levels);
+    let mut out = Vec::with_capacity(levels.len());
     let mut kept = vec![true; n];
-    for lod in 0..levels.max(1) {
+    for &lod in levels {
         let target = base_branch_tris as f32 / LOD_RATIO.powi(lod as i32);
         let mut r_min = 0.0;
         kept_joints(sk, &topo, 0.0, &mut kept);

@@ -15,6 +15,138 @@ pub enum BenchCommand {
     /// Sway: per-step cost of stepping many instances of each preset on one core, springs
     /// and palette composition included, and joint updates per second.
     Sway(SwayBench),
+    /// Tree generation on one core: skeleton, LOD-0 mesh and leaf clusters per preset
+    /// (median of runs), the full LOD chain and textures, triangles per level.
+    Tree(TreeBench),
+    /// Rendering a scene headless: simulation and rendering ms per frame (medians) and
+    /// triangles per frame, on whatever adapter the machine has.
+    Render(RenderBench),
+}
+
+#[derive(Debug, Args)]
+pub struct TreeBench {
+    /// Runs per preset (the median is reported).
+    #[arg(long, default_value_t = 7)]
+    runs: usize,
+    /// Seed of the generated trees.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+}
+
+#[derive(Debug, Args)]
+pub struct RenderBench {
+    /// Scene: built-in name or file.
+    #[arg(long, default_value = "A")]
+    scene: String,
+    /// Image size.
+    #[arg(long, default_value = "1024x768")]
+    size: String,
+    /// Frames timed (after one warm-up frame).
+    #[arg(long, default_value_t = 10)]
+    frames: usize,
+    /// Geometry-LOD threshold h₀ (see `sylva render --help`).
+    #[arg(long, default_value_t = sylva_forest::driver::DEFAULT_LOD_FRACTION)]
+    lod_fraction: f32,
+}
+
+/// Sapling (Blender's WP95 add-on) on this machine kind, as quoted in the tree issue:
+/// (preset, seconds, triangles).
+const SAPLING: [(&str, f64, f64); 3] =
+    [("quaking_aspen", 0.025, 6.8e3), ("weeping_willow", 1.7, 217e3), ("douglas_fir", 2.9, 519e3)];
+
+fn tree(a: TreeBench) -> anyhow::Result<()> {
+    use sylva_tree::mesh::{LOD_LEVELS, lod_chain, lod_levels};
+    use sylva_tree::texture::{bark, leaf_atlas};
+    use sylva_tree::{PRESETS, Species};
+    println!("machine: {}", machine());
+    println!(
+        "{:<22}{:>10}{:>12}{:>10}{:>12}{:>12}  triangles per LOD",
+        "preset", "joints", "LOD0 ms", "LOD0 tris", "chain ms", "textures ms"
+    );
+    let runs = a.runs.max(1);
+    for (name, _) in PRESETS {
+        let sp = Species::preset(name).expect("shipped preset");
+        let atlas = leaf_atlas(&sp, a.seed, sylva_tree::mesh::ATLAS_SIZE);
+        let mut lod0 = Vec::new();
+        let mut chain = Vec::new();
+        let mut tex = Vec::new();
+        let mut last = None;
+        for _ in 0..runs {
+            let t = Instant::now();
+            let tree = sp.generate(a.seed)?;
+            let l = lod_chain(&tree, &sp, &atlas.coverage, a.seed, 1);
+            lod0.push(t.elapsed().as_secs_f64());
+            std::hint::black_box(&l);
+            let t = Instant::now();
+            let tree = sp.generate(a.seed)?;
+            let l = lod_chain(&tree, &sp, &atlas.coverage, a.seed, LOD_LEVELS);
+            chain.push(t.elapsed().as_secs_f64());
+            let t = Instant::now();
+            std::hint::black_box((bark(a.seed, sylva_tree::mesh::BARK_SIZE), leaf_atlas(&sp, a.seed, sylva_tree::mesh::ATLAS_SIZE)));
+            tex.push(t.elapsed().as_secs_f64());
+            last = Some((tree, l));
+        }
+        let Some((tree, lods)) = last else { continue };
+        let t0 = median(lod0);
+        let tris: Vec<String> = lods.iter().map(|l| l.triangles().to_string()).collect();
+        println!(
+            "{name:<22}{:>10}{:>12.2}{:>10}{:>12.2}{:>12.2}  {}",
+            tree.skeleton.len(),
+            t0 * 1e3,
+            lods[0].triangles(),
+            median(chain) * 1e3,
+            median(tex) * 1e3,
+            tris.join(" / ")
+        );
+        if let Some((_, secs, stris)) = SAPLING.iter().find(|(n, _, _)| n == name) {
+            // The level nearest Sapling's triangle count, generated directly (skeleton,
+            // then that level's mesh and clusters).
+            let k = (0..lods.len())
+                .min_by(|&x, &y| {
+                    let d = |l: usize| (lods[l].triangles() as f64 / stris).ln().abs();
+                    d(x).total_cmp(&d(y))
+                })
+                .unwrap_or(0);
+            let mut times = Vec::new();
+            for _ in 0..runs {
+                let t = Instant::now();
+                let tree = sp.generate(a.seed)?;
+                std::hint::black_box(lod_levels(&tree, &sp, &atlas.coverage, a.seed, &[k]));
+                times.push(t.elapsed().as_secs_f64());
+            }
+            let tk = median(times);
+            println!(
+                "{:<22}Sapling {:.0} ms / {:.1}k triangles; sylva LOD {k} directly {:.2} ms / {:.1}k triangles: {:.0}× faster",
+                "",
+                secs * 1e3,
+                stris / 1e3,
+                tk * 1e3,
+                lods[k].triangles() as f64 / 1e3,
+                secs / tk,
+            );
+        }
+    }
+    Ok(())
+}
+
+fn render_bench(a: RenderBench) -> anyhow::Result<()> {
+    let args = crate::render::RenderArgs {
+        scene: a.scene,
+        seconds: (a.frames.max(1) + 1) as f64 / 10.0,
+        fps: 10.0,
+        size: a.size,
+        out: std::path::PathBuf::from("out/bench-render"),
+        wind: None,
+        lod_fraction: a.lod_fraction,
+        no_gif: true,
+    };
+    println!("machine: {}", machine());
+    let r = crate::render::render(&args)?;
+    println!(
+        "{} frames at {}: simulation {:.1} ms + rendering {:.1} ms per frame (medians; rendering = upload, draw, read back), {:.2} M triangles per frame, adapter {}",
+        r.frames, args.size, r.sim_ms, r.render_ms, r.triangles / 1e6, r.adapter
+    );
+    Ok(())
 }
 
 #[derive(Debug, Args)]
@@ -95,6 +227,8 @@ pub fn run(cmd: BenchCommand) -> anyhow::Result<()> {
     match cmd {
         BenchCommand::Wind(a) => wind(a),
         BenchCommand::Sway(a) => sway(a),
+        BenchCommand::Tree(a) => tree(a),
+        BenchCommand::Render(a) => render_bench(a),
     }
 }
 
