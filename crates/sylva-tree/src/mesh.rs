@@ -7,6 +7,7 @@
 //! to each of the two joints, so a bend at the joint bends the surface smoothly; a stem's
 //! first ring belongs to its first joint only. Radial resolution falls with the stem level
 //! ([`SIDES`]); rings are parallel-transported along the stem so the surface never twists.
+//! The trunk's rings carry WP95's lobes: radius × (1 + LobeDepth · sin(Lobes · θ)).
 //! Bark UVs: u around the stem (0 … 1, seam duplicated), v the distance along the stem
 //! divided by the stem's base circumference, so bark texels stay square.
 //!
@@ -189,6 +190,10 @@ struct MeshBuilder<'a> {
     ring_ref: Vec<V3>,
     /// Per joint: v coordinate at its base.
     v_base: Vec<f32>,
+    /// WP95 Lobes and LobeDepth of the trunk's cross-section.
+    lobes: (u32, f32),
+    /// Lobes of the ring being built (the trunk's, or none).
+    ring_lobes: (u32, f32),
 }
 
 impl MeshBuilder<'_> {
@@ -213,7 +218,9 @@ impl MeshBuilder<'_> {
             let a = TAU * k as f32 / n as f32;
             let (s, c) = a.sin_cos();
             let dir = add(scale(refv, c), scale(side, s));
-            self.mesh.positions.push(add(center, scale(dir, radius)));
+            let (lobes, depth) = self.ring_lobes;
+            let r = radius * (1.0 + depth * (lobes as f32 * a).sin());
+            self.mesh.positions.push(add(center, scale(dir, r)));
             self.mesh.normals.push(dir);
             self.mesh.uvs.push([k as f32 / n as f32, v]);
             self.mesh.joints.push([j0, j1, j0, j0]);
@@ -237,6 +244,7 @@ impl MeshBuilder<'_> {
             }
             let level = self.topo.level[i];
             let n = sides(level, self.lod);
+            self.ring_lobes = if level == 0 { self.lobes } else { (0, 0.0) };
             let start = self.topo.stem_start[i] as usize;
             let circumference = TAU * js[start].radius.max(1e-4);
             let shared = self.topo.shares_parent_ring[i]
@@ -291,7 +299,13 @@ impl MeshBuilder<'_> {
 }
 
 /// Build the branch mesh of `sk` at LOD `lod`, with the joints marked in `kept`.
-fn branch_mesh(sk: &Skeleton, topo: &Topology, lod: usize, kept: &[bool]) -> BranchMesh {
+fn branch_mesh(
+    sk: &Skeleton,
+    topo: &Topology,
+    lod: usize,
+    kept: &[bool],
+    lobes: (u32, f32),
+) -> BranchMesh {
     let n = sk.len();
     MeshBuilder {
         sk,
@@ -302,6 +316,8 @@ fn branch_mesh(sk: &Skeleton, topo: &Topology, lod: usize, kept: &[bool]) -> Bra
         tip_ring: vec![0; n],
         ring_ref: vec![[1.0, 0.0, 0.0]; n],
         v_base: vec![0.0; n],
+        lobes,
+        ring_lobes: (0, 0.0),
     }
     .build()
 }
@@ -472,7 +488,7 @@ pub fn lod_levels(
             r_min = radii.get(lo).copied().unwrap_or(f32::INFINITY);
             kept_joints(sk, &topo, r_min, &mut kept);
         }
-        let branches = branch_mesh(sk, &topo, lod, &kept);
+        let branches = branch_mesh(sk, &topo, lod, &kept, (species.lobes, species.lobe_depth));
         // Re-hang clusters of dropped joints on the nearest kept ancestor, then merge.
         let mut rehung: Vec<LeafCluster> = base_clusters
             .iter()

@@ -7,10 +7,11 @@ fn model(name: &str, seed: u64) -> TreeModel {
     Species::preset(name).expect("preset").model(seed, LOD_LEVELS).expect("valid tree")
 }
 
-/// Axis-aligned box around every segment of the skeleton, widened by the thickest radius.
-fn skeleton_bounds(m: &TreeModel) -> ([f32; 3], [f32; 3]) {
+/// Axis-aligned box around every segment of the skeleton, widened by the thickest radius
+/// (with the trunk's lobes).
+fn skeleton_bounds(m: &TreeModel, lobe_depth: f32) -> ([f32; 3], [f32; 3]) {
     let js = m.tree.skeleton.joints();
-    let r = js.iter().map(|j| j.radius).fold(0.0, f32::max);
+    let r = js.iter().map(|j| j.radius).fold(0.0, f32::max) * (1.0 + lobe_depth);
     let (mut lo, mut hi) = ([f32::MAX; 3], [f32::MIN; 3]);
     for j in js {
         for p in [j.origin, j.tip()] {
@@ -39,7 +40,8 @@ fn every_preset_at_every_lod_is_well_formed() {
                 "{name}: joint {i} parent order"
             );
         }
-        let bounds = skeleton_bounds(&m);
+        let lobe_depth = Species::preset(name).expect("preset").lobe_depth;
+        let bounds = skeleton_bounds(&m, lobe_depth);
         // Leaf billboards hang outside the wood by at most a branch radius and half their
         // own size; merged ones sit at the area-weighted centre of their members.
         let leaf_margin = m.lods[0].clusters.iter().map(|c| c.size).fold(0.0, f32::max);
@@ -144,4 +146,25 @@ fn textures_are_opaque_bark_and_alpha_masked_leaves() {
         m.leaves.image.rgba.chunks(4).filter(|p| p[3] == 255 && p[1] > p[0] && p[1] > p[2]).count();
     let clear = m.leaves.image.rgba.chunks(4).filter(|p| p[3] == 0).count();
     assert!(opaque_green > 1000 && clear > 1000, "leaves green on a transparent ground");
+}
+
+#[test]
+fn trunk_cross_section_carries_the_lobes() {
+    // WP95: r(θ) = r (1 + LobeDepth sin(Lobes θ)) on the trunk. The first ring of the mesh
+    // is the trunk's base ring, centred on the origin.
+    let mut sp = Species::preset("sugar_maple").expect("preset");
+    sp.lobes = 4;
+    sp.lobe_depth = 0.2;
+    let m = sp.model(1, 1).expect("tree");
+    let r0 = m.tree.skeleton.joints()[0].radius;
+    let b = &m.lods[0].branches;
+    let sides = sylva_tree::mesh::SIDES[0] as usize;
+    let radii: Vec<f32> =
+        b.positions[..sides].iter().map(|p| (p[0] * p[0] + p[1] * p[1]).sqrt() / r0).collect();
+    let (lo, hi) = radii.iter().fold((f32::MAX, 0.0f32), |(l, h), &r| (l.min(r), h.max(r)));
+    assert!(hi > 1.15 && lo < 0.85 && hi <= 1.2 + 1e-4 && lo >= 0.8 - 1e-4, "radii {lo} … {hi}");
+    sp.lobe_depth = 0.0;
+    let round = sp.model(1, 1).expect("tree");
+    let p = &round.lods[0].branches.positions[..sides];
+    assert!(p.iter().all(|p| ((p[0] * p[0] + p[1] * p[1]).sqrt() / r0 - 1.0).abs() < 1e-4));
 }

@@ -82,7 +82,10 @@ fn tree(a: TreeBench) -> anyhow::Result<()> {
             let l = lod_chain(&tree, &sp, &atlas.coverage, a.seed, LOD_LEVELS);
             chain.push(t.elapsed().as_secs_f64());
             let t = Instant::now();
-            std::hint::black_box((bark(a.seed, sylva_tree::mesh::BARK_SIZE), leaf_atlas(&sp, a.seed, sylva_tree::mesh::ATLAS_SIZE)));
+            std::hint::black_box((
+                bark(a.seed, sylva_tree::mesh::BARK_SIZE),
+                leaf_atlas(&sp, a.seed, sylva_tree::mesh::ATLAS_SIZE),
+            ));
             tex.push(t.elapsed().as_secs_f64());
             last = Some((tree, l));
         }
@@ -144,7 +147,12 @@ fn render_bench(a: RenderBench) -> anyhow::Result<()> {
     let r = crate::render::render(&args)?;
     println!(
         "{} frames at {}: simulation {:.1} ms + rendering {:.1} ms per frame (medians; rendering = upload, draw, read back), {:.2} M triangles per frame, adapter {}",
-        r.frames, args.size, r.sim_ms, r.render_ms, r.triangles / 1e6, r.adapter
+        r.frames,
+        args.size,
+        r.sim_ms,
+        r.render_ms,
+        r.triangles / 1e6,
+        r.adapter
     );
     Ok(())
 }
