@@ -89,3 +89,54 @@ fn tree_and_sway_commands_work_and_refuse_bad_species_files() {
         rows.lines().count()
     );
 }
+
+#[test]
+fn render_renders_frames_deterministically_and_says_what_to_install_without_a_driver() {
+    let dir = temp("render");
+    let d = dir.to_str().expect("utf-8 path");
+    let args = [
+        "render",
+        "--scene",
+        "small",
+        "--seconds",
+        "0.2",
+        "--fps",
+        "10",
+        "--size",
+        "96x64",
+        "--out",
+        d,
+    ];
+    let (ok, text) = sylva(&args);
+    assert!(ok, "{text}");
+    assert!(text.contains("triangles per frame"), "{text}");
+    let first = std::fs::read(dir.join("frame_0001.png")).expect("frame written");
+    assert!(dir.join("forest.gif").exists());
+    let (ok, text) = sylva(&args);
+    assert!(ok, "{text}");
+    assert_eq!(
+        first,
+        std::fs::read(dir.join("frame_0001.png")).expect("frame"),
+        "same scene, same frame"
+    );
+    // No Vulkan driver at all: the error names the packages to install.
+    let out = Command::new(env!("CARGO_BIN_EXE_sylva"))
+        .args(args)
+        .env("VK_ICD_FILENAMES", "/nonexistent/icd.json")
+        .env("VK_DRIVER_FILES", "/nonexistent/icd.json")
+        .output()
+        .expect("run sylva");
+    let text = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(text.contains("mesa-vulkan-drivers"), "{text}");
+    // Bad flags name the flag.
+    for (flag, value) in
+        [("--size", "12x"), ("--fps", "0"), ("--scene", "nowhere"), ("--wind", "gale")]
+    {
+        let mut a: Vec<&str> = vec!["render", "--out", d];
+        a.extend([flag, value]);
+        let (ok, text) = sylva(&a);
+        assert!(!ok && (text.contains(flag) || text.contains(value)), "{flag} {value}: {text}");
+        assert!(!text.contains("panicked"), "{text}");
+    }
+}
