@@ -106,6 +106,8 @@ pub struct RenderReport {
     pub sim_ms: f64,
     pub render_ms: f64,
     pub triangles: f64,
+    pub simulated: usize,
+    pub joints: usize,
     pub adapter: String,
     pub gif: Option<PathBuf>,
     pub mp4: Option<PathBuf>,
@@ -197,6 +199,8 @@ pub fn render(a: &RenderArgs) -> anyhow::Result<RenderReport> {
         sim_ms: median(&mut sim),
         render_ms: median(&mut draw),
         triangles: tris / frames as f64,
+        simulated: frame.stats.simulated,
+        joints: frame.stats.joints,
         adapter,
         gif: (!a.no_gif).then_some(gif_path),
         mp4: made_mp4.then_some(mp4),
@@ -208,7 +212,10 @@ pub fn print_report(a: &RenderArgs, r: &RenderReport) {
         "{} frames: simulation {:.1} ms, rendering {:.1} ms per frame (medians), {:.0} triangles per frame",
         r.frames, r.sim_ms, r.render_ms, r.triangles
     );
-    println!("adapter {}", r.adapter);
+    println!(
+        "{} simulated trees (instance groups), {} joints stepped per frame; adapter {}",
+        r.simulated, r.joints, r.adapter
+    );
     println!("wrote {}/frame_0000.png … frame_{:04}.png", a.out.display(), r.frames - 1);
     if let Some(g) = &r.gif {
         println!("wrote {}", g.display());
