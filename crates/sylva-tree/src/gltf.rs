@@ -238,33 +238,12 @@ impl TreeModel {
         let sk = &self.tree.skeleton;
         let js = sk.joints();
         let n = js.len();
-        // Joints to export: the heaviest, a set closed under parents (a parent carries at
-        // least what its child does; ties go to the lower index, which is the parent).
-        let limit = opts.max_joints.clamp(1, MAX_GLTF_JOINTS);
+        let frames: Vec<[V3; 3]> = (0..n).map(|j| frame(sk, j)).collect();
+        // Joints by priority: carried mass, heaviest first (a parent carries at least what
+        // its child does; ties go to the lower index, which is the parent).
         let mut order: Vec<usize> = (0..n).collect();
         order.sort_by(|&a, &b| sk.carried_mass(b).total_cmp(&sk.carried_mass(a)).then(a.cmp(&b)));
-        let mut keep = vec![false; n];
-        for &j in order.iter().take(limit) {
-            keep[j] = true;
-        }
-        for j in 0..n {
-            let p = js[j].parent;
-            if keep[j] && p != NO_PARENT && !keep[p as usize] {
-                keep[j] = false;
-            }
-        }
-        // Exported index of each joint, or of its nearest exported ancestor.
-        let mut index = vec![0u16; n];
-        let mut exported = Vec::new();
-        for j in 0..n {
-            if keep[j] {
-                index[j] = exported.len() as u16;
-                exported.push(j);
-            } else {
-                index[j] = index[js[j].parent as usize];
-            }
-        }
-        let frames: Vec<[V3; 3]> = (0..n).map(|j| frame(sk, j)).collect();
+        let limit = opts.max_joints.clamp(1, MAX_GLTF_JOINTS);
         let mut bin = Bin {
             data: Vec::new(),
             views: String::new(),
@@ -272,64 +251,9 @@ impl TreeModel {
             n_views: 0,
             n_accessors: 0,
         };
-        // Joint nodes 0 … k−1 (node i = exported joint i); mesh nodes after them.
         let mut nodes = String::new();
-        let mut children: Vec<Vec<usize>> = vec![Vec::new(); exported.len()];
-        for (i, &j) in exported.iter().enumerate().skip(1) {
-            children[index[js[j].parent as usize] as usize].push(i);
-        }
-        let mut ibm = Vec::with_capacity(exported.len());
-        for (i, &j) in exported.iter().enumerate() {
-            let f = &frames[j];
-            let (t, r) = if js[j].parent == NO_PARENT {
-                (js[j].origin, quaternion(f))
-            } else {
-                let p = js[j].parent as usize;
-                let pf = &frames[p];
-                let local = [to_local(pf, f[0]), to_local(pf, f[1]), to_local(pf, f[2])];
-                (to_local(pf, sub(js[j].origin, js[p].origin)), quaternion(&local))
-            };
-            if i > 0 {
-                nodes.push(',');
-            }
-            let _ = write!(
-                nodes,
-                "{{\"name\":\"joint{j}\",\"translation\":[{},{},{}],\"rotation\":[{},{},{},{}]",
-                t[0], t[1], t[2], r[0], r[1], r[2], r[3]
-            );
-            if !children[i].is_empty() {
-                let list: Vec<String> = children[i].iter().map(|c| c.to_string()).collect();
-                let _ = write!(nodes, ",\"children\":[{}]", list.join(","));
-            }
-            nodes.push('}');
-            // Inverse bind: [Rᵀ | −Rᵀ o], column-major.
-            let o = js[j].origin;
-            let m = [
-                f[0][0],
-                f[1][0],
-                f[2][0],
-                0.0,
-                f[0][1],
-                f[1][1],
-                f[2][1],
-                0.0,
-                f[0][2],
-                f[1][2],
-                f[2][2],
-                0.0,
-                -dot(f[0], o),
-                -dot(f[1], o),
-                -dot(f[2], o),
-                1.0,
-            ];
-            ibm.push(m);
-        }
-        let ibm_acc = bin.accessor(&f32_bytes(&ibm), None, 5126, ibm.len(), "MAT4", None);
-        let joint_list: Vec<String> = (0..exported.len()).map(|i| i.to_string()).collect();
-        let skin = format!(
-            "{{\"inverseBindMatrices\":{ibm_acc},\"skeleton\":0,\"joints\":[{}]}}",
-            joint_list.join(",")
-        );
+        let mut n_nodes = 0usize;
+        let mut skins = String::new();
         // Textures: image 0 bark, image 1 leaves.
         let bark_view = bin.view(&png(&self.bark), None);
         let leaf_view = bin.view(&png(&self.leaves.image), None);
@@ -344,6 +268,39 @@ impl TreeModel {
         for (k, &l) in lods.iter().enumerate() {
             let lod = &self.lods[l];
             let b = &lod.branches;
+            // This level's joints: those its vertices and clusters use, with their
+            // ancestors, at most `limit` of them by priority.
+            let mut used = vec![false; n];
+            for (j, w) in b.joints.iter().zip(&b.weights) {
+                for s in 0..4 {
+                    if w[s] > 0.0 {
+                        used[j[s] as usize] = true;
+                    }
+                }
+            }
+            for c in &lod.clusters {
+                used[c.joint as usize] = true;
+            }
+            used[0] = true;
+            for j in (1..n).rev() {
+                if used[j] && js[j].parent != NO_PARENT {
+                    used[js[j].parent as usize] = true;
+                }
+            }
+            let mut keep = vec![false; n];
+            for &j in order.iter().filter(|&&j| used[j]).take(limit) {
+                keep[j] = true;
+            }
+            for j in 0..n {
+                let p = js[j].parent;
+                if keep[j] && p != NO_PARENT && !keep[p as usize] {
+                    keep[j] = false;
+                }
+            }
+            let base = n_nodes;
+            let (index, count) =
+                self.joint_nodes(&keep, &frames, base, &mut nodes, &mut bin, &mut skins);
+            n_nodes += count;
             let mut prims = Vec::new();
             if !b.indices.is_empty() {
                 let pos = bin.accessor(
@@ -451,24 +408,22 @@ impl TreeModel {
             if k > 0 {
                 meshes.push(',');
                 scenes.push(',');
-                nodes.push(',');
-            } else {
-                nodes.push(',');
             }
             let _ = write!(meshes, "{{\"name\":\"lod{l}\",\"primitives\":[{}]}}", prims.join(","));
-            let node = exported.len() + k;
+            let node = n_nodes;
+            n_nodes += 1;
             let _ = write!(
                 nodes,
-                "{{\"name\":{},\"mesh\":{k},\"skin\":0}}",
+                ",{{\"name\":{},\"mesh\":{k},\"skin\":{k}}}",
                 json_str(&format!("{} lod{l}", opts.name))
             );
-            let _ = write!(scenes, "{{\"name\":\"lod{l}\",\"nodes\":[0,{node}]}}");
+            let _ = write!(scenes, "{{\"name\":\"lod{l}\",\"nodes\":[{base},{node}]}}");
         }
         let json = format!(
             concat!(
                 "{{\"asset\":{{\"version\":\"2.0\",\"generator\":\"sylva\"}},",
                 "\"scene\":0,\"scenes\":[{scenes}],\"nodes\":[{nodes}],\"meshes\":[{meshes}],",
-                "\"skins\":[{skin}],",
+                "\"skins\":[{skins}],",
                 "\"materials\":[",
                 "{{\"name\":\"bark\",\"pbrMetallicRoughness\":{{\"baseColorTexture\":{{\"index\":0}},\"metallicFactor\":0,\"roughnessFactor\":0.9}}}},",
                 "{{\"name\":\"leaves\",\"pbrMetallicRoughness\":{{\"baseColorTexture\":{{\"index\":1}},\"metallicFactor\":0,\"roughnessFactor\":0.7}},",
@@ -483,7 +438,7 @@ impl TreeModel {
             scenes = scenes,
             nodes = nodes,
             meshes = meshes,
-            skin = skin,
+            skins = skins,
             bark_view = bark_view,
             leaf_view = leaf_view,
             accessors = bin.accessors,
@@ -510,5 +465,92 @@ impl TreeModel {
         out.extend_from_slice(b"BIN\0");
         out.extend_from_slice(&data);
         out
+    }
+
+    /// Emit the joint nodes of the joints marked in `keep` (parents first) as nodes `base`
+    /// onwards, their inverse bind matrices and a skin over them. Returns, per skeleton
+    /// joint, its exported index (or its nearest exported ancestor's), and the node count.
+    fn joint_nodes(
+        &self,
+        keep: &[bool],
+        frames: &[[V3; 3]],
+        base: usize,
+        nodes: &mut String,
+        bin: &mut Bin,
+        skins: &mut String,
+    ) -> (Vec<u16>, usize) {
+        let js = self.tree.skeleton.joints();
+        let n = js.len();
+        let mut index = vec![0u16; n];
+        let mut exported = Vec::new();
+        for j in 0..n {
+            if keep[j] {
+                index[j] = exported.len() as u16;
+                exported.push(j);
+            } else if js[j].parent != NO_PARENT {
+                index[j] = index[js[j].parent as usize];
+            }
+        }
+        let mut children: Vec<Vec<usize>> = vec![Vec::new(); exported.len()];
+        for (i, &j) in exported.iter().enumerate().skip(1) {
+            children[index[js[j].parent as usize] as usize].push(i);
+        }
+        let mut ibm = Vec::with_capacity(exported.len());
+        for (i, &j) in exported.iter().enumerate() {
+            let f = &frames[j];
+            let (t, r) = if js[j].parent == NO_PARENT {
+                (js[j].origin, quaternion(f))
+            } else {
+                let p = js[j].parent as usize;
+                let pf = &frames[p];
+                let local = [to_local(pf, f[0]), to_local(pf, f[1]), to_local(pf, f[2])];
+                (to_local(pf, sub(js[j].origin, js[p].origin)), quaternion(&local))
+            };
+            if base + i > 0 {
+                nodes.push(',');
+            }
+            let _ = write!(
+                nodes,
+                "{{\"name\":\"joint{j}\",\"translation\":[{},{},{}],\"rotation\":[{},{},{},{}]",
+                t[0], t[1], t[2], r[0], r[1], r[2], r[3]
+            );
+            if !children[i].is_empty() {
+                let list: Vec<String> =
+                    children[i].iter().map(|c| (base + c).to_string()).collect();
+                let _ = write!(nodes, ",\"children\":[{}]", list.join(","));
+            }
+            nodes.push('}');
+            // Inverse bind: [Rᵀ | −Rᵀ o], column-major.
+            let o = js[j].origin;
+            ibm.push([
+                f[0][0],
+                f[1][0],
+                f[2][0],
+                0.0,
+                f[0][1],
+                f[1][1],
+                f[2][1],
+                0.0,
+                f[0][2],
+                f[1][2],
+                f[2][2],
+                0.0,
+                -dot(f[0], o),
+                -dot(f[1], o),
+                -dot(f[2], o),
+                1.0,
+            ]);
+        }
+        let acc = bin.accessor(&f32_bytes(&ibm), None, 5126, ibm.len(), "MAT4", None);
+        let list: Vec<String> = (0..exported.len()).map(|i| (base + i).to_string()).collect();
+        if !skins.is_empty() {
+            skins.push(',');
+        }
+        let _ = write!(
+            skins,
+            "{{\"inverseBindMatrices\":{acc},\"skeleton\":{base},\"joints\":[{}]}}",
+            list.join(",")
+        );
+        (index, exported.len())
     }
 }

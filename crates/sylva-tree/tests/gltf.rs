@@ -36,9 +36,14 @@ fn glb_container_holds_json_and_binary_chunks_describing_the_model() {
     let bin_at = 20 + json_len;
     assert_eq!(&bytes[bin_at + 4..bin_at + 8], b"BIN\0");
     assert_eq!(bin_at + 8 + u32_at(&bytes, bin_at), bytes.len());
-    // One joint node per joint, one skin, one mesh and scene per LOD, alpha-masked leaves.
-    assert_eq!(json.matches("\"name\":\"joint").count(), model.tree.skeleton.len());
-    assert_eq!(json.matches("\"inverseBindMatrices\"").count(), 1);
+    // Per LOD: a skin over the joints it uses (every joint at LOD 0, fewer after), a mesh
+    // and a scene; alpha-masked leaves; PNG textures.
+    let joints = json.matches("\"name\":\"joint").count();
+    let n = model.tree.skeleton.len();
+    assert!(joints > n && joints < n * model.lods.len(), "{joints} joint nodes");
+    assert_eq!(json.matches("\"inverseBindMatrices\"").count(), model.lods.len());
+    // The node list itself, and one scene per LOD.
+    assert_eq!(json.matches("\"nodes\":[").count(), 1 + model.lods.len());
     assert_eq!(json.matches("\"primitives\"").count(), model.lods.len());
     assert!(json.contains("\"alphaMode\":\"MASK\"") && json.contains("\"image/png\""));
     // Only the requested LOD.

@@ -168,10 +168,10 @@ pub fn run_tree(cmd: TreeCommand) -> anyhow::Result<()> {
                 None => model.lods.iter().map(|l| l.triangles()).sum(),
             };
             println!(
-                "wrote {} ({:.1} MB, {} joints, {} triangles{})",
+                "wrote {} ({:.1} MB, skeleton of {} joints, {} triangles{})",
                 a.out.display(),
                 bytes.len() as f64 / 1e6,
-                model.tree.skeleton.len().min(a.max_joints),
+                model.tree.skeleton.len(),
                 tris,
                 if a.lod.is_none() { ", all LODs" } else { "" }
             );
