@@ -57,10 +57,7 @@ fn demo(a: DemoArgs) -> anyhow::Result<()> {
         println!(
             "sylva demo: scene A in the viewer (drag to orbit, WASD to move, arrows for wind)"
         );
-        match view::view(&view::ViewArgs {
-            scene: "A".into(),
-            lod_fraction: sylva_forest::driver::DEFAULT_LOD_FRACTION,
-        }) {
+        match view::view(&view::ViewArgs { scene: "A".into(), lod_fraction: None }) {
             Ok(()) => return Ok(()),
             Err(e) => eprintln!("viewer unavailable ({e:#}); rendering headless instead"),
         }

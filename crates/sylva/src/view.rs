@@ -8,6 +8,7 @@ use std::time::Instant;
 
 use anyhow::Context;
 use clap::Args;
+use sylva_forest::driver::DEFAULT_LOD_FRACTION;
 use sylva_forest::{Camera, Forest, FrameData};
 use sylva_render::{Gpu, Renderer, wgpu};
 use winit::application::ApplicationHandler;
@@ -23,9 +24,10 @@ pub struct ViewArgs {
     /// Scene: a built-in name (small, A) or a scene file (.toml).
     #[arg(long, default_value = "A")]
     pub scene: String,
-    /// Geometry-LOD threshold h₀ (see `sylva render --help`).
-    #[arg(long, default_value_t = sylva_forest::driver::DEFAULT_LOD_FRACTION)]
-    pub lod_fraction: f32,
+    /// Geometry-LOD threshold h₀ (see `sylva render --help`). Default: 1 on a GPU, 3 on a
+    /// software rasteriser such as lavapipe.
+    #[arg(long)]
+    pub lod_fraction: Option<f32>,
 }
 
 /// Whether a window can be opened here (a display server is named in the environment).
@@ -93,6 +95,7 @@ struct App {
     last: Instant,
     fps: f32,
     paused: bool,
+    lod_fraction: Option<f32>,
 }
 
 impl App {
@@ -117,6 +120,9 @@ impl App {
             config.format = *f;
         }
         surface.configure(&gpu.device, &config);
+        let software = gpu.adapter.get_info().device_type == wgpu::DeviceType::Cpu;
+        let h0 = self.lod_fraction.unwrap_or(if software { 3.0 } else { DEFAULT_LOD_FRACTION });
+        self.forest.set_lod_fraction(h0);
         let renderer =
             Renderer::new(&gpu, &self.forest, config.format, config.width, config.height);
         println!("sylva view: {} ({}× MSAA)", gpu.describe(), renderer.samples());
@@ -258,8 +264,12 @@ impl ApplicationHandler for App {
 
 pub fn view(a: &ViewArgs) -> anyhow::Result<()> {
     let spec = load_scene(&a.scene)?;
-    let mut forest = Forest::new(&spec)?;
-    forest.set_lod_fraction(a.lod_fraction);
+    if let Some(h0) = a.lod_fraction
+        && !(h0 > 0.0 && h0.is_finite())
+    {
+        anyhow::bail!("--lod-fraction {h0}: must be > 0");
+    }
+    let forest = Forest::new(&spec)?;
     let orbit = Orbit::from_camera(&forest.default_camera());
     let event_loop = EventLoop::new().context("no window system: is a display available?")?;
     let mut app = App {
@@ -274,6 +284,7 @@ pub fn view(a: &ViewArgs) -> anyhow::Result<()> {
         last: Instant::now(),
         fps: 0.0,
         paused: false,
+        lod_fraction: a.lod_fraction,
     };
     event_loop.run_app(&mut app).context("window event loop")?;
     match app.error {
