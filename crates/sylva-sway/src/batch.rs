@@ -83,9 +83,27 @@ fn small_angle(a2: f32) -> (f32, f32) {
     )
 }
 
+#[cfg(test)]
 fn large_angle(a2: f32) -> (f32, f32) {
     let a = a2.sqrt();
     (a.sin() / a, (1.0 - a.cos()) / a2)
+}
+
+/// (sin a / a, (1 − cos a) / a²) from a² for any angle up to about 4 rad, branch-free so it
+/// vectorises: the Taylor series at h = a/8, then three doublings (sin 2h / 2h =
+/// (sin h / h) cos h; (1 − cos 2h) / (2h)² = (sin h / h)² / 2; cos h = 1 − h² (1 − cos h)/h²).
+/// Absolute error below 3e-7 (against f64) up to 4 rad.
+#[inline(always)]
+fn any_angle(a2: f32) -> (f32, f32) {
+    let mut h2 = a2 / 64.0;
+    let (mut s, mut v) = small_angle(h2);
+    for _ in 0..3 {
+        let c = 1.0 - h2 * v;
+        v = 0.5 * s * s;
+        s *= c;
+        h2 *= 4.0;
+    }
+    (s, v)
 }
 
 #[inline(always)]
@@ -396,13 +414,12 @@ fn step_group_impl(
         let p = sp.parent[i];
         let (before, rest) = st.lanes.split_at_mut(i);
         let parent = (p != sylva_tree::NO_PARENT).then(|| &before[p as usize]);
-        // Two copies of the lane loop: the common all-small-angle one vectorises fully.
+        // Two copies of the lane loop, both branch-free: the common all-small-angle one, and
+        // one for any angle.
         if small {
             palette_lanes(&phi, o, parent, &mut rest[0], small_angle);
         } else {
-            palette_lanes(&phi, o, parent, &mut rest[0], |a2| {
-                if a2 < 0.25 { small_angle(a2) } else { large_angle(a2) }
-            });
+            palette_lanes(&phi, o, parent, &mut rest[0], any_angle);
         }
         // Instance-major copy for the renderer.
         let lanes = &rest[0];
@@ -471,6 +488,23 @@ pub fn transform(p: &Palette, x: [f32; 3]) -> [f32; 3] {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn any_angle_matches_f64_within_3e_7() {
+        for k in 0..=4000 {
+            let a = k as f32 * 1e-3;
+            let (s, v) = any_angle(a * a);
+            // Reference in f64 (f32's 1 − cos a cancels at small a).
+            let x = a as f64;
+            let (ls, lv) = if k > 0 {
+                ((x.sin() / x) as f32, ((1.0 - x.cos()) / (x * x)) as f32)
+            } else {
+                (1.0, 0.5)
+            };
+            assert!((s - ls).abs() <= 3e-7, "sin a / a at {a}: {s} vs {ls}");
+            assert!((v - lv).abs() <= 3e-7, "(1 − cos a)/a² at {a}: {v} vs {lv}");
+        }
+    }
+
     use super::*;
 
     #[test]
