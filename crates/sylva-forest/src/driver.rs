@@ -18,6 +18,9 @@ use std::time::Instant;
 use bytemuck::{Pod, Zeroable};
 use rayon::prelude::*;
 use sylva_sway::{LeafParams, LeafSway, Palette, SwayBatch, SwayParams, SwaySpecies};
+
+/// Distance in [`FrameData::palettes`] between consecutive joints' palettes of one instance.
+pub const PALETTE_STRIDE: u32 = sylva_sway::PALETTE_STRIDE as u32;
 use sylva_tree::Species;
 use sylva_tree::mesh::{LOD_LEVELS, TreeModel};
 use sylva_wind::{Grid, Preset, SynthParams, WindField, WindParams};
@@ -52,7 +55,8 @@ pub struct Instance {
     pub yaw: f32,
     /// Uniform scale.
     pub scale: f32,
-    /// Index in [`FrameData::palettes`] of the instance's joint 0.
+    /// Index in [`FrameData::palettes`] of the instance's joint 0; joint j's palette is
+    /// [`PALETTE_STRIDE`] × j further on.
     pub palette: u32,
     /// Leaf flutter phase, rad.
     pub leaf_phase: f32,
@@ -100,7 +104,7 @@ pub struct FrameData {
     /// Buckets in (species, LOD) order.
     pub buckets: Vec<Bucket>,
     /// Joint palettes of every simulated instance (3×4 row-major, rest → animated, tree
-    /// space).
+    /// space), each species' batch as it lays them out (see [`Instance::palette`]).
     pub palettes: Vec<Palette>,
     /// Mean wind at the scene centre, 20 m up, world m/s.
     pub wind: [f32; 3],
@@ -256,7 +260,8 @@ impl Forest {
                 groups,
                 palette_base,
             });
-            palette_base += n_groups * joints;
+            palette_base +=
+                species.last().map_or(0, |s: &SpeciesRuntime| s.batch.all_palettes().len());
         }
         let wind = wind_field(spec, radius)?;
         Ok(Forest {
@@ -378,7 +383,6 @@ impl Forest {
             let (p, g) = self.trees[i as usize];
             let sp = &self.species[p.species as usize];
             let group = &sp.groups[g as usize];
-            let joints = sp.model.tree.skeleton.len();
             let (species, lod) = (key >> 8, key & 0xff);
             match out.buckets.last_mut() {
                 Some(b) if b.species == species && b.lod == lod => b.count += 1,
@@ -394,7 +398,7 @@ impl Forest {
                 position: p.position,
                 yaw: p.yaw,
                 scale: p.scale,
-                palette: (sp.palette_base + g as usize * joints) as u32,
+                palette: (sp.palette_base + sp.batch.palette_index(g as usize, 0)) as u32,
                 leaf_phase: group.leaf.phase,
                 leaf_amplitude: group.leaf.amplitude,
             });

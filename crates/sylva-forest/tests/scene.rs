@@ -1,6 +1,6 @@
 //! Layout and frame-driver behaviour.
 
-use sylva_forest::{Forest, FrameData, SceneSpec, Terrain, layout};
+use sylva_forest::{Forest, FrameData, PALETTE_STRIDE, SceneSpec, Terrain, layout};
 
 #[test]
 fn layout_is_deterministic_poisson_spaced_and_follows_the_mix() {
@@ -63,22 +63,29 @@ fn frames_draw_every_visible_tree_once_with_valid_palettes_and_trees_move() {
     forest.frame(&cam, 4.0 / 3.0, &mut f);
     assert_eq!(f.stats.drawn, 5, "the small scene is all in view");
     assert_eq!(f.buckets.iter().map(|b| b.count).sum::<u32>() as usize, f.instances.len());
-    for b in &f.buckets {
-        let sp = &forest.species[b.species as usize];
-        for inst in &f.instances[b.first as usize..(b.first + b.count) as usize] {
-            assert!((inst.palette as usize + sp.model.tree.skeleton.len()) <= f.palettes.len());
+    // The palette indices every drawn tree's joints use.
+    let joints: Vec<usize> = forest.species.iter().map(|s| s.model.tree.skeleton.len()).collect();
+    let used = |f: &FrameData| -> Vec<usize> {
+        let mut out = Vec::new();
+        for b in &f.buckets {
+            let joints = joints[b.species as usize];
+            for inst in &f.instances[b.first as usize..(b.first + b.count) as usize] {
+                out.extend(
+                    (0..joints).map(|j| inst.palette as usize + j * PALETTE_STRIDE as usize),
+                );
+            }
         }
-    }
-    let before = f.palettes.clone();
+        out
+    };
+    let idx = used(&f);
+    assert!(idx.iter().all(|&i| i < f.palettes.len()), "palette index out of range");
+    let before: Vec<_> = idx.iter().map(|&i| f.palettes[i]).collect();
     for _ in 0..30 {
         forest.step(1.0 / 30.0);
     }
     forest.frame(&cam, 4.0 / 3.0, &mut f);
-    let moved = before.iter().zip(&f.palettes).filter(|(a, b)| a != b).count();
-    assert!(
-        moved > before.len() / 2,
-        "only {moved} of {} palettes changed in 1 s of wind",
-        before.len()
-    );
+    assert_eq!(used(&f), idx, "same trees, same palettes");
+    let moved = idx.iter().zip(&before).filter(|(i, b)| f.palettes[**i] != **b).count();
+    assert!(moved > idx.len() / 2, "only {moved} of {} joints moved in 1 s of wind", idx.len());
     assert!(f.palettes.iter().flatten().all(|v| v.is_finite()));
 }

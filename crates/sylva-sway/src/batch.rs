@@ -30,6 +30,9 @@ const IDENTITY: Palette = [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0
 
 /// Instances per group: the vector width the joint loops run across.
 pub const LANES: usize = 16;
+/// Distance between consecutive joints' palettes of one instance in
+/// [`SwayBatch::all_palettes`].
+pub const PALETTE_STRIDE: usize = LANES;
 
 type Lanes = [f32; LANES];
 
@@ -56,7 +59,8 @@ pub struct SwayBatch {
     loads: Vec<[Lanes; 6]>,
     /// Palette scratch per (group, joint), lanes inner (parents are read from here).
     pal_lanes: Vec<[Lanes; 12]>,
-    /// Palettes per (instance, joint): what the renderer uploads.
+    /// Palettes per (group, joint, lane): what the renderer uploads (see
+    /// [`SwayBatch::all_palettes`]).
     palettes: Vec<Palette>,
     budget: Vec<u32>,
     transitions: Vec<Transition>,
@@ -89,13 +93,17 @@ fn large_angle(a2: f32) -> (f32, f32) {
     (a.sin() / a, (1.0 - a.cos()) / a2)
 }
 
-/// (sin a / a, (1 − cos a) / a²) from a² for any angle up to about 4 rad, branch-free so it
-/// vectorises: the Taylor series at h = a/8, then three doublings (sin 2h / 2h =
-/// (sin h / h) cos h; (1 − cos 2h) / (2h)² = (sin h / h)² / 2; cos h = 1 − h² (1 − cos h)/h²).
-/// Absolute error below 3e-7 (against f64) up to 4 rad.
+/// (sin a / a, (1 − cos a) / a²) from a² for any angle, branch-free so it vectorises: the
+/// angle is reduced to r ∈ [−π, π] (same sine and cosine), the Taylor series is taken at
+/// r/8 and doubled three times (sin 2h / 2h = (sin h / h) cos h; (1 − cos 2h) / (2h)² =
+/// (sin h / h)² / 2; cos h = 1 − h² (1 − cos h)/h²), then rescaled by r/a. Absolute error
+/// below 3e-7 (against f64).
 #[inline(always)]
 fn any_angle(a2: f32) -> (f32, f32) {
-    let mut h2 = a2 / 64.0;
+    let a = a2.sqrt();
+    let r = a - std::f32::consts::TAU * (a / std::f32::consts::TAU).round();
+    let ratio = if a > 0.0 { r / a } else { 1.0 };
+    let mut h2 = r * r / 64.0;
     let (mut s, mut v) = small_angle(h2);
     for _ in 0..3 {
         let c = 1.0 - h2 * v;
@@ -103,7 +111,7 @@ fn any_angle(a2: f32) -> (f32, f32) {
         s *= c;
         h2 *= 4.0;
     }
-    (s, v)
+    (s * ratio, v * ratio * ratio)
 }
 
 #[inline(always)]
@@ -128,7 +136,7 @@ impl SwayBatch {
             weight: vec![[1.0; LANES]; groups * n],
             loads: vec![[ZERO; 6]; groups * n],
             pal_lanes: vec![[ZERO; 12]; groups * n],
-            palettes: vec![IDENTITY; instances * n],
+            palettes: vec![IDENTITY; groups * n * LANES],
             budget: vec![n as u32; instances],
             transitions: Vec::with_capacity(n),
             aero_dt: Vec::with_capacity(n),
@@ -184,13 +192,21 @@ impl SwayBatch {
         }
     }
 
-    /// The palettes of instance `i`, one per joint.
-    pub fn palettes(&self, i: usize) -> &[Palette] {
-        let n = self.species.len();
-        &self.palettes[i * n..(i + 1) * n]
+    /// Index in [`SwayBatch::all_palettes`] of joint `j`'s palette of instance `i`:
+    /// `(group · joints + j) · LANES + lane`, with group = i / LANES and lane = i % LANES.
+    /// The palettes of one instance lie [`PALETTE_STRIDE`] apart.
+    pub fn palette_index(&self, i: usize, j: usize) -> usize {
+        ((i / LANES) * self.species.len() + j) * LANES + i % LANES
     }
 
-    /// All palettes, instance-major.
+    /// Joint `j`'s palette of instance `i`.
+    pub fn palette(&self, i: usize, j: usize) -> &Palette {
+        &self.palettes[self.palette_index(i, j)]
+    }
+
+    /// All palettes, grouped as the step computes them: per group of [`LANES`] instances,
+    /// per joint, the palettes of the group's instances side by side (a last, partial group
+    /// is padded). Written contiguously, uploaded as is; see [`SwayBatch::palette_index`].
     pub fn all_palettes(&self) -> &[Palette] {
         &self.palettes
     }
@@ -246,7 +262,7 @@ struct Group<'a> {
     weight: &'a mut [Lanes],
     loads: &'a mut [[Lanes; 6]],
     lanes: &'a mut [[Lanes; 12]],
-    /// The group's instances' palettes, instance-major (fewer than LANES in a last group).
+    /// The group's palettes, (joint, lane).
     out: &'a mut [Palette],
 }
 
@@ -421,10 +437,10 @@ fn step_group_impl(
         } else {
             palette_lanes(&phi, o, parent, &mut rest[0], any_angle);
         }
-        // Instance-major copy for the renderer.
+        // Lanes side by side for the renderer: one contiguous run per joint.
         let lanes = &rest[0];
-        for (l, pal) in st.out.chunks_mut(n).enumerate() {
-            pal[i] = std::array::from_fn(|e| lanes[e][l]);
+        for (l, pal) in st.out[i * LANES..(i + 1) * LANES].iter_mut().enumerate() {
+            *pal = std::array::from_fn(|e| lanes[e][l]);
         }
     }
 }
@@ -490,7 +506,7 @@ pub fn transform(p: &Palette, x: [f32; 3]) -> [f32; 3] {
 mod tests {
     #[test]
     fn any_angle_matches_f64_within_3e_7() {
-        for k in 0..=4000 {
+        for k in 0..=40000 {
             let a = k as f32 * 1e-3;
             let (s, v) = any_angle(a * a);
             // Reference in f64 (f32's 1 − cos a cancels at small a).

@@ -31,7 +31,7 @@ fn pole(n: usize, height: f32, r0: f32, leaf: f32) -> Skeleton {
 
 fn tip(b: &SwayBatch, sk: &Skeleton) -> [f32; 3] {
     let last = sk.len() - 1;
-    transform(&b.palettes(0)[last], sk.joints()[last].tip())
+    transform(b.palette(0, last), sk.joints()[last].tip())
 }
 
 #[test]

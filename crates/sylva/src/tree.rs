@@ -295,10 +295,9 @@ pub fn run_sway(cmd: SwayCommand) -> anyhow::Result<()> {
             wind[k]
         };
         batch.step(dt as f32, &[w]);
-        let pal = batch.palettes(0);
         let disp = |j: usize| {
             let rest = sk.joints()[j].tip();
-            let p = transform(&pal[j], rest);
+            let p = transform(batch.palette(0, j), rest);
             (p[0] - rest[0], p[1] - rest[1])
         };
         let (tx, ty) = disp(top);

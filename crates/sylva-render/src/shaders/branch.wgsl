@@ -31,7 +31,7 @@ fn vs_main(v: BranchIn) -> BranchOut {
     for (var k = 0u; k < 4u; k = k + 1u) {
         let w = v.weights[k];
         if (w > 0.0) {
-            let j = v.palette + v.joints[k];
+            let j = v.palette + v.joints[k] * PALETTE_STRIDE;
             p = p + w * palette_apply(j, v.position);
             n = n + w * palette_rotate(j, v.normal);
         }

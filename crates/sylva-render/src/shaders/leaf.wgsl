@@ -41,7 +41,7 @@ fn vs_main(v: LeafIn) -> LeafOut {
         axis = vec3<f32>(1.0, 0.0, 0.0);
     }
     let swung = v.hang + rotate_axis(offset, normalize(axis), swing);
-    let j = v.palette + v.joint;
+    let j = v.palette + v.joint * PALETTE_STRIDE;
     let c = tree_to_world(palette_apply(j, swung), v.base, v.scale);
     let s = sin(v.params.y);
     let co = cos(v.params.y);
