@@ -327,10 +327,8 @@ fn step_group_impl(
     st: &mut Group<'_>,
 ) {
     let n = st.theta.len();
-    // (1) Loads, tips inwards: loads[i] = (force on the subtree, moment about joint i).
-    for l in st.loads.iter_mut() {
-        *l = [ZERO; 6];
-    }
+    // (1) Loads, tips inwards: loads[i] = (force on the subtree, moment about joint i). They
+    // start at zero: pass (2) clears each joint's loads once it has used them.
     for i in (0..n).rev() {
         let [ax, ay] = sp.axes[i];
         let arm = sp.arm[i];
@@ -412,6 +410,7 @@ fn step_group_impl(
             }
             w[l] = if active { (w[l] + blend).min(1.0) } else { (w[l] - blend).max(0.0) };
         }
+        st.loads[i] = [ZERO; 6];
     }
     // (3) Palettes, root outwards: M_i = M_parent · (T(o) R_i T(−o)).
     for i in 0..n {
