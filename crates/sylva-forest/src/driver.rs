@@ -17,10 +17,8 @@ use std::time::Instant;
 
 use bytemuck::{Pod, Zeroable};
 use rayon::prelude::*;
-use sylva_sway::{LeafParams, LeafSway, Palette, SwayBatch, SwayParams, SwaySpecies};
+use sylva_sway::{LANES, LeafParams, LeafSway, Palette, SwayBatch, SwayParams, SwaySpecies};
 
-/// Distance in [`FrameData::palettes`] between consecutive joints' palettes of one instance.
-pub const PALETTE_STRIDE: u32 = sylva_sway::PALETTE_STRIDE as u32;
 use sylva_tree::Species;
 use sylva_tree::mesh::{LOD_LEVELS, TreeModel};
 use sylva_wind::{Grid, Preset, SynthParams, WindField, WindParams};
@@ -45,7 +43,7 @@ pub enum ForestError {
     Wind(String),
 }
 
-/// One tree drawn this frame, as the vertex shaders read it (32 bytes).
+/// One tree drawn this frame, as the vertex shaders read it (36 bytes).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, PartialEq, Pod, Zeroable)]
 pub struct Instance {
@@ -56,12 +54,15 @@ pub struct Instance {
     /// Uniform scale.
     pub scale: f32,
     /// Index in [`FrameData::palettes`] of the instance's joint 0; joint j's palette is
-    /// [`PALETTE_STRIDE`] × j further on.
+    /// `palette_stride × j` further on.
     pub palette: u32,
     /// Leaf flutter phase, rad.
     pub leaf_phase: f32,
     /// Leaf flutter amplitude, rad.
     pub leaf_amplitude: f32,
+    /// Distance between consecutive joints' palettes (the simulated instances sharing a
+    /// lane group, up to 16).
+    pub palette_stride: u32,
 }
 
 /// A run of instances of one species at one LOD: one instanced draw.
@@ -104,7 +105,8 @@ pub struct FrameData {
     /// Buckets in (species, LOD) order.
     pub buckets: Vec<Bucket>,
     /// Joint palettes of every simulated instance (3×4 row-major, rest → animated, tree
-    /// space), each species' batch as it lays them out (see [`Instance::palette`]).
+    /// space): per species, per lane group of up to 16 simulated instances, per joint, the
+    /// group's palettes side by side (see [`Instance::palette`]). No padding.
     pub palettes: Vec<Palette>,
     /// Mean wind at the scene centre, 20 m up, world m/s.
     pub wind: [f32; 3],
@@ -260,8 +262,7 @@ impl Forest {
                 groups,
                 palette_base,
             });
-            palette_base +=
-                species.last().map_or(0, |s: &SpeciesRuntime| s.batch.all_palettes().len());
+            palette_base += n_groups * joints;
         }
         let wind = wind_field(spec, radius)?;
         Ok(Forest {
@@ -394,19 +395,37 @@ impl Forest {
                 }),
             }
             stats.triangles += sp.model.lods[lod as usize].triangles();
+            // Lane group of this simulated instance: its first palette and its width.
+            let joints = sp.model.tree.skeleton.len();
+            let first_lane = g as usize / LANES * LANES;
+            let used = (sp.groups.len() - first_lane).min(LANES);
+            let block = first_lane * joints;
             out.instances.push(Instance {
                 position: p.position,
                 yaw: p.yaw,
                 scale: p.scale,
-                palette: (sp.palette_base + sp.batch.palette_index(g as usize, 0)) as u32,
+                palette: (sp.palette_base + block + g as usize % LANES) as u32,
                 leaf_phase: group.leaf.phase,
                 leaf_amplitude: group.leaf.amplitude,
+                palette_stride: used as u32,
             });
         }
         stats.drawn = out.instances.len();
         out.palettes.clear();
         for s in &self.species {
-            out.palettes.extend_from_slice(s.batch.all_palettes());
+            // The batch pads its last lane group to 16; copy only the simulated lanes.
+            let all = s.batch.all_palettes();
+            let n = s.batch.species().len();
+            for (k, block) in all.chunks(n * LANES).enumerate() {
+                let used = (s.groups.len() - k * LANES).min(LANES);
+                if used == LANES {
+                    out.palettes.extend_from_slice(block);
+                } else {
+                    for j in 0..n {
+                        out.palettes.extend_from_slice(&block[j * LANES..j * LANES + used]);
+                    }
+                }
+            }
             stats.simulated += s.groups.len();
             stats.joints += s.groups.len() * s.batch.species().len();
         }

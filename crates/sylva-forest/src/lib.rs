@@ -10,7 +10,5 @@ pub mod driver;
 pub mod scene;
 
 pub use camera::{Camera, Mat4};
-pub use driver::{
-    Bucket, Forest, ForestError, FrameData, FrameStats, Instance, PALETTE_STRIDE, SpeciesRuntime,
-};
+pub use driver::{Bucket, Forest, ForestError, FrameData, FrameStats, Instance, SpeciesRuntime};
 pub use scene::{Placement, SCENES, SceneError, SceneSpec, Terrain, layout};

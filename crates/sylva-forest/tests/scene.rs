@@ -1,6 +1,6 @@
 //! Layout and frame-driver behaviour.
 
-use sylva_forest::{Forest, FrameData, PALETTE_STRIDE, SceneSpec, Terrain, layout};
+use sylva_forest::{Forest, FrameData, SceneSpec, Terrain, layout};
 
 #[test]
 fn layout_is_deterministic_poisson_spaced_and_follows_the_mix() {
@@ -71,12 +71,28 @@ fn frames_draw_every_visible_tree_once_with_valid_palettes_and_trees_move() {
             let joints = joints[b.species as usize];
             for inst in &f.instances[b.first as usize..(b.first + b.count) as usize] {
                 out.extend(
-                    (0..joints).map(|j| inst.palette as usize + j * PALETTE_STRIDE as usize),
+                    (0..joints).map(|j| inst.palette as usize + j * inst.palette_stride as usize),
                 );
             }
         }
         out
     };
+    // Each tree's palettes form one kinematic chain: a joint turns about its own origin,
+    // which its parent carries, so M_j · o_j = M_parent · o_j. Palettes gathered from the
+    // wrong instance or joint break this.
+    for b in &f.buckets {
+        let sk = &forest.species[b.species as usize].model.tree.skeleton;
+        for inst in &f.instances[b.first as usize..(b.first + b.count) as usize] {
+            let pal =
+                |j: usize| &f.palettes[inst.palette as usize + j * inst.palette_stride as usize];
+            for (j, joint) in sk.joints().iter().enumerate().skip(1) {
+                let a = sylva_sway::transform(pal(j), joint.origin);
+                let p = sylva_sway::transform(pal(joint.parent as usize), joint.origin);
+                let d = (0..3).map(|c| (a[c] - p[c]).abs()).fold(0.0, f32::max);
+                assert!(d < 1e-3, "joint {j}: chain broken by {d} m");
+            }
+        }
+    }
     let idx = used(&f);
     assert!(idx.iter().all(|&i| i < f.palettes.len()), "palette index out of range");
     let before: Vec<_> = idx.iter().map(|&i| f.palettes[i]).collect();

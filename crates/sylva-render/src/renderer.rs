@@ -269,8 +269,8 @@ fn ground_mesh(gpu: &Gpu, terrain: &Terrain, extent: f32) -> Mesh {
     }
 }
 
-const INSTANCE_ATTRS: [wgpu::VertexAttribute; 4] = wgpu::vertex_attr_array![
-    5 => Float32x4, 6 => Float32, 7 => Uint32, 8 => Float32x2
+const INSTANCE_ATTRS: [wgpu::VertexAttribute; 5] = wgpu::vertex_attr_array![
+    5 => Float32x4, 6 => Float32, 7 => Uint32, 8 => Float32x2, 9 => Uint32
 ];
 
 fn instance_layout() -> wgpu::VertexBufferLayout<'static> {

@@ -57,10 +57,3 @@ fn a_broken_shader_is_caught() {
     };
     assert!(invalid);
 }
-
-#[test]
-fn shader_palette_stride_matches_the_frame_data() {
-    let common = sylva_render::shader_source("common.wgsl").expect("common");
-    let want = format!("const PALETTE_STRIDE: u32 = {}u;", sylva_forest::PALETTE_STRIDE);
-    assert!(common.contains(&want), "common.wgsl must declare `{want}`");
-}

@@ -173,6 +173,9 @@ pub struct SwayBench {
     /// Seed of the generated trees.
     #[arg(long, default_value_t = 1)]
     seed: u64,
+    /// Mean wind speed, m/s (instances get this plus 0 … 4 m/s, and a small cross-wind).
+    #[arg(long, default_value_t = 6.0)]
+    wind: f32,
 }
 
 fn sway(a: SwayBench) -> anyhow::Result<()> {
@@ -192,8 +195,9 @@ fn sway(a: SwayBench) -> anyhow::Result<()> {
         let n = tree.skeleton.len();
         let sp = SwaySpecies::new(&tree.skeleton, SwayParams::default())?;
         let mut batch = SwayBatch::new(sp, a.instances);
-        let winds: Vec<[f32; 3]> =
-            (0..a.instances).map(|i| [6.0 + (i % 5) as f32, (i % 3) as f32 - 1.0, 0.0]).collect();
+        let winds: Vec<[f32; 3]> = (0..a.instances)
+            .map(|i| [a.wind + (i % 5) as f32, (i % 3) as f32 - 1.0, 0.0])
+            .collect();
         let times = one.install(|| {
             batch.step(1.0 / 60.0, &winds);
             (0..a.steps.max(1))

@@ -12,6 +12,7 @@ struct BranchIn {
     @location(6) scale: f32,
     @location(7) palette: u32,
     @location(8) leaf: vec2<f32>,
+    @location(9) stride: u32,
 };
 
 struct BranchOut {
@@ -31,7 +32,7 @@ fn vs_main(v: BranchIn) -> BranchOut {
     for (var k = 0u; k < 4u; k = k + 1u) {
         let w = v.weights[k];
         if (w > 0.0) {
-            let j = v.palette + v.joints[k] * PALETTE_STRIDE;
+            let j = v.palette + v.joints[k] * v.stride;
             p = p + w * palette_apply(j, v.position);
             n = n + w * palette_rotate(j, v.normal);
         }

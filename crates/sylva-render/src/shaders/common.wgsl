@@ -21,10 +21,9 @@ struct Globals {
 
 @group(0) @binding(0) var<uniform> globals: Globals;
 // Joint palettes: three rows (rotation | translation) per joint, rest -> animated tree space.
-// An instance's joint j sits PALETTE_STRIDE palettes after its joint 0 (sylva-sway keeps the
-// palettes of 16 instances side by side per joint).
+// An instance's joint j sits `stride` palettes after its joint 0 (the simulation keeps the
+// palettes of up to 16 instances side by side per joint).
 @group(0) @binding(1) var<storage, read> palettes: array<vec4<f32>>;
-const PALETTE_STRIDE: u32 = 16u;
 @group(0) @binding(2) var linear_sampler: sampler;
 
 fn palette_apply(j: u32, p: vec3<f32>) -> vec3<f32> {

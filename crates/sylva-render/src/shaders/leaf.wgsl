@@ -13,6 +13,7 @@ struct LeafIn {
     @location(6) scale: f32,
     @location(7) palette: u32,
     @location(8) leaf: vec2<f32>,
+    @location(9) stride: u32,
 };
 
 struct LeafOut {
@@ -41,7 +42,7 @@ fn vs_main(v: LeafIn) -> LeafOut {
         axis = vec3<f32>(1.0, 0.0, 0.0);
     }
     let swung = v.hang + rotate_axis(offset, normalize(axis), swing);
-    let j = v.palette + v.joint * PALETTE_STRIDE;
+    let j = v.palette + v.joint * v.stride;
     let c = tree_to_world(palette_apply(j, swung), v.base, v.scale);
     let s = sin(v.params.y);
     let co = cos(v.params.y);
