@@ -1,10 +1,12 @@
 //! Weber–Penn parametric trees in the paper's hybrid representation (paper §4.1).
 //!
-//! Today this crate holds the [`Species`] parameters (Weber & Penn's full set under their
-//! names, TOML species files, validation naming the key and line, six shipped presets) and
-//! the [`Skeleton`]: the joint hierarchy that the branch mesh, the leaf clusters and the
-//! animation share. Generation, meshes, leaves, the geometry LOD chain and glTF export are
-//! still to come (see `ARCHITECTURE.md`).
+//! From a [`Species`] (Weber & Penn's full parameter set under their names, TOML species
+//! files whose errors name the key and line, six shipped presets) and a seed:
+//! [`Species::generate`] grows the [`Skeleton`] — the joint hierarchy that the branch mesh,
+//! the leaf clusters and the animation share — and [`Species::model`] adds the
+//! [`mesh`] (skinned branch meshes and leaf-cluster billboards at every level of the
+//! geometry LOD chain) and the procedural [`texture`]s; [`gltf`] writes it all as `.glb`.
+//! See `ARCHITECTURE.md`.
 #![warn(missing_docs)]
 
 pub mod generate;

@@ -1,4 +1,5 @@
-//! The `sylva` command: wind fields, trees and their sway now; the forest viewer as it lands.
+//! The `sylva` command: forests in wind (demo, render, view), wind fields, trees, sway probes
+//! and benchmarks.
 //!
 //! Arguments are parsed in two stages (raw clap flags -> validated settings in `wind.rs`),
 //! so every check happens once, at the edge, with an error that names the flag.
