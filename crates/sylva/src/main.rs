@@ -12,7 +12,7 @@ mod wind;
 
 use clap::{Parser, Subcommand};
 
-/// Forests in wind: stochastic wind fields from wind-engineering spectra and coherence.
+/// Forests in wind: wind-engineering wind fields, Weber–Penn trees, swaying branches, rendered.
 #[derive(Debug, Parser)]
 #[command(name = "sylva", version, about, long_about = None)]
 struct Cli {
