@@ -315,14 +315,7 @@ impl Forest {
     }
 
     fn wind_at(&self, p: [f64; 3], t: f64) -> [f32; 3] {
-        let w = self.wind.view().sample(p, t);
-        let (s, c) = self.turn.sin_cos();
-        let g = self.gain;
-        [
-            g * (c * w[0] as f32 - s * w[1] as f32),
-            g * (s * w[0] as f32 + c * w[1] as f32),
-            g * w[2] as f32,
-        ]
+        sample_wind(&self.wind, self.gain, self.turn, p, t)
     }
 
     /// Advance the simulation by `dt` seconds (> 0; others are ignored).
@@ -334,15 +327,11 @@ impl Forest {
         self.time += dt as f64;
         let t = self.time;
         let leaf = self.leaf_params;
-        let this = &*self;
-        // Wind samples first (the field is shared, read-only), then the batches in parallel.
-        let winds: Vec<Vec<[f32; 3]>> = this
-            .species
-            .iter()
-            .map(|s| s.groups.iter().map(|g| this.wind_at(g.sample, t)).collect())
-            .collect();
-        self.species.par_iter_mut().zip(winds).for_each(|(s, w)| {
-            for ((g, out), w) in s.groups.iter_mut().zip(&mut s.winds).zip(&w) {
+        let (field, gain, turn) = (&self.wind, self.gain, self.turn);
+        // Species in parallel; each samples the shared, read-only field for its groups.
+        self.species.par_iter_mut().for_each(|s| {
+            for (g, out) in s.groups.iter_mut().zip(&mut s.winds) {
+                let w = sample_wind(field, gain, turn, g.sample, t);
                 let (sn, cs) = g.yaw.sin_cos();
                 *out = [cs * w[0] + sn * w[1], -sn * w[0] + cs * w[1], w[2]];
                 let speed = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
@@ -434,6 +423,17 @@ impl Forest {
         out.wind = w;
         out.stats = stats;
     }
+}
+
+/// Wind at world point `p` and time `t`, scaled by `gain` and turned by `turn` rad.
+fn sample_wind(field: &WindField, gain: f32, turn: f32, p: [f64; 3], t: f64) -> [f32; 3] {
+    let w = field.view().sample(p, t);
+    let (s, c) = turn.sin_cos();
+    [
+        gain * (c * w[0] as f32 - s * w[1] as f32),
+        gain * (s * w[0] as f32 + c * w[1] as f32),
+        gain * w[2] as f32,
+    ]
 }
 
 /// The scene's wind field: its preset and direction over a grid covering the forest
