@@ -134,7 +134,8 @@ impl App {
         let now = Instant::now();
         let dt = now.duration_since(self.last).as_secs_f32().min(0.2);
         self.last = now;
-        self.fps = 0.9 * self.fps + 0.1 / dt.max(1e-4);
+        let now_fps = 1.0 / dt.max(1e-4);
+        self.fps = if self.fps == 0.0 { now_fps } else { 0.9 * self.fps + 0.1 * now_fps };
         // Movement in the ground plane, relative to the view.
         let speed = 0.8 * self.orbit.distance.max(10.0) * dt;
         let (fx, fy) = (-self.orbit.yaw.cos(), -self.orbit.yaw.sin());
