@@ -17,7 +17,7 @@ use std::time::Instant;
 
 use bytemuck::{Pod, Zeroable};
 use rayon::prelude::*;
-use sylva_sway::{LANES, LeafParams, LeafSway, Palette, SwayBatch, SwayParams, SwaySpecies};
+use sylva_sway::{LANES, LeafParams, LeafSway, SwayBatch, SwayParams, SwaySpecies};
 
 use sylva_tree::Species;
 use sylva_tree::mesh::{LOD_LEVELS, TreeModel};
@@ -53,15 +53,15 @@ pub struct Instance {
     pub yaw: f32,
     /// Uniform scale.
     pub scale: f32,
-    /// Index in [`FrameData::palettes`] of the instance's joint 0; joint j's palette is
-    /// `palette_stride × j` further on.
+    /// Index in [`FrameData::palettes`] of element 0 of the instance's joint-0 palette;
+    /// element e (row-major 3×4) of joint j is at `palette + (12 j + e) · palette_stride`.
     pub palette: u32,
     /// Leaf flutter phase, rad.
     pub leaf_phase: f32,
     /// Leaf flutter amplitude, rad.
     pub leaf_amplitude: f32,
-    /// Distance between consecutive joints' palettes (the simulated instances sharing a
-    /// lane group, up to 16).
+    /// Distance between consecutive palette elements: the simulated instances whose
+    /// palettes are interleaved with this one's (its lane group, up to 16).
     pub palette_stride: u32,
 }
 
@@ -105,9 +105,10 @@ pub struct FrameData {
     /// Buckets in (species, LOD) order.
     pub buckets: Vec<Bucket>,
     /// Joint palettes of every simulated instance (3×4 row-major, rest → animated, tree
-    /// space): per species, per lane group of up to 16 simulated instances, per joint, the
-    /// group's palettes side by side (see [`Instance::palette`]). No padding.
-    pub palettes: Vec<Palette>,
+    /// space), as the simulation computes them: per species, per lane group of up to 16
+    /// simulated instances, per joint, per matrix element, the group's values side by side
+    /// (see [`Instance::palette`]). No padding.
+    pub palettes: Vec<f32>,
     /// Mean wind at the scene centre, 20 m up, world m/s.
     pub wind: [f32; 3],
     /// Figures.
@@ -262,7 +263,7 @@ impl Forest {
                 groups,
                 palette_base,
             });
-            palette_base += n_groups * joints;
+            palette_base += n_groups * joints * 12;
         }
         let wind = wind_field(spec, radius)?;
         Ok(Forest {
@@ -388,7 +389,7 @@ impl Forest {
             let joints = sp.model.tree.skeleton.len();
             let first_lane = g as usize / LANES * LANES;
             let used = (sp.groups.len() - first_lane).min(LANES);
-            let block = first_lane * joints;
+            let block = first_lane * joints * 12;
             out.instances.push(Instance {
                 position: p.position,
                 yaw: p.yaw,
@@ -403,15 +404,14 @@ impl Forest {
         out.palettes.clear();
         for s in &self.species {
             // The batch pads its last lane group to 16; copy only the simulated lanes.
-            let all = s.batch.all_palettes();
             let n = s.batch.species().len();
-            for (k, block) in all.chunks(n * LANES).enumerate() {
+            for (k, block) in s.batch.lane_palettes().chunks(n).enumerate() {
                 let used = (s.groups.len() - k * LANES).min(LANES);
                 if used == LANES {
-                    out.palettes.extend_from_slice(block);
+                    out.palettes.extend_from_slice(block.as_flattened().as_flattened());
                 } else {
-                    for j in 0..n {
-                        out.palettes.extend_from_slice(&block[j * LANES..j * LANES + used]);
+                    for lanes in block.iter().flatten() {
+                        out.palettes.extend_from_slice(&lanes[..used]);
                     }
                 }
             }

@@ -63,16 +63,15 @@ fn frames_draw_every_visible_tree_once_with_valid_palettes_and_trees_move() {
     forest.frame(&cam, 4.0 / 3.0, &mut f);
     assert_eq!(f.stats.drawn, 5, "the small scene is all in view");
     assert_eq!(f.buckets.iter().map(|b| b.count).sum::<u32>() as usize, f.instances.len());
-    // The palette indices every drawn tree's joints use.
+    // The palette values (12 per joint) every drawn tree uses.
     let joints: Vec<usize> = forest.species.iter().map(|s| s.model.tree.skeleton.len()).collect();
     let used = |f: &FrameData| -> Vec<usize> {
         let mut out = Vec::new();
         for b in &f.buckets {
             let joints = joints[b.species as usize];
             for inst in &f.instances[b.first as usize..(b.first + b.count) as usize] {
-                out.extend(
-                    (0..joints).map(|j| inst.palette as usize + j * inst.palette_stride as usize),
-                );
+                let stride = inst.palette_stride as usize;
+                out.extend((0..12 * joints).map(|k| inst.palette as usize + k * stride));
             }
         }
         out
@@ -83,11 +82,13 @@ fn frames_draw_every_visible_tree_once_with_valid_palettes_and_trees_move() {
     for b in &f.buckets {
         let sk = &forest.species[b.species as usize].model.tree.skeleton;
         for inst in &f.instances[b.first as usize..(b.first + b.count) as usize] {
-            let pal =
-                |j: usize| &f.palettes[inst.palette as usize + j * inst.palette_stride as usize];
+            let pal = |j: usize| -> [f32; 12] {
+                let stride = inst.palette_stride as usize;
+                std::array::from_fn(|e| f.palettes[inst.palette as usize + (12 * j + e) * stride])
+            };
             for (j, joint) in sk.joints().iter().enumerate().skip(1) {
-                let a = sylva_sway::transform(pal(j), joint.origin);
-                let p = sylva_sway::transform(pal(joint.parent as usize), joint.origin);
+                let a = sylva_sway::transform(&pal(j), joint.origin);
+                let p = sylva_sway::transform(&pal(joint.parent as usize), joint.origin);
                 let d = (0..3).map(|c| (a[c] - p[c]).abs()).fold(0.0, f32::max);
                 assert!(d < 1e-3, "joint {j}: chain broken by {d} m");
             }
@@ -102,6 +103,10 @@ fn frames_draw_every_visible_tree_once_with_valid_palettes_and_trees_move() {
     forest.frame(&cam, 4.0 / 3.0, &mut f);
     assert_eq!(used(&f), idx, "same trees, same palettes");
     let moved = idx.iter().zip(&before).filter(|(i, b)| f.palettes[**i] != **b).count();
-    assert!(moved > idx.len() / 2, "only {moved} of {} joints moved in 1 s of wind", idx.len());
-    assert!(f.palettes.iter().flatten().all(|v| v.is_finite()));
+    assert!(
+        moved > idx.len() / 2,
+        "only {moved} of {} palette values moved in 1 s of wind",
+        idx.len()
+    );
+    assert!(f.palettes.iter().all(|v| v.is_finite()));
 }

@@ -574,7 +574,7 @@ impl Renderer {
         };
         gpu.queue.write_buffer(&self.globals, 0, bytemuck::bytes_of(&g));
         // Grow the per-frame buffers to the next power of two.
-        let pal_bytes = (frame.palettes.len().max(1) * 48) as u64;
+        let pal_bytes = (frame.palettes.len().max(12) * 4) as u64;
         if pal_bytes > self.palettes.size() {
             self.palettes = storage(dev, pal_bytes.next_power_of_two());
             self.globals_group = globals_bind_group(

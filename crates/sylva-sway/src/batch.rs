@@ -30,11 +30,8 @@ const IDENTITY: Palette = [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0
 
 /// Instances per group: the vector width the joint loops run across.
 pub const LANES: usize = 16;
-/// Distance between consecutive joints' palettes of one instance in
-/// [`SwayBatch::all_palettes`].
-pub const PALETTE_STRIDE: usize = LANES;
-
-type Lanes = [f32; LANES];
+/// A value per lane of a group.
+pub type Lanes = [f32; LANES];
 
 fn cross(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
     [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
@@ -59,9 +56,6 @@ pub struct SwayBatch {
     loads: Vec<[Lanes; 6]>,
     /// Palette scratch per (group, joint), lanes inner (parents are read from here).
     pal_lanes: Vec<[Lanes; 12]>,
-    /// Palettes per (group, joint, lane): what the renderer uploads (see
-    /// [`SwayBatch::all_palettes`]).
-    palettes: Vec<Palette>,
     budget: Vec<u32>,
     transitions: Vec<Transition>,
     /// Per joint, aerodynamic damping rate per unit wind speed × dt (see `loads`).
@@ -135,8 +129,7 @@ impl SwayBatch {
             rate: vec![[ZERO; 2]; groups * n],
             weight: vec![[1.0; LANES]; groups * n],
             loads: vec![[ZERO; 6]; groups * n],
-            pal_lanes: vec![[ZERO; 12]; groups * n],
-            palettes: vec![IDENTITY; groups * n * LANES],
+            pal_lanes: vec![std::array::from_fn(|e| [IDENTITY[e]; LANES]); groups * n],
             budget: vec![n as u32; instances],
             transitions: Vec::with_capacity(n),
             aero_dt: Vec::with_capacity(n),
@@ -192,23 +185,18 @@ impl SwayBatch {
         }
     }
 
-    /// Index in [`SwayBatch::all_palettes`] of joint `j`'s palette of instance `i`:
-    /// `(group · joints + j) · LANES + lane`, with group = i / LANES and lane = i % LANES.
-    /// The palettes of one instance lie [`PALETTE_STRIDE`] apart.
-    pub fn palette_index(&self, i: usize, j: usize) -> usize {
-        ((i / LANES) * self.species.len() + j) * LANES + i % LANES
-    }
-
     /// Joint `j`'s palette of instance `i`.
-    pub fn palette(&self, i: usize, j: usize) -> &Palette {
-        &self.palettes[self.palette_index(i, j)]
+    pub fn palette(&self, i: usize, j: usize) -> Palette {
+        let m = &self.pal_lanes[(i / LANES) * self.species.len() + j];
+        std::array::from_fn(|e| m[e][i % LANES])
     }
 
-    /// All palettes, grouped as the step computes them: per group of [`LANES`] instances,
-    /// per joint, the palettes of the group's instances side by side (a last, partial group
-    /// is padded). Written contiguously, uploaded as is; see [`SwayBatch::palette_index`].
-    pub fn all_palettes(&self) -> &[Palette] {
-        &self.palettes
+    /// All palettes, as the step computes them: per group of [`LANES`] instances, per joint,
+    /// per matrix element (row-major 3×4), the group's lanes side by side — element e of
+    /// joint j of instance i is `lane_palettes()[(i / LANES) · joints + j][e][i % LANES]`. A
+    /// last, partial group is padded. Uploaded to the GPU as it is (see `sylva-forest`).
+    pub fn lane_palettes(&self) -> &[[Lanes; 12]] {
+        &self.pal_lanes
     }
 
     /// Advance every instance by `dt` seconds (> 0) in the wind `wind[i]` (m/s, tree space,
@@ -237,9 +225,8 @@ impl SwayBatch {
             .zip(self.weight.par_chunks_mut(n))
             .zip(self.loads.par_chunks_mut(n))
             .zip(self.pal_lanes.par_chunks_mut(n))
-            .zip(self.palettes.par_chunks_mut(n * LANES))
             .enumerate()
-            .for_each(|(g, (((((theta, rate), weight), loads), lanes), out))| {
+            .for_each(|(g, ((((theta, rate), weight), loads), lanes))| {
                 let mut u = [ZERO; 3];
                 let mut bud = [0u32; LANES];
                 for l in 0..LANES.min(ni - g * LANES) {
@@ -249,7 +236,7 @@ impl SwayBatch {
                     }
                     bud[l] = budget[g * LANES + l];
                 }
-                let mut st = Group { theta, rate, weight, loads, lanes, out };
+                let mut st = Group { theta, rate, weight, loads, lanes };
                 step_group(sp, tr, aero, blend, &bud, &u, &mut st);
             });
     }
@@ -262,8 +249,6 @@ struct Group<'a> {
     weight: &'a mut [Lanes],
     loads: &'a mut [[Lanes; 6]],
     lanes: &'a mut [[Lanes; 12]],
-    /// The group's palettes, (joint, lane).
-    out: &'a mut [Palette],
 }
 
 /// Step one group, vectorised with the widest instruction set the CPU has.
@@ -387,7 +372,7 @@ fn step_group_impl(
             }
         }
     }
-    // (2) Springs of the active joints; blend weights.
+    // (2) Springs of the active joints and blend weights, root outwards, and with them:
     for i in 0..n {
         let t = &tr[i];
         let rank = sp.rank[i];
@@ -411,10 +396,8 @@ fn step_group_impl(
             w[l] = if active { (w[l] + blend).min(1.0) } else { (w[l] - blend).max(0.0) };
         }
         st.loads[i] = [ZERO; 6];
-    }
-    // (3) Palettes, root outwards: M_i = M_parent · (T(o) R_i T(−o)).
-    for i in 0..n {
-        let [ax, ay] = sp.axes[i];
+        // (3) Palette, in the same sweep (the parent's is done): M_i = M_parent ·
+        // (T(o) R_i T(−o)).
         let o = sp.origin[i];
         let (th, w) = (&st.theta[i], &st.weight[i]);
         let mut phi = [ZERO; 3];
@@ -435,11 +418,6 @@ fn step_group_impl(
             palette_lanes(&phi, o, parent, &mut rest[0], small_angle);
         } else {
             palette_lanes(&phi, o, parent, &mut rest[0], any_angle);
-        }
-        // Lanes side by side for the renderer: one contiguous run per joint.
-        let lanes = &rest[0];
-        for (l, pal) in st.out[i * LANES..(i + 1) * LANES].iter_mut().enumerate() {
-            *pal = std::array::from_fn(|e| lanes[e][l]);
         }
     }
 }

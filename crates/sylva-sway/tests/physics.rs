@@ -31,7 +31,7 @@ fn pole(n: usize, height: f32, r0: f32, leaf: f32) -> Skeleton {
 
 fn tip(b: &SwayBatch, sk: &Skeleton) -> [f32; 3] {
     let last = sk.len() - 1;
-    transform(b.palette(0, last), sk.joints()[last].tip())
+    transform(&b.palette(0, last), sk.joints()[last].tip())
 }
 
 #[test]
@@ -202,7 +202,7 @@ fn batches_are_bit_identical_for_one_and_two_threads() {
             for _ in 0..200 {
                 b.step(1.0 / 30.0, &winds);
             }
-            b.all_palettes().iter().flatten().map(|x| x.to_bits()).collect::<Vec<u32>>()
+            b.lane_palettes().iter().flatten().flatten().map(|x| x.to_bits()).collect::<Vec<u32>>()
         })
     };
     assert_eq!(run(1), run(2));

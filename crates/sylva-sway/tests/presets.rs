@@ -20,7 +20,7 @@ fn release_frequency(sk: &Skeleton) -> f64 {
     let mut xs = Vec::new();
     for _ in 0..(16.0 / dt) as usize {
         b.step(dt, &[[0.0, 0.0, 0.0]]);
-        let p = transform(b.palette(0, top), tip);
+        let p = transform(&b.palette(0, top), tip);
         xs.push(((p[0] - tip[0]) as f64, (p[1] - tip[1]) as f64));
     }
     let (x, y): (Vec<f64>, Vec<f64>) = xs.into_iter().unzip();

@@ -208,7 +208,7 @@ fn sway(a: SwayBench) -> anyhow::Result<()> {
                 })
                 .collect::<Vec<f64>>()
         });
-        std::hint::black_box(batch.all_palettes());
+        std::hint::black_box(batch.lane_palettes());
         let step = median(times);
         let joints = (n * a.instances) as f64;
         println!(

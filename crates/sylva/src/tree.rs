@@ -297,7 +297,7 @@ pub fn run_sway(cmd: SwayCommand) -> anyhow::Result<()> {
         batch.step(dt as f32, &[w]);
         let disp = |j: usize| {
             let rest = sk.joints()[j].tip();
-            let p = transform(batch.palette(0, j), rest);
+            let p = transform(&batch.palette(0, j), rest);
             (p[0] - rest[0], p[1] - rest[1])
         };
         let (tx, ty) = disp(top);

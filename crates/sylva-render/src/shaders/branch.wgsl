@@ -32,9 +32,9 @@ fn vs_main(v: BranchIn) -> BranchOut {
     for (var k = 0u; k < 4u; k = k + 1u) {
         let w = v.weights[k];
         if (w > 0.0) {
-            let j = v.palette + v.joints[k] * v.stride;
-            p = p + w * palette_apply(j, v.position);
-            n = n + w * palette_rotate(j, v.normal);
+            let m = palette(v.palette, v.stride, v.joints[k]);
+            p = p + w * palette_apply(m, v.position);
+            n = n + w * palette_rotate(m, v.normal);
         }
     }
     let world = tree_to_world(p, v.base, v.scale);

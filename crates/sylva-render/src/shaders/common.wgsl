@@ -20,24 +20,33 @@ struct Globals {
 };
 
 @group(0) @binding(0) var<uniform> globals: Globals;
-// Joint palettes: three rows (rotation | translation) per joint, rest -> animated tree space.
-// An instance's joint j sits `stride` palettes after its joint 0 (the simulation keeps the
-// palettes of up to 16 instances side by side per joint).
-@group(0) @binding(1) var<storage, read> palettes: array<vec4<f32>>;
+// Joint palettes (rest -> animated tree space, 3x4 row-major), as the simulation lays them
+// out: element e of an instance's joint j is at base + (12 j + e) * stride, where base and
+// stride come with the instance (up to 16 instances' palettes are interleaved).
+@group(0) @binding(1) var<storage, read> palettes: array<f32>;
 @group(0) @binding(2) var linear_sampler: sampler;
 
-fn palette_apply(j: u32, p: vec3<f32>) -> vec3<f32> {
-    let r0 = palettes[3u * j];
-    let r1 = palettes[3u * j + 1u];
-    let r2 = palettes[3u * j + 2u];
-    return vec3<f32>(dot(r0.xyz, p) + r0.w, dot(r1.xyz, p) + r1.w, dot(r2.xyz, p) + r2.w);
+struct Palette {
+    r0: vec4<f32>,
+    r1: vec4<f32>,
+    r2: vec4<f32>,
+};
+
+fn palette(base: u32, stride: u32, j: u32) -> Palette {
+    let at = base + 12u * j * stride;
+    var m: Palette;
+    m.r0 = vec4<f32>(palettes[at], palettes[at + stride], palettes[at + 2u * stride], palettes[at + 3u * stride]);
+    m.r1 = vec4<f32>(palettes[at + 4u * stride], palettes[at + 5u * stride], palettes[at + 6u * stride], palettes[at + 7u * stride]);
+    m.r2 = vec4<f32>(palettes[at + 8u * stride], palettes[at + 9u * stride], palettes[at + 10u * stride], palettes[at + 11u * stride]);
+    return m;
 }
 
-fn palette_rotate(j: u32, v: vec3<f32>) -> vec3<f32> {
-    let r0 = palettes[3u * j];
-    let r1 = palettes[3u * j + 1u];
-    let r2 = palettes[3u * j + 2u];
-    return vec3<f32>(dot(r0.xyz, v), dot(r1.xyz, v), dot(r2.xyz, v));
+fn palette_apply(m: Palette, p: vec3<f32>) -> vec3<f32> {
+    return vec3<f32>(dot(m.r0.xyz, p) + m.r0.w, dot(m.r1.xyz, p) + m.r1.w, dot(m.r2.xyz, p) + m.r2.w);
+}
+
+fn palette_rotate(m: Palette, v: vec3<f32>) -> vec3<f32> {
+    return vec3<f32>(dot(m.r0.xyz, v), dot(m.r1.xyz, v), dot(m.r2.xyz, v));
 }
 
 fn rotate_z(v: vec3<f32>, yaw: f32) -> vec3<f32> {

@@ -42,8 +42,8 @@ fn vs_main(v: LeafIn) -> LeafOut {
         axis = vec3<f32>(1.0, 0.0, 0.0);
     }
     let swung = v.hang + rotate_axis(offset, normalize(axis), swing);
-    let j = v.palette + v.joint * v.stride;
-    let c = tree_to_world(palette_apply(j, swung), v.base, v.scale);
+    let m = palette(v.palette, v.stride, v.joint);
+    let c = tree_to_world(palette_apply(m, swung), v.base, v.scale);
     let s = sin(v.params.y);
     let co = cos(v.params.y);
     let r = vec2<f32>(co * v.corner.x - s * v.corner.y, s * v.corner.x + co * v.corner.y);
@@ -57,7 +57,7 @@ fn vs_main(v: LeafIn) -> LeafOut {
     out.clip = globals.view_proj * vec4<f32>(world, 1.0);
     out.world = world;
     // Shade as a piece of a rounded crown: outward from the branch, tilted up.
-    out.normal = rotate_z(palette_rotate(j, offset), v.base.w) + vec3<f32>(0.0, 0.0, 0.6 * length(offset));
+    out.normal = rotate_z(palette_rotate(m, offset), v.base.w) + vec3<f32>(0.0, 0.0, 0.6 * length(offset));
     out.uv = (origin + vec2<f32>(v.corner.x + 0.5, 0.5 - v.corner.y)) / cells;
     return out;
 }
