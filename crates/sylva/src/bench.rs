@@ -146,10 +146,11 @@ fn render_bench(a: RenderBench) -> anyhow::Result<()> {
     println!("machine: {}", machine());
     let r = crate::render::render(&args)?;
     println!(
-        "{} frames at {}: simulation {:.1} ms + rendering {:.1} ms per frame (medians; rendering = upload, draw, read back), {:.2} M triangles per frame, {} simulated trees, {} joints per step, adapter {}",
+        "{} frames at {}: simulation {:.1} ms (sway step {:.1} ms) + rendering {:.1} ms per frame (medians; rendering = upload, draw, read back), {:.2} M triangles per frame, {} simulated trees, {} joints per step, adapter {}",
         r.frames,
         args.size,
         r.sim_ms,
+        r.step_ms,
         r.render_ms,
         r.triangles / 1e6,
         r.simulated,

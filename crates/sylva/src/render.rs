@@ -104,6 +104,8 @@ fn shrink(rgba: &[u8], w: u32, h: u32, k: u32) -> (Vec<u8>, u32, u32) {
 pub struct RenderReport {
     pub frames: usize,
     pub sim_ms: f64,
+    /// Of which the sway step (wind sampling, springs, palettes).
+    pub step_ms: f64,
     pub render_ms: f64,
     pub triangles: f64,
     pub simulated: usize,
@@ -162,12 +164,14 @@ pub fn render(a: &RenderArgs) -> anyhow::Result<RenderReport> {
     };
     let mut frame = FrameData::default();
     let (mut sim, mut draw, mut tris) = (Vec::new(), Vec::new(), 0.0);
+    let mut step = Vec::new();
     let bar = indicatif::ProgressBar::new(frames as u64);
     for i in 0..frames {
         let t = Instant::now();
         forest.step(dt);
         forest.frame(&camera, w as f32 / h as f32, &mut frame);
         sim.push(t.elapsed().as_secs_f64() * 1e3);
+        step.push(frame.stats.sim_ms);
         let t = Instant::now();
         let rgba = gpu.render(&frame, &camera)?;
         draw.push(t.elapsed().as_secs_f64() * 1e3);
@@ -197,6 +201,7 @@ pub fn render(a: &RenderArgs) -> anyhow::Result<RenderReport> {
     Ok(RenderReport {
         frames,
         sim_ms: median(&mut sim),
+        step_ms: median(&mut step),
         render_ms: median(&mut draw),
         triangles: tris / frames as f64,
         simulated: frame.stats.simulated,
@@ -209,8 +214,8 @@ pub fn render(a: &RenderArgs) -> anyhow::Result<RenderReport> {
 
 pub fn print_report(a: &RenderArgs, r: &RenderReport) {
     println!(
-        "{} frames: simulation {:.1} ms, rendering {:.1} ms per frame (medians), {:.0} triangles per frame",
-        r.frames, r.sim_ms, r.render_ms, r.triangles
+        "{} frames: simulation {:.1} ms (sway step {:.1} ms), rendering {:.1} ms per frame (medians), {:.0} triangles per frame",
+        r.frames, r.sim_ms, r.step_ms, r.render_ms, r.triangles
     );
     println!(
         "{} simulated trees (instance groups), {} joints stepped per frame; adapter {}",
