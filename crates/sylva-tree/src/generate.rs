@@ -21,6 +21,7 @@ use std::f32::consts::PI;
 
 use crate::skeleton::{Joint, NO_PARENT, Skeleton, SkeletonError};
 use crate::species::Species;
+use crate::v3::{V3, add, cross, dot, norm, rotate, scale};
 
 /// Density of green wood, kg/m³ (green hardwoods ≈ 700–1000; USDA Wood Handbook).
 pub const WOOD_DENSITY: f32 = 800.0;
@@ -45,29 +46,6 @@ impl Rng {
     fn sym(&mut self) -> f32 {
         (self.next_u64() >> 40) as f32 / (1u64 << 23) as f32 - 1.0
     }
-}
-
-type V3 = [f32; 3];
-
-fn add(a: V3, b: V3) -> V3 {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-}
-fn scale(a: V3, s: f32) -> V3 {
-    [a[0] * s, a[1] * s, a[2] * s]
-}
-fn dot(a: V3, b: V3) -> f32 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-fn cross(a: V3, b: V3) -> V3 {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-}
-fn norm(a: V3) -> V3 {
-    scale(a, 1.0 / dot(a, a).sqrt().max(1e-20))
-}
-/// Rotate `v` about the unit axis `k` by `angle` radians (Rodrigues).
-fn rotate(v: V3, k: V3, angle: f32) -> V3 {
-    let (s, c) = angle.sin_cos();
-    add(add(scale(v, c), scale(cross(k, v), s)), scale(k, dot(k, v) * (1.0 - c)))
 }
 
 /// WP95's crown shape ratio for `shape` at relative position `r` ∈ [0, 1].

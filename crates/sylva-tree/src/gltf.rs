@@ -22,6 +22,7 @@ use std::fmt::Write as _;
 use crate::mesh::{LeafCluster, TreeModel};
 use crate::skeleton::{NO_PARENT, Skeleton};
 use crate::texture::Image;
+use crate::v3::{V3, cross, dot, norm, scale, sub};
 
 /// Most joints glTF's 16-bit `JOINTS_0` can index.
 pub const MAX_GLTF_JOINTS: usize = 65_535;
@@ -43,20 +44,6 @@ impl Default for GltfOptions {
     }
 }
 
-type V3 = [f32; 3];
-fn sub(a: V3, b: V3) -> V3 {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-fn dot(a: V3, b: V3) -> f32 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-fn cross(a: V3, b: V3) -> V3 {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-}
-fn norm(a: V3) -> V3 {
-    let n = dot(a, a).sqrt().max(1e-20);
-    [a[0] / n, a[1] / n, a[2] / n]
-}
 /// Rᵀ·v for the frame R with columns f[0], f[1], f[2].
 fn to_local(f: &[V3; 3], v: V3) -> V3 {
     [dot(f[0], v), dot(f[1], v), dot(f[2], v)]
@@ -92,9 +79,6 @@ fn frame(sk: &Skeleton, j: usize) -> [V3; 3] {
     let x = norm(sub(f[0], scale(z, dot(f[0], z))));
     let y = cross(z, x);
     [x, y, z]
-}
-fn scale(a: V3, s: f32) -> V3 {
-    [a[0] * s, a[1] * s, a[2] * s]
 }
 
 /// Binary buffer under construction, with one view per accessor.

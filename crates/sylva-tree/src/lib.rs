@@ -15,6 +15,7 @@ pub mod mesh;
 pub mod skeleton;
 pub mod species;
 pub mod texture;
+mod v3;
 
 pub use generate::{Tree, TreeStats, shape_ratio};
 pub use mesh::{BranchMesh, LeafCluster, TreeLod, TreeModel};

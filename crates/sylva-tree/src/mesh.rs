@@ -33,6 +33,7 @@ use crate::generate::Tree;
 use crate::skeleton::{NO_PARENT, Skeleton, SkeletonError};
 use crate::species::Species;
 use crate::texture::{Image, LeafAtlas, bark, leaf_atlas};
+use crate::v3::{V3, add, cross, dot, norm, scale, sub};
 
 /// Ring sides per stem level at LOD 0 (trunk, branches, sub-branches, twigs).
 pub const SIDES: [u32; 4] = [14, 8, 5, 4];
@@ -149,25 +150,6 @@ fn topology(sk: &Skeleton) -> Topology {
     Topology { level, next, shares_parent_ring: shares, stem_start }
 }
 
-type V3 = [f32; 3];
-fn add(a: V3, b: V3) -> V3 {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-}
-fn sub(a: V3, b: V3) -> V3 {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-fn scale(a: V3, s: f32) -> V3 {
-    [a[0] * s, a[1] * s, a[2] * s]
-}
-fn dot(a: V3, b: V3) -> f32 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-fn cross(a: V3, b: V3) -> V3 {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-}
-fn norm(a: V3) -> V3 {
-    scale(a, 1.0 / dot(a, a).sqrt().max(1e-20))
-}
 /// `r` made perpendicular to the unit `axis`; `fallback` when `r` is (nearly) parallel.
 fn perpendicular(r: V3, axis: V3, fallback: V3) -> V3 {
     let p = sub(r, scale(axis, dot(r, axis)));

@@ -7,12 +7,6 @@ struct BranchIn {
     @location(2) uv: vec2<f32>,
     @location(3) joints: vec4<u32>,
     @location(4) weights: vec4<f32>,
-    // Instance: trunk base and yaw, scale, first palette, leaf flutter (phase, amplitude).
-    @location(5) base: vec4<f32>,
-    @location(6) scale: f32,
-    @location(7) palette: u32,
-    @location(8) leaf: vec2<f32>,
-    @location(9) stride: u32,
 };
 
 struct BranchOut {
@@ -26,22 +20,22 @@ struct BranchOut {
 @group(1) @binding(1) var leaf_texture: texture_2d<f32>;
 
 @vertex
-fn vs_main(v: BranchIn) -> BranchOut {
+fn vs_main(v: BranchIn, inst: InstanceIn) -> BranchOut {
     var p = vec3<f32>(0.0);
     var n = vec3<f32>(0.0);
     for (var k = 0u; k < 4u; k = k + 1u) {
         let w = v.weights[k];
         if (w > 0.0) {
-            let m = palette(v.palette, v.stride, v.joints[k]);
+            let m = palette(inst.palette, inst.stride, v.joints[k]);
             p = p + w * palette_apply(m, v.position);
             n = n + w * palette_rotate(m, v.normal);
         }
     }
-    let world = tree_to_world(p, v.base, v.scale);
+    let world = tree_to_world(p, inst.base, inst.scale);
     var out: BranchOut;
     out.clip = globals.view_proj * vec4<f32>(world, 1.0);
     out.world = world;
-    out.normal = rotate_z(n, v.base.w);
+    out.normal = rotate_z(n, inst.base.w);
     out.uv = v.uv;
     return out;
 }

@@ -49,6 +49,16 @@ fn palette_rotate(m: Palette, v: vec3<f32>) -> vec3<f32> {
     return vec3<f32>(dot(m.r0.xyz, v), dot(m.r1.xyz, v), dot(m.r2.xyz, v));
 }
 
+// Per-instance inputs of the tree pipelines (sylva-forest's `Instance`): trunk base and yaw,
+// scale, first palette element, leaf flutter (phase, amplitude), palette stride.
+struct InstanceIn {
+    @location(5) base: vec4<f32>,
+    @location(6) scale: f32,
+    @location(7) palette: u32,
+    @location(8) leaf: vec2<f32>,
+    @location(9) stride: u32,
+};
+
 fn rotate_z(v: vec3<f32>, yaw: f32) -> vec3<f32> {
     let s = sin(yaw);
     let c = cos(yaw);

@@ -9,11 +9,6 @@ struct LeafIn {
     // size (m), roll (rad), phase (rad), atlas cell
     @location(3) params: vec4<f32>,
     @location(4) joint: u32,
-    @location(5) base: vec4<f32>,
-    @location(6) scale: f32,
-    @location(7) palette: u32,
-    @location(8) leaf: vec2<f32>,
-    @location(9) stride: u32,
 };
 
 struct LeafOut {
@@ -34,20 +29,20 @@ fn rotate_axis(v: vec3<f32>, k: vec3<f32>, a: f32) -> vec3<f32> {
 }
 
 @vertex
-fn vs_main(v: LeafIn) -> LeafOut {
-    let swing = v.leaf.y * sin(v.leaf.x + v.params.z);
+fn vs_main(v: LeafIn, inst: InstanceIn) -> LeafOut {
+    let swing = inst.leaf.y * sin(inst.leaf.x + v.params.z);
     let offset = v.center - v.hang;
     var axis = cross(offset, vec3<f32>(0.0, 0.0, 1.0));
     if (dot(axis, axis) < 1e-10) {
         axis = vec3<f32>(1.0, 0.0, 0.0);
     }
     let swung = v.hang + rotate_axis(offset, normalize(axis), swing);
-    let m = palette(v.palette, v.stride, v.joint);
-    let c = tree_to_world(palette_apply(m, swung), v.base, v.scale);
+    let m = palette(inst.palette, inst.stride, v.joint);
+    let c = tree_to_world(palette_apply(m, swung), inst.base, inst.scale);
     let s = sin(v.params.y);
     let co = cos(v.params.y);
     let r = vec2<f32>(co * v.corner.x - s * v.corner.y, s * v.corner.x + co * v.corner.y);
-    let size = v.params.x * v.scale;
+    let size = v.params.x * inst.scale;
     let world = c + (globals.cam_right.xyz * r.x + globals.cam_up.xyz * r.y) * size;
     let cells = globals.misc.y;
     let cell = u32(v.params.w + 0.5);
@@ -57,7 +52,7 @@ fn vs_main(v: LeafIn) -> LeafOut {
     out.clip = globals.view_proj * vec4<f32>(world, 1.0);
     out.world = world;
     // Shade as a piece of a rounded crown: outward from the branch, tilted up.
-    out.normal = rotate_z(palette_rotate(m, offset), v.base.w) + vec3<f32>(0.0, 0.0, 0.6 * length(offset));
+    out.normal = rotate_z(palette_rotate(m, offset), inst.base.w) + vec3<f32>(0.0, 0.0, 0.6 * length(offset));
     out.uv = (origin + vec2<f32>(v.corner.x + 0.5, 0.5 - v.corner.y)) / cells;
     return out;
 }
