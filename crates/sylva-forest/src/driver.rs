@@ -197,17 +197,15 @@ impl Forest {
             .map(|p| (p.position[0].powi(2) + p.position[1].powi(2)).sqrt())
             .fold(0.0, f32::max);
         // Models, one per species, in parallel (deterministic: each from its own seed).
-        let models: Vec<Result<(Species, TreeModel), ForestError>> = spec
+        let models: Vec<Result<TreeModel, ForestError>> = spec
             .species
             .par_iter()
             .enumerate()
             .map(|(i, s)| {
                 let sp = load_species(&s.name)?;
-                let model =
-                    sp.model(spec.seed.wrapping_add(1000 * i as u64 + 1), LOD_LEVELS).map_err(
-                        |e| ForestError::Species { name: s.name.clone(), message: e.to_string() },
-                    )?;
-                Ok((sp, model))
+                sp.model(spec.seed.wrapping_add(1000 * i as u64 + 1), LOD_LEVELS).map_err(|e| {
+                    ForestError::Species { name: s.name.clone(), message: e.to_string() }
+                })
             })
             .collect();
         let mut species = Vec::with_capacity(models.len());
@@ -216,7 +214,7 @@ impl Forest {
         let side = spec.side();
         let mut palette_base = 0;
         for (si, m) in models.into_iter().enumerate() {
-            let (_, model) = m?;
+            let model = m?;
             let joints = model.tree.skeleton.len();
             let mut members: Vec<usize> =
                 (0..trees.len()).filter(|&t| trees[t].0.species == si as u32).collect();
