@@ -9,18 +9,8 @@ struct BranchIn {
     @location(4) weights: vec4<f32>,
 };
 
-struct BranchOut {
-    @builtin(position) clip: vec4<f32>,
-    @location(0) world: vec3<f32>,
-    @location(1) normal: vec3<f32>,
-    @location(2) uv: vec2<f32>,
-};
-
-@group(1) @binding(0) var bark_texture: texture_2d<f32>;
-@group(1) @binding(1) var leaf_texture: texture_2d<f32>;
-
 @vertex
-fn vs_main(v: BranchIn, inst: InstanceIn) -> BranchOut {
+fn vs_main(v: BranchIn, inst: InstanceIn) -> TreeOut {
     var p = vec3<f32>(0.0);
     var n = vec3<f32>(0.0);
     for (var k = 0u; k < 4u; k = k + 1u) {
@@ -32,7 +22,7 @@ fn vs_main(v: BranchIn, inst: InstanceIn) -> BranchOut {
         }
     }
     let world = tree_to_world(p, inst.base, inst.scale);
-    var out: BranchOut;
+    var out: TreeOut;
     out.clip = globals.view_proj * vec4<f32>(world, 1.0);
     out.world = world;
     out.normal = rotate_z(n, inst.base.w);
@@ -41,7 +31,7 @@ fn vs_main(v: BranchIn, inst: InstanceIn) -> BranchOut {
 }
 
 @fragment
-fn fs_main(in: BranchOut) -> @location(0) vec4<f32> {
+fn fs_main(in: TreeOut) -> @location(0) vec4<f32> {
     let albedo = textureSample(bark_texture, linear_sampler, in.uv).rgb;
     let lit = albedo * lighting(normalize(in.normal));
     return vec4<f32>(apply_fog(lit, in.world), 1.0);

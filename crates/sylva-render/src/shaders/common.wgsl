@@ -59,6 +59,17 @@ struct InstanceIn {
     @location(9) stride: u32,
 };
 
+// Vertex output of the tree pipelines, and their species textures.
+struct TreeOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) world: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) uv: vec2<f32>,
+};
+
+@group(1) @binding(0) var bark_texture: texture_2d<f32>;
+@group(1) @binding(1) var leaf_texture: texture_2d<f32>;
+
 fn rotate_z(v: vec3<f32>, yaw: f32) -> vec3<f32> {
     let s = sin(yaw);
     let c = cos(yaw);

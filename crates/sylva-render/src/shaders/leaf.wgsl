@@ -11,16 +11,6 @@ struct LeafIn {
     @location(4) joint: u32,
 };
 
-struct LeafOut {
-    @builtin(position) clip: vec4<f32>,
-    @location(0) world: vec3<f32>,
-    @location(1) normal: vec3<f32>,
-    @location(2) uv: vec2<f32>,
-};
-
-@group(1) @binding(0) var bark_texture: texture_2d<f32>;
-@group(1) @binding(1) var leaf_texture: texture_2d<f32>;
-
 // Rotate v about the unit axis k by angle a (Rodrigues).
 fn rotate_axis(v: vec3<f32>, k: vec3<f32>, a: f32) -> vec3<f32> {
     let c = cos(a);
@@ -29,7 +19,7 @@ fn rotate_axis(v: vec3<f32>, k: vec3<f32>, a: f32) -> vec3<f32> {
 }
 
 @vertex
-fn vs_main(v: LeafIn, inst: InstanceIn) -> LeafOut {
+fn vs_main(v: LeafIn, inst: InstanceIn) -> TreeOut {
     let swing = inst.leaf.y * sin(inst.leaf.x + v.params.z);
     let offset = v.center - v.hang;
     var axis = cross(offset, vec3<f32>(0.0, 0.0, 1.0));
@@ -48,7 +38,7 @@ fn vs_main(v: LeafIn, inst: InstanceIn) -> LeafOut {
     let cell = u32(v.params.w + 0.5);
     let n_cells = u32(cells);
     let origin = vec2<f32>(f32(cell % n_cells), f32(cell / n_cells));
-    var out: LeafOut;
+    var out: TreeOut;
     out.clip = globals.view_proj * vec4<f32>(world, 1.0);
     out.world = world;
     // Shade as a piece of a rounded crown: outward from the branch, tilted up.
@@ -58,7 +48,7 @@ fn vs_main(v: LeafIn, inst: InstanceIn) -> LeafOut {
 }
 
 @fragment
-fn fs_main(in: LeafOut) -> @location(0) vec4<f32> {
+fn fs_main(in: TreeOut) -> @location(0) vec4<f32> {
     let t = textureSample(leaf_texture, linear_sampler, in.uv);
     if (t.a < 0.5) {
         discard;
