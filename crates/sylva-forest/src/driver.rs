@@ -175,18 +175,6 @@ fn morton(x: f32, y: f32, side: f32) -> u64 {
     spread(q(x)) | (spread(q(y)) << 1)
 }
 
-fn load_species(name: &str) -> Result<Species, ForestError> {
-    if let Some(s) = Species::preset(name) {
-        return Ok(s);
-    }
-    let text = std::fs::read_to_string(name).map_err(|e| ForestError::Species {
-        name: name.to_string(),
-        message: format!("not a preset, and reading it as a file failed: {e}"),
-    })?;
-    Species::from_toml(name, &text)
-        .map_err(|e| ForestError::Species { name: name.to_string(), message: e.to_string() })
-}
-
 impl Forest {
     /// Build the forest of `spec`: layout, tree models, simulations and wind field.
     pub fn new(spec: &SceneSpec) -> Result<Forest, ForestError> {
@@ -202,7 +190,10 @@ impl Forest {
             .par_iter()
             .enumerate()
             .map(|(i, s)| {
-                let sp = load_species(&s.name)?;
+                let sp = Species::load(&s.name).map_err(|e| ForestError::Species {
+                    name: s.name.clone(),
+                    message: e.to_string(),
+                })?;
                 sp.model(spec.seed.wrapping_add(1000 * i as u64 + 1), LOD_LEVELS).map_err(|e| {
                     ForestError::Species { name: s.name.clone(), message: e.to_string() }
                 })

@@ -32,7 +32,7 @@ use std::f32::consts::{PI, TAU};
 use crate::generate::Tree;
 use crate::skeleton::{NO_PARENT, Skeleton, SkeletonError};
 use crate::species::Species;
-use crate::texture::{Image, LeafAtlas, bark, leaf_atlas};
+use crate::texture::{Image, LeafAtlas, bark, leaf_atlas, unit};
 use crate::v3::{V3, add, cross, dot, norm, scale, sub};
 
 /// Ring sides per stem level at LOD 0 (trunk, branches, sub-branches, twigs).
@@ -323,14 +323,6 @@ fn branch_triangles(topo: &Topology, lod: usize, kept: &[bool]) -> usize {
         .sum()
 }
 
-/// Deterministic hash of (seed, index) to [0, 1).
-fn hash01(seed: u64, i: u64) -> f32 {
-    let mut z = seed ^ i.wrapping_mul(0x9e37_79b9_7f4a_7c15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
-}
-
 /// Leaf clusters of the full-detail tree.
 fn leaf_clusters(
     sk: &Skeleton,
@@ -352,8 +344,7 @@ fn leaf_clusters(
         let [fx, fy, _] = j.frame();
         for k in 0..n {
             let h = out.len() as u64;
-            let atlas =
-                (hash01(seed, 4 * h) * coverage.len() as f32) as u32 % coverage.len() as u32;
+            let atlas = (unit(seed, 4 * h) * coverage.len() as f32) as u32 % coverage.len() as u32;
             let size = (area / coverage[atlas as usize]).sqrt();
             turn += golden;
             let t = (k as f32 + 0.5) / n as f32;
@@ -367,9 +358,9 @@ fn leaf_clusters(
                 hang,
                 center,
                 size,
-                roll: TAU * hash01(seed, 4 * h + 1),
+                roll: TAU * unit(seed, 4 * h + 1),
                 atlas,
-                phase: TAU * hash01(seed, 4 * h + 2),
+                phase: TAU * unit(seed, 4 * h + 2),
                 leaf_area: area,
             });
         }

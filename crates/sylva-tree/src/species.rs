@@ -296,6 +296,18 @@ pub const PARAMS: &[ParamDoc] = &[
 /// A species file that cannot be used.
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum SpeciesError {
+    /// Neither a preset nor a readable file.
+    #[error(
+        "no preset named `{name}` and no readable species file of that name ({reason}); presets: {presets}"
+    )]
+    NotFound {
+        /// What was asked for.
+        name: String,
+        /// Why reading it as a file failed.
+        reason: String,
+        /// The shipped presets, comma-separated.
+        presets: String,
+    },
     /// The file is empty.
     #[error("{file}: the species file is empty")]
     Empty {
@@ -603,11 +615,35 @@ impl Species {
         // The shipped files are checked by the tests; a failure here is a build defect.
         Species::from_toml(&format!("{n}.toml"), text).ok()
     }
+
+    /// A preset by name, or else the species file at that path.
+    pub fn load(name_or_path: &str) -> Result<Species, SpeciesError> {
+        if let Some(sp) = Species::preset(name_or_path) {
+            return Ok(sp);
+        }
+        let text = std::fs::read_to_string(name_or_path).map_err(|e| SpeciesError::NotFound {
+            name: name_or_path.to_string(),
+            reason: e.to_string(),
+            presets: PRESETS.iter().map(|p| p.0).collect::<Vec<_>>().join(", "),
+        })?;
+        Species::from_toml(name_or_path, &text)
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn load_takes_a_preset_name_or_a_file_and_names_what_is_missing() {
+        assert_eq!(
+            Species::load("douglas_fir"),
+            Ok(Species::preset("douglas_fir").expect("preset"))
+        );
+        let e = Species::load("no/such/species.toml").expect_err("missing");
+        let text = e.to_string();
+        assert!(text.contains("no/such/species.toml") && text.contains("quaking_aspen"), "{text}");
+    }
 
     #[test]
     fn every_preset_parses_and_round_trips() {

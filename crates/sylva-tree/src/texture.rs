@@ -50,7 +50,8 @@ fn hash(seed: u64, x: u64) -> u64 {
     z ^ (z >> 31)
 }
 
-fn unit(seed: u64, x: u64) -> f32 {
+/// A hash of (seed, x), uniform in [0, 1).
+pub(crate) fn unit(seed: u64, x: u64) -> f32 {
     (hash(seed, x) >> 40) as f32 / (1u64 << 24) as f32
 }
 

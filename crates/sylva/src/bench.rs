@@ -5,6 +5,8 @@ use std::time::Instant;
 
 use anyhow::Context;
 use clap::{Args, Subcommand};
+
+use crate::render::median;
 use sylva_wind::{Grid, Method, SynthParams, WindField, WindParams};
 
 #[derive(Debug, Subcommand)]
@@ -90,15 +92,15 @@ fn tree(a: TreeBench) -> anyhow::Result<()> {
             last = Some((tree, l));
         }
         let Some((tree, lods)) = last else { continue };
-        let t0 = median(lod0);
+        let t0 = median(&mut lod0);
         let tris: Vec<String> = lods.iter().map(|l| l.triangles().to_string()).collect();
         println!(
             "{name:<22}{:>10}{:>12.2}{:>10}{:>12.2}{:>12.2}  {}",
             tree.skeleton.len(),
             t0 * 1e3,
             lods[0].triangles(),
-            median(chain) * 1e3,
-            median(tex) * 1e3,
+            median(&mut chain) * 1e3,
+            median(&mut tex) * 1e3,
             tris.join(" / ")
         );
         if let Some((_, secs, stris)) = SAPLING.iter().find(|(n, _, _)| n == name) {
@@ -117,7 +119,7 @@ fn tree(a: TreeBench) -> anyhow::Result<()> {
                 std::hint::black_box(lod_levels(&tree, &sp, &atlas.coverage, a.seed, &[k]));
                 times.push(t.elapsed().as_secs_f64());
             }
-            let tk = median(times);
+            let tk = median(&mut times);
             println!(
                 "{:<22}Sapling {:.0} ms / {:.1}k triangles; sylva LOD {k} directly {:.2} ms / {:.1}k triangles: {:.0}× faster",
                 "",
@@ -199,7 +201,7 @@ fn sway(a: SwayBench) -> anyhow::Result<()> {
         let winds: Vec<[f32; 3]> = (0..a.instances)
             .map(|i| [a.wind + (i % 5) as f32, (i % 3) as f32 - 1.0, 0.0])
             .collect();
-        let times = one.install(|| {
+        let mut times = one.install(|| {
             batch.step(1.0 / 60.0, &winds);
             (0..a.steps.max(1))
                 .map(|_| {
@@ -210,7 +212,7 @@ fn sway(a: SwayBench) -> anyhow::Result<()> {
                 .collect::<Vec<f64>>()
         });
         std::hint::black_box(batch.lane_palettes());
-        let step = median(times);
+        let step = median(&mut times);
         let joints = (n * a.instances) as f64;
         println!(
             "{:<22}{:>9}{:>11}{:>14.1}{:>14.1}{:>16.1}",
@@ -247,11 +249,6 @@ pub fn run(cmd: BenchCommand) -> anyhow::Result<()> {
     }
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
-
 fn time_generate(grid: &Grid, method: Method, runs: usize) -> anyhow::Result<f64> {
     let params = WindParams::default();
     let mut t = Vec::new();
@@ -261,7 +258,7 @@ fn time_generate(grid: &Grid, method: Method, runs: usize) -> anyhow::Result<f64
         t.push(t0.elapsed().as_secs_f64());
         std::hint::black_box(&f.data);
     }
-    Ok(median(t))
+    Ok(median(&mut t))
 }
 
 fn machine() -> String {

@@ -62,7 +62,8 @@ pub fn parse_size(s: &str) -> anyhow::Result<(u32, u32)> {
     Ok((w, h))
 }
 
-fn median(v: &mut [f64]) -> f64 {
+/// Median of `v` (reordered); NaN when empty.
+pub fn median(v: &mut [f64]) -> f64 {
     if v.is_empty() {
         return f64::NAN;
     }

@@ -94,17 +94,7 @@ pub struct ProbeArgs {
 }
 
 pub fn load_species(s: &str) -> anyhow::Result<Species> {
-    if let Some(sp) = Species::preset(s) {
-        return Ok(sp);
-    }
-    if s.ends_with(".toml") || std::path::Path::new(s).exists() {
-        let text = std::fs::read_to_string(s).with_context(|| format!("reading {s}"))?;
-        return Ok(Species::from_toml(s, &text)?);
-    }
-    bail!(
-        "no preset named `{s}` and no such file (presets: {})",
-        PRESETS.iter().map(|p| p.0).collect::<Vec<_>>().join(", ")
-    )
+    Ok(Species::load(s)?)
 }
 
 pub fn run_tree(cmd: TreeCommand) -> anyhow::Result<()> {
