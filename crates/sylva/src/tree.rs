@@ -93,10 +93,6 @@ pub struct ProbeArgs {
     release: bool,
 }
 
-pub fn load_species(s: &str) -> anyhow::Result<Species> {
-    Ok(Species::load(s)?)
-}
-
 pub fn run_tree(cmd: TreeCommand) -> anyhow::Result<()> {
     match cmd {
         TreeCommand::List => {
@@ -127,7 +123,7 @@ pub fn run_tree(cmd: TreeCommand) -> anyhow::Result<()> {
             );
         }
         TreeCommand::Generate(a) => {
-            let sp = load_species(&a.species)?;
+            let sp = Species::load(&a.species)?;
             if a.max_joints == 0 || a.max_joints > sylva_tree::gltf::MAX_GLTF_JOINTS {
                 bail!(
                     "--max-joints {}: must be 1 … {}",
@@ -166,9 +162,9 @@ pub fn run_tree(cmd: TreeCommand) -> anyhow::Result<()> {
                 if a.lod.is_none() { ", all LODs" } else { "" }
             );
         }
-        TreeCommand::Show { species } => print!("{}", load_species(&species)?.to_toml()),
+        TreeCommand::Show { species } => print!("{}", Species::load(&species)?.to_toml()),
         TreeCommand::Stats(a) => {
-            let sp = load_species(&a.species)?;
+            let sp = Species::load(&a.species)?;
             let t0 = Instant::now();
             let model = sp.model(a.seed, sylva_tree::mesh::LOD_LEVELS)?;
             let secs = t0.elapsed().as_secs_f64();
@@ -222,7 +218,7 @@ pub fn run_sway(cmd: SwayCommand) -> anyhow::Result<()> {
     if !(a.seconds > 0.0 && a.fps > 0.0) {
         bail!("--seconds and --fps must be positive");
     }
-    let species = load_species(&a.species)?;
+    let species = Species::load(&a.species)?;
     let tree = species.generate(a.seed)?;
     let sk = &tree.skeleton;
     let crown = [0.0, 0.0, 0.7 * tree.stats.height as f64];
