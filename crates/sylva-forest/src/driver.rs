@@ -8,10 +8,20 @@
 //! as fit, and each run is one simulated instance, driven by the wind at the run's centre.
 //! Trees that share a simulation share its yaw, so the wind bends them all downwind.
 //!
-//! **Geometry LOD.** A tree's level comes from the fraction `h` of the image height its
-//! crown covers: level 0 while `h ≥ h₀`, then one level coarser per factor 3 smaller
-//! (`⌈log₃(h₀ / h)⌉`), down to the chain's last; `h₀` is [`Forest::set_lod_fraction`]
-//! (default [`DEFAULT_LOD_FRACTION`]: full detail only for a tree as tall as the image). Trees outside the view cone are culled.
+//! **Geometry LOD** ([`LodSettings`]). A tree's continuous level is
+//! `x = 1 + log₃(h₀ / h)` (≥ 0; level ⌊x⌋), where `h` is the fraction of the image height its
+//! crown covers and `h₀` the fraction from which it is drawn at full detail. A backlash of half-width
+//! [`LodSettings::hysteresis`] (per view, kept in the [`FrameData`]) keeps a tree whose size
+//! wavers about a threshold from flickering. Levels `0 … far_level − 1` are meshes of the
+//! tree's LOD chain; from `far_level` on the tree is an impostor (two triangles showing
+//! the tree rendered from eight sides). In the last [`LodSettings::band`] of each level the
+//! tree is drawn at both that level and the next, cross-faded per pixel by a screen-space
+//! dither: the two draws keep complementary pixel sets ([`Instance::fade`]), so no frame
+//! shows a tree jump from one level to the next. Trees outside the view cone are culled.
+//!
+//! **Uploads.** Only the palettes of lane groups with a drawn tree go into the frame: the
+//! whole group when one of its trees is drawn as a mesh, else only the trunk-top joint the
+//! impostor sways with.
 
 use std::time::Instant;
 
@@ -43,7 +53,8 @@ pub enum ForestError {
     Wind(String),
 }
 
-/// One tree drawn this frame, as the vertex shaders read it (36 bytes).
+/// One tree drawn this frame, as the vertex shaders read it (44 bytes; sylva-render maps
+/// each field to a vertex attribute by its offset).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, PartialEq, Pod, Zeroable)]
 pub struct Instance {
@@ -63,6 +74,69 @@ pub struct Instance {
     /// Distance between consecutive palette elements: the simulated instances whose
     /// palettes are interleaved with this one's (its lane group, up to 16).
     pub palette_stride: u32,
+    /// Cross-fade: the draw keeps the pixels whose dither value d ∈ [0, 1) lies in
+    /// `[fade[0], fade[1])`. A tree between two levels is drawn twice with complementary
+    /// ranges `[0, 1 − w)` and `[1 − w, 1)`; a tree at one level has `[0, 2)`.
+    pub fade: [f32; 2],
+}
+
+/// The geometry-LOD switch and thresholds (see the module documentation).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LodSettings {
+    /// Geometry LOD on. Off: every tree at full detail (level 0), no impostors.
+    pub geometry: bool,
+    /// `h₀`: image-height fraction from which a tree is drawn at full detail (0.01 … 100;
+    /// larger is coarser). Default [`DEFAULT_LOD_FRACTION`].
+    pub fraction: f32,
+    /// First level drawn as an impostor (1 … the chain's length). Default 4.
+    pub far_level: u32,
+    /// Cross-fade band, in levels (0 … 1): over the last `band` of each level the tree
+    /// blends into the next. Default 0.3.
+    pub band: f32,
+    /// Hysteresis half-width, in levels (0 … 0.5). Default 0.1.
+    pub hysteresis: f32,
+}
+
+impl Default for LodSettings {
+    fn default() -> LodSettings {
+        LodSettings {
+            geometry: true,
+            fraction: DEFAULT_LOD_FRACTION,
+            far_level: 4,
+            band: 0.3,
+            hysteresis: 0.1,
+        }
+    }
+}
+
+/// The continuous LOD coordinate of a tree covering `frac` of the image height:
+/// `1 + log₃(h₀ / frac)`, clamped to ≥ 0, so level 0 (x < 1) is for trees taller than `h₀`
+/// and level k for `h₀ / 3^k ≤ frac < h₀ / 3^(k−1)`. Monotone: smaller trees get larger
+/// values.
+pub fn lod_coordinate(frac: f32, h0: f32) -> f32 {
+    (1.0 + (h0 / frac.max(1e-9)).ln() / 3f32.ln()).max(0.0)
+}
+
+/// Backlash hysteresis: the previous value `prev` is kept while within `half_width` of the
+/// new `x`, else dragged along with it (NaN `prev`: no history, `x` itself).
+pub fn hysteresis(prev: f32, x: f32, half_width: f32) -> f32 {
+    if prev.is_nan() { x } else { prev.clamp(x - half_width, x + half_width) }
+}
+
+/// Levels of a tree at continuous level `x` (levels ≥ `last` are `last`): the level, the
+/// next one and the weight of the next (0 outside the band).
+pub fn blend_levels(x: f32, last: u32, band: f32) -> (u32, u32, f32) {
+    if x >= last as f32 {
+        return (last, last, 0.0);
+    }
+    let level = x.floor().max(0.0) as u32;
+    let t = x - level as f32;
+    let band = band.clamp(0.0, 1.0);
+    if band > 0.0 && t > 1.0 - band {
+        (level, level + 1, ((t - (1.0 - band)) / band).clamp(0.0, 1.0))
+    } else {
+        (level, level, 0.0)
+    }
 }
 
 /// A run of instances of one species at one LOD: one instanced draw.
@@ -91,6 +165,14 @@ pub struct FrameStats {
     pub simulated: usize,
     /// Joints stepped by the last simulation step.
     pub joints: usize,
+    /// Trees drawn as impostors (fully or fading in).
+    pub impostors: usize,
+    /// Trees drawn at two levels (cross-fading).
+    pub fading: usize,
+    /// Bytes of palettes and instances this frame sends to the GPU.
+    pub uploaded_bytes: usize,
+    /// Instanced draws (per bucket: branches and leaves, or one impostor draw).
+    pub draw_calls: usize,
     /// Wall time of the last simulation step, ms.
     pub sim_ms: f64,
 }
@@ -104,16 +186,25 @@ pub struct FrameData {
     pub instances: Vec<Instance>,
     /// Buckets in (species, LOD) order.
     pub buckets: Vec<Bucket>,
-    /// Joint palettes of every simulated instance (3×4 row-major, rest → animated, tree
-    /// space), as the simulation computes them: per species, per lane group of up to 16
-    /// simulated instances, per joint, per matrix element, the group's values side by side
-    /// (see [`Instance::palette`]). No padding.
+    /// Joint palettes the drawn trees use (3×4 row-major, rest → animated, tree space), as
+    /// the simulation computes them: per lane group of up to 16 simulated instances, per
+    /// joint, per matrix element, the group's values side by side (see
+    /// [`Instance::palette`]). A lane group with a tree drawn as a mesh has all its joints
+    /// here; one whose drawn trees are all impostors has only its trunk-top joint (the
+    /// impostor's joint 0). Groups with no drawn tree are left out. No padding.
     pub palettes: Vec<f32>,
     /// Mean wind at the scene centre, 20 m up, world m/s.
     pub wind: [f32; 3],
     /// Figures.
     pub stats: FrameStats,
+    /// (bucket key, tree index) of each draw.
     keys: Vec<(u32, u32)>,
+    /// Per tree: continuous level after hysteresis (NaN: not seen yet).
+    lod_state: Vec<f32>,
+    /// Per species lane group (all species in a row): bit 0 a mesh draw, bit 1 an impostor.
+    needs: Vec<u8>,
+    /// Per species lane group: palette offset of the full block and of the trunk-top block.
+    offsets: Vec<(u32, u32)>,
 }
 
 /// One species of a forest: its model, simulation and instance groups.
@@ -127,8 +218,10 @@ pub struct SpeciesRuntime {
     /// Per group: wind sample point (world), yaw, leaf flutter.
     groups: Vec<Group>,
     winds: Vec<[f32; 3]>,
-    /// Offset of this species' palettes in [`FrameData::palettes`].
-    palette_base: usize,
+    /// Index of this species' first lane group in the forest's list of lane groups.
+    lane_base: usize,
+    /// The trunk-top joint (impostors sway with its palette).
+    trunk_top: usize,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -157,7 +250,8 @@ pub struct Forest {
     gain: f32,
     turn: f32,
     last_sim_ms: f64,
-    lod_fraction: f32,
+    lod: LodSettings,
+    lane_groups: usize,
 }
 
 /// Default image-height fraction above which a tree is drawn at full detail.
@@ -203,7 +297,7 @@ impl Forest {
         let mut trees: Vec<(Placement, u32)> = placements.iter().map(|&p| (p, 0)).collect();
         let total = trees.len().max(1);
         let side = spec.side();
-        let mut palette_base = 0;
+        let mut lane_base = 0;
         for (si, m) in models.into_iter().enumerate() {
             let model = m?;
             let joints = model.tree.skeleton.len();
@@ -244,15 +338,17 @@ impl Forest {
                     }
                 })?;
             let batch = SwayBatch::new(sway, n_groups);
+            let trunk_top = model.tree.skeleton.trunk_top();
             species.push(SpeciesRuntime {
                 name: spec.species[si].name.clone(),
                 model,
                 batch,
                 winds: vec![[0.0; 3]; n_groups],
                 groups,
-                palette_base,
+                lane_base,
+                trunk_top,
             });
-            palette_base += n_groups * joints * 12;
+            lane_base += n_groups.div_ceil(LANES);
         }
         let wind = wind_field(spec, radius)?;
         Ok(Forest {
@@ -267,7 +363,8 @@ impl Forest {
             gain: 1.0,
             turn: 0.0,
             last_sim_ms: 0.0,
-            lod_fraction: DEFAULT_LOD_FRACTION,
+            lod: LodSettings::default(),
+            lane_groups: lane_base,
         })
     }
 
@@ -279,8 +376,27 @@ impl Forest {
     /// Geometry-LOD threshold: the image-height fraction `h₀` above which a tree is drawn at
     /// full detail (larger: coarser everywhere). Clamped to 0.01 … 100.
     pub fn set_lod_fraction(&mut self, h0: f32) {
-        self.lod_fraction =
+        self.lod.fraction =
             if h0.is_finite() { h0.clamp(0.01, 100.0) } else { DEFAULT_LOD_FRACTION };
+    }
+
+    /// Geometry-LOD settings; values out of range are clamped.
+    pub fn set_lod(&mut self, lod: LodSettings) {
+        let chain = self.species.iter().map(|s| s.model.lods.len()).min().unwrap_or(1) as u32;
+        let finite = |v: f32, d: f32| if v.is_finite() { v } else { d };
+        let d = LodSettings::default();
+        self.lod = LodSettings {
+            geometry: lod.geometry,
+            fraction: finite(lod.fraction, d.fraction).clamp(0.01, 100.0),
+            far_level: lod.far_level.clamp(1, chain.max(1)),
+            band: finite(lod.band, d.band).clamp(0.0, 1.0),
+            hysteresis: finite(lod.hysteresis, d.hysteresis).clamp(0.0, 0.5),
+        };
+    }
+
+    /// The geometry-LOD settings in use.
+    pub fn lod(&self) -> LodSettings {
+        self.lod
     }
 
     /// Simulation time, s.
@@ -333,80 +449,131 @@ impl Forest {
     }
 
     /// Fill `out` for `camera` and an image of `aspect` = width / height. Allocates only
-    /// while `out`'s arrays grow.
+    /// while `out`'s arrays grow. `out` keeps the per-tree LOD history (hysteresis) of this
+    /// view: use one `FrameData` per view.
     pub fn frame(&self, camera: &Camera, aspect: f32, out: &mut FrameData) {
         out.time = self.time;
         out.keys.clear();
+        if out.lod_state.len() != self.trees.len() {
+            out.lod_state.clear();
+            out.lod_state.resize(self.trees.len(), f32::NAN);
+        }
+        out.needs.clear();
+        out.needs.resize(self.lane_groups, 0);
+        let lod = self.lod;
         let mut stats = FrameStats { trees: self.trees.len(), ..FrameStats::default() };
-        for (i, (p, _)) in self.trees.iter().enumerate() {
+        for (i, (p, g)) in self.trees.iter().enumerate() {
             let sp = &self.species[p.species as usize];
             let h = sp.model.tree.stats.height * p.scale;
             let c = [p.position[0], p.position[1], p.position[2] + 0.5 * h];
             if !camera.may_see(c, 0.75 * h, aspect) {
                 continue;
             }
-            let frac = camera.screen_fraction(c, h);
-            let last = sp.model.lods.len() as u32 - 1;
-            let lod = if frac >= self.lod_fraction {
-                0
+            let chain = sp.model.lods.len() as u32;
+            let (a, b) = if lod.geometry {
+                let x = lod_coordinate(camera.screen_fraction(c, h), lod.fraction);
+                let x = hysteresis(out.lod_state[i], x, lod.hysteresis);
+                out.lod_state[i] = x;
+                let (a, b, _) = blend_levels(x, lod.far_level.min(chain), lod.band);
+                (a, b)
             } else {
-                ((self.lod_fraction / frac.max(1e-9)).ln() / 3f32.ln())
-                    .ceil()
-                    .clamp(0.0, last as f32) as u32
+                (0, 0)
             };
-            out.keys.push(((p.species << 8) | lod, i as u32));
+            let lane = sp.lane_base + *g as usize / LANES;
+            for level in a..=b {
+                out.keys.push(((p.species << 8) | level, i as u32));
+                out.needs[lane] |=
+                    if level >= lod.far_level.min(chain) && lod.geometry { 2 } else { 1 };
+            }
+            stats.fading += (a != b) as usize;
+            stats.impostors += (lod.geometry && b >= lod.far_level.min(chain)) as usize;
         }
         out.keys.sort_unstable();
+        // Palettes of the lane groups that are drawn: all joints for meshes, the trunk top
+        // alone for impostors.
+        out.palettes.clear();
+        out.offsets.clear();
+        out.offsets.resize(self.lane_groups, (u32::MAX, u32::MAX));
+        for s in &self.species {
+            let n = s.batch.species().len();
+            for (k, block) in s.batch.lane_palettes().chunks(n).enumerate() {
+                let need = out.needs[s.lane_base + k];
+                // The batch pads its last lane group to 16; copy only the simulated lanes.
+                let used = (s.groups.len() - k * LANES).min(LANES);
+                if need & 1 != 0 {
+                    out.offsets[s.lane_base + k].0 = out.palettes.len() as u32;
+                    if used == LANES {
+                        out.palettes.extend_from_slice(block.as_flattened().as_flattened());
+                    } else {
+                        for lanes in block.iter().flatten() {
+                            out.palettes.extend_from_slice(&lanes[..used]);
+                        }
+                    }
+                }
+                if need & 2 != 0 {
+                    out.offsets[s.lane_base + k].1 = out.palettes.len() as u32;
+                    for lanes in &block[s.trunk_top] {
+                        out.palettes.extend_from_slice(&lanes[..used]);
+                    }
+                }
+            }
+            stats.simulated += s.groups.len();
+            stats.joints += s.groups.len() * n;
+        }
         out.instances.clear();
         out.buckets.clear();
         for &(key, i) in &out.keys {
             let (p, g) = self.trees[i as usize];
             let sp = &self.species[p.species as usize];
             let group = &sp.groups[g as usize];
-            let (species, lod) = (key >> 8, key & 0xff);
+            let (species, level) = (key >> 8, key & 0xff);
+            let chain = sp.model.lods.len() as u32;
+            let far = lod.geometry && level >= lod.far_level.min(chain);
+            // Impostors are bucketed as level `chain` (one past the last mesh).
+            let bucket_lod = if far { chain } else { level };
             match out.buckets.last_mut() {
-                Some(b) if b.species == species && b.lod == lod => b.count += 1,
-                _ => out.buckets.push(Bucket {
-                    species,
-                    lod,
-                    first: out.instances.len() as u32,
-                    count: 1,
-                }),
+                Some(b) if b.species == species && b.lod == bucket_lod => b.count += 1,
+                _ => {
+                    stats.draw_calls += if far { 1 } else { 2 };
+                    out.buckets.push(Bucket {
+                        species,
+                        lod: bucket_lod,
+                        first: out.instances.len() as u32,
+                        count: 1,
+                    })
+                }
             }
-            stats.triangles += sp.model.lods[lod as usize].triangles();
-            // Lane group of this simulated instance: its first palette and its width.
-            let joints = sp.model.tree.skeleton.len();
+            stats.triangles += if far { 2 } else { sp.model.lods[level as usize].triangles() };
+            let fade = if lod.geometry {
+                let (a, b, w) =
+                    blend_levels(out.lod_state[i as usize], lod.far_level.min(chain), lod.band);
+                match (a == b, level == a) {
+                    (true, _) => [0.0, 2.0],
+                    (false, true) => [0.0, 1.0 - w],
+                    (false, false) => [1.0 - w, 2.0],
+                }
+            } else {
+                [0.0, 2.0]
+            };
+            // Lane group of this simulated instance: its palette block and its width.
             let first_lane = g as usize / LANES * LANES;
             let used = (sp.groups.len() - first_lane).min(LANES);
-            let block = first_lane * joints * 12;
+            let (full, trunk) = out.offsets[sp.lane_base + g as usize / LANES];
+            let block = if far { trunk } else { full };
             out.instances.push(Instance {
                 position: p.position,
                 yaw: p.yaw,
                 scale: p.scale,
-                palette: (sp.palette_base + block + g as usize % LANES) as u32,
+                palette: block + (g as usize % LANES) as u32,
                 leaf_phase: group.leaf.phase,
                 leaf_amplitude: group.leaf.amplitude,
                 palette_stride: used as u32,
+                fade,
             });
         }
-        stats.drawn = out.instances.len();
-        out.palettes.clear();
-        for s in &self.species {
-            // The batch pads its last lane group to 16; copy only the simulated lanes.
-            let n = s.batch.species().len();
-            for (k, block) in s.batch.lane_palettes().chunks(n).enumerate() {
-                let used = (s.groups.len() - k * LANES).min(LANES);
-                if used == LANES {
-                    out.palettes.extend_from_slice(block.as_flattened().as_flattened());
-                } else {
-                    for lanes in block.iter().flatten() {
-                        out.palettes.extend_from_slice(&lanes[..used]);
-                    }
-                }
-            }
-            stats.simulated += s.groups.len();
-            stats.joints += s.groups.len() * s.batch.species().len();
-        }
+        stats.drawn = out.keys.len() - stats.fading;
+        stats.uploaded_bytes =
+            4 * out.palettes.len() + std::mem::size_of::<Instance>() * out.instances.len();
         stats.sim_ms = self.last_sim_ms;
         let w = self.wind_at([0.0, 0.0, 20.0], self.time);
         out.wind = w;

@@ -10,5 +10,8 @@ pub mod driver;
 pub mod scene;
 
 pub use camera::{Camera, Mat4};
-pub use driver::{Bucket, Forest, ForestError, FrameData, FrameStats, Instance, SpeciesRuntime};
-pub use scene::{Placement, SCENES, SceneError, SceneSpec, Terrain, layout};
+pub use driver::{
+    Bucket, Forest, ForestError, FrameData, FrameStats, Instance, LodSettings, SpeciesRuntime,
+    blend_levels, hysteresis, lod_coordinate,
+};
+pub use scene::{Lighting, Placement, SCENES, SceneError, SceneSpec, Terrain, layout};

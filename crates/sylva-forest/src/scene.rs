@@ -32,7 +32,7 @@ pub enum SceneError {
         expected: &'static str,
     },
     /// No scene of that name.
-    #[error("no scene named `{0}` (built in: small, A; or give a .toml file)")]
+    #[error("no scene named `{0}` (built in: small, A, B, C, D; or give a .toml file)")]
     Unknown(String),
 }
 
@@ -107,6 +107,56 @@ pub struct SceneSpec {
     /// Viewpoint; default: from the forest's south-west edge, looking across it.
     #[serde(default)]
     pub camera: Option<CameraSpec>,
+    /// Sun, sky and fog (a `[lighting]` table; every key optional).
+    #[serde(default)]
+    pub lighting: Lighting,
+}
+
+/// Sun, sky and fog of a scene: what the renderer lights and fogs with. Colours are linear
+/// RGB in 0 … 1 (before the sRGB encoding of the output).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Lighting {
+    /// Direction towards the sun, world (z up); normalised on use. Default (−0.35, −0.55, 0.75).
+    pub sun_direction: [f32; 3],
+    /// Sun intensity multiplying `sun_colour`. Default 1.1.
+    pub sun_intensity: f32,
+    /// Sun colour. Default (1.0, 0.95, 0.85).
+    pub sun_colour: [f32; 3],
+    /// Ambient light from the sky (surfaces facing up). Default (0.32, 0.38, 0.48).
+    pub ambient_sky: [f32; 3],
+    /// Ambient light from the ground (surfaces facing down). Default (0.22, 0.2, 0.16).
+    pub ambient_ground: [f32; 3],
+    /// Sky colour at the zenith. Default (0.18, 0.36, 0.72).
+    pub sky_zenith: [f32; 3],
+    /// Sky colour at the horizon, also the fog colour. Default (0.62, 0.72, 0.82).
+    pub sky_horizon: [f32; 3],
+    /// Fog density, per metre (exponential fog, ≥ 0). Default 0.0011.
+    pub fog_density: f32,
+}
+
+impl Default for Lighting {
+    fn default() -> Lighting {
+        Lighting {
+            sun_direction: [-0.35, -0.55, 0.75],
+            sun_intensity: 1.1,
+            sun_colour: [1.0, 0.95, 0.85],
+            ambient_sky: [0.32, 0.38, 0.48],
+            ambient_ground: [0.22, 0.2, 0.16],
+            sky_zenith: [0.18, 0.36, 0.72],
+            sky_horizon: [0.62, 0.72, 0.82],
+            fog_density: 0.0011,
+        }
+    }
+}
+
+impl Lighting {
+    /// The unit direction towards the sun.
+    pub fn sun_unit(&self) -> [f32; 3] {
+        let [x, y, z] = self.sun_direction;
+        let n = (x * x + y * y + z * z).sqrt();
+        [x / n, y / n, z / n]
+    }
 }
 
 fn spacing() -> f32 {
@@ -133,9 +183,14 @@ fn budget() -> usize {
 
 const SMALL: &str = include_str!("../scenes/small.toml");
 const SCENE_A: &str = include_str!("../scenes/A.toml");
+const SCENE_B: &str = include_str!("../scenes/B.toml");
+const SCENE_C: &str = include_str!("../scenes/C.toml");
+const SCENE_D: &str = include_str!("../scenes/D.toml");
 
-/// Built-in scenes: (name, TOML).
-pub const SCENES: [(&str, &str); 2] = [("small", SMALL), ("A", SCENE_A)];
+/// Built-in scenes: (name, TOML). `A` … `D` are the paper's Table-3 scenes (1 000, 3 000,
+/// 10 000 and 50 000 trees of the same species mix).
+pub const SCENES: [(&str, &str); 5] =
+    [("small", SMALL), ("A", SCENE_A), ("B", SCENE_B), ("C", SCENE_C), ("D", SCENE_D)];
 
 impl SceneSpec {
     /// A built-in scene.
@@ -145,6 +200,22 @@ impl SceneSpec {
             .find(|(n, _)| n.eq_ignore_ascii_case(name))
             .ok_or_else(|| SceneError::Unknown(name.to_string()))?;
         SceneSpec::from_toml(n, text)
+    }
+
+    /// A built-in scene by name (`small`, `A` … `D`) or a scene file (`.toml`).
+    pub fn load(name_or_path: &str) -> Result<SceneSpec, SceneError> {
+        if let Ok(spec) = SceneSpec::builtin(name_or_path) {
+            return Ok(spec);
+        }
+        let path = std::path::Path::new(name_or_path);
+        if path.exists() || name_or_path.ends_with(".toml") {
+            let text = std::fs::read_to_string(path).map_err(|e| SceneError::Parse {
+                file: name_or_path.to_string(),
+                message: format!("cannot read: {e}"),
+            })?;
+            return SceneSpec::from_toml(name_or_path, &text);
+        }
+        Err(SceneError::Unknown(name_or_path.to_string()))
     }
 
     /// Parse and validate a scene file; `file` names it in errors.
@@ -191,6 +262,25 @@ impl SceneSpec {
         }
         if self.sim_joint_budget == 0 {
             return Err(bad("sim_joint_budget", "0".into(), "≥ 1"));
+        }
+        let l = &self.lighting;
+        let colours = [l.sun_colour, l.ambient_sky, l.ambient_ground, l.sky_zenith, l.sky_horizon];
+        if colours.iter().flatten().any(|c| !(0.0..=10.0).contains(c)) {
+            return Err(bad("lighting", "a colour".into(), "components 0 … 10"));
+        }
+        let [x, y, z] = l.sun_direction;
+        if !(x * x + y * y + z * z > 1e-12 && (x + y + z).is_finite()) {
+            return Err(bad(
+                "lighting.sun_direction",
+                format!("{:?}", l.sun_direction),
+                "finite, non-zero",
+            ));
+        }
+        if !(0.0..=100.0).contains(&l.sun_intensity) {
+            return Err(bad("lighting.sun_intensity", l.sun_intensity.to_string(), "0 … 100"));
+        }
+        if !(0.0..=1.0).contains(&l.fog_density) {
+            return Err(bad("lighting.fog_density", l.fog_density.to_string(), "0 … 1 per m"));
         }
         if let Some(c) = &self.camera {
             if !(1.0..=150.0).contains(&c.fov_deg) {

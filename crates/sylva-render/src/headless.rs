@@ -30,7 +30,7 @@ impl Headless {
         if width == 0 || height == 0 || width > max || height > max {
             return Err(RenderError::Size(width, height, max));
         }
-        let renderer = Renderer::new(&gpu, forest, FORMAT, width, height);
+        let renderer = Renderer::for_forest(&gpu, forest, FORMAT, width, height)?;
         let target = gpu.device.create_texture(&wgpu::TextureDescriptor {
             label: Some("capture"),
             size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },

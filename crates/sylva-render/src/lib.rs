@@ -1,16 +1,21 @@
-//! The wgpu renderer: skinned branches, leaf-cluster billboards, ground, sky, one sun,
-//! distance fog, 4× MSAA; one instanced draw per (species, LOD) bucket; headless capture.
+//! The wgpu renderer: skinned branches, leaf-cluster billboards, impostors for far trees,
+//! ground, sky, one sun, distance fog, 4× MSAA; one instanced draw per (species, LOD)
+//! bucket, levels cross-faded by a screen-space dither; headless capture.
 //!
 //! It reads [`sylva_forest::FrameData`] and the tree models, and never calls back into
-//! the simulation. Shaders live in `src/shaders/*.wgsl`; `common.wgsl` is prepended to each
-//! pipeline's file.
+//! the simulation. Each pass (`passes/`) keeps its pipeline and its `.wgsl` side by side;
+//! `common.wgsl` is prepended to each; [`layout`] holds every type the shaders read.
 #![warn(missing_docs)]
 
 mod gpu;
 mod headless;
+pub mod layout;
+pub mod passes;
 mod renderer;
+mod shared;
 
 pub use gpu::{Gpu, RenderError};
 pub use headless::Headless;
-pub use renderer::{Renderer, SHADERS, shader_source};
+pub use renderer::{Renderer, SceneAssets};
+pub use shared::{SHADERS, shader_source};
 pub use wgpu;

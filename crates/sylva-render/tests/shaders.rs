@@ -5,10 +5,15 @@ use std::path::Path;
 
 #[test]
 fn every_wgsl_file_is_used_and_validates() {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("src/shaders");
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    for dir in [src.clone(), src.join("passes")] {
+        for entry in std::fs::read_dir(&dir).expect("shader folder") {
+            files.push(entry.expect("entry").path());
+        }
+    }
     let mut found = 0;
-    for entry in std::fs::read_dir(&dir).expect("shader folder") {
-        let path = entry.expect("entry").path();
+    for path in files {
         if path.extension().and_then(|e| e.to_str()) != Some("wgsl") {
             continue;
         }

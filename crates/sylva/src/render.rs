@@ -10,7 +10,7 @@ use sylva_render::Headless;
 
 #[derive(Debug, Args)]
 pub struct RenderArgs {
-    /// Scene: a built-in name (small, A) or a scene file (.toml).
+    /// Scene: a built-in name (small, A, B, C, D) or a scene file (.toml).
     #[arg(long, default_value = "A")]
     pub scene: String,
     /// Seconds of simulated time to render.
@@ -35,17 +35,6 @@ pub struct RenderArgs {
     /// Skip the animated GIF.
     #[arg(long)]
     pub no_gif: bool,
-}
-
-pub fn load_scene(s: &str) -> anyhow::Result<SceneSpec> {
-    if let Ok(spec) = SceneSpec::builtin(s) {
-        return Ok(spec);
-    }
-    if Path::new(s).exists() || s.ends_with(".toml") {
-        let text = std::fs::read_to_string(s).with_context(|| format!("reading {s}"))?;
-        return Ok(SceneSpec::from_toml(s, &text)?);
-    }
-    bail!("no scene named `{s}` (built in: small, A) and no such file")
 }
 
 pub fn parse_size(s: &str) -> anyhow::Result<(u32, u32)> {
@@ -117,7 +106,7 @@ pub struct RenderReport {
 }
 
 pub fn render(a: &RenderArgs) -> anyhow::Result<RenderReport> {
-    let mut spec = load_scene(&a.scene)?;
+    let mut spec = SceneSpec::load(&a.scene)?;
     if let Some(w) = &a.wind {
         if sylva_wind::Preset::from_name(w).is_none() {
             bail!("--wind `{w}`: use calm, breeze, strong or storm");

@@ -9,15 +9,13 @@ use std::time::Instant;
 use anyhow::Context;
 use clap::Args;
 use sylva_forest::driver::DEFAULT_LOD_FRACTION;
-use sylva_forest::{Camera, Forest, FrameData};
+use sylva_forest::{Camera, Forest, FrameData, SceneSpec};
 use sylva_render::{Gpu, Renderer, wgpu};
 use winit::application::ApplicationHandler;
 use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, EventLoop};
 use winit::keyboard::{KeyCode, PhysicalKey};
 use winit::window::{Window, WindowId};
-
-use crate::render::load_scene;
 
 #[derive(Debug, Args)]
 pub struct ViewArgs {
@@ -124,7 +122,7 @@ impl App {
         let h0 = self.lod_fraction.unwrap_or(if software { 3.0 } else { DEFAULT_LOD_FRACTION });
         self.forest.set_lod_fraction(h0);
         let renderer =
-            Renderer::new(&gpu, &self.forest, config.format, config.width, config.height);
+            Renderer::for_forest(&gpu, &self.forest, config.format, config.width, config.height)?;
         println!("sylva view: {} ({}× MSAA)", gpu.describe(), renderer.samples());
         self.surface = Some(Surface { window, surface, gpu, config, renderer });
         Ok(())
@@ -264,7 +262,7 @@ impl ApplicationHandler for App {
 }
 
 pub fn view(a: &ViewArgs) -> anyhow::Result<()> {
-    let spec = load_scene(&a.scene)?;
+    let spec = SceneSpec::load(&a.scene)?;
     if let Some(h0) = a.lod_fraction
         && !(h0 > 0.0 && h0.is_finite())
     {

@@ -1,5 +1,6 @@
 // Branches: generalized cylinders skinned to the joint palette of their instance
-// (up to four joints per vertex), bark-textured, lit and fogged.
+// (up to four joints per vertex), bark-textured, lit and fogged. `fs_bake` writes albedo and
+// tree-space normal instead, for the impostor atlas (far.rs).
 
 struct BranchIn {
     @location(0) position: vec3<f32>,
@@ -27,12 +28,25 @@ fn vs_main(v: BranchIn, inst: InstanceIn) -> TreeOut {
     out.world = world;
     out.normal = rotate_z(n, inst.base.w);
     out.uv = v.uv;
+    out.fade = inst.fade;
     return out;
 }
 
 @fragment
 fn fs_main(in: TreeOut) -> @location(0) vec4<f32> {
+    if (!dither_keeps(in.clip.xy, in.fade)) {
+        discard;
+    }
     let albedo = textureSample(bark_texture, linear_sampler, in.uv).rgb;
     let lit = albedo * lighting(normalize(in.normal));
     return vec4<f32>(apply_fog(lit, in.world), 1.0);
+}
+
+@fragment
+fn fs_bake(in: TreeOut) -> BakeOut {
+    var out: BakeOut;
+    out.albedo = vec4<f32>(textureSample(bark_texture, linear_sampler, in.uv).rgb, 1.0);
+    // Alpha 0: bark (no light shows through).
+    out.normal = vec4<f32>(normalize(in.normal) * 0.5 + 0.5, 0.0);
+    return out;
 }

@@ -4,19 +4,28 @@
 struct Globals {
     view_proj: mat4x4<f32>,
     inv_view_proj: mat4x4<f32>,
-    // xyz: eye position (m).
-    eye: vec4<f32>,
-    // xyz: camera right and up in world space (billboards).
-    cam_right: vec4<f32>,
-    cam_up: vec4<f32>,
-    // xyz: unit direction towards the sun; w: its intensity.
-    sun: vec4<f32>,
-    sky_zenith: vec4<f32>,
-    sky_horizon: vec4<f32>,
-    // rgb: fog colour; a: density per metre.
-    fog: vec4<f32>,
-    // x: time (s); y: leaf-atlas cells per side.
-    misc: vec4<f32>,
+    // Eye position (m) and simulation time (s).
+    eye: vec3<f32>,
+    time: f32,
+    // Camera right and up in world space (billboards); fog density per metre.
+    cam_right: vec3<f32>,
+    fog_density: f32,
+    cam_up: vec3<f32>,
+    sun_intensity: f32,
+    // Unit direction towards the sun.
+    sun_dir: vec3<f32>,
+    pad0: f32,
+    sun_colour: vec3<f32>,
+    pad1: f32,
+    ambient_sky: vec3<f32>,
+    pad2: f32,
+    ambient_ground: vec3<f32>,
+    pad3: f32,
+    sky_zenith: vec3<f32>,
+    pad4: f32,
+    // Sky at the horizon; also the fog colour.
+    sky_horizon: vec3<f32>,
+    pad5: f32,
 };
 
 @group(0) @binding(0) var<uniform> globals: Globals;
@@ -49,14 +58,16 @@ fn palette_rotate(m: Palette, v: vec3<f32>) -> vec3<f32> {
     return vec3<f32>(dot(m.r0.xyz, v), dot(m.r1.xyz, v), dot(m.r2.xyz, v));
 }
 
-// Per-instance inputs of the tree pipelines (sylva-forest's `Instance`): trunk base and yaw,
-// scale, first palette element, leaf flutter (phase, amplitude), palette stride.
+// Per-instance inputs of the tree pipelines (sylva-forest's `Instance`, attributes in
+// layout.rs): trunk base and yaw, scale, first palette element, leaf flutter (phase,
+// amplitude), palette stride, cross-fade range of the dither.
 struct InstanceIn {
     @location(5) base: vec4<f32>,
     @location(6) scale: f32,
     @location(7) palette: u32,
     @location(8) leaf: vec2<f32>,
     @location(9) stride: u32,
+    @location(10) fade: vec2<f32>,
 };
 
 // Vertex output of the tree pipelines, and their species textures.
@@ -65,7 +76,16 @@ struct TreeOut {
     @location(0) world: vec3<f32>,
     @location(1) normal: vec3<f32>,
     @location(2) uv: vec2<f32>,
+    @location(3) @interpolate(flat) fade: vec2<f32>,
 };
+
+// Cross-fade between two levels of a tree: a screen-space dither value in [0, 1) per pixel
+// (interleaved gradient noise, Jimenez 2014); a draw keeps the pixels whose value lies in
+// its instance's fade range, so the two levels of a fading tree cover complementary pixels.
+fn dither_keeps(pixel: vec2<f32>, fade: vec2<f32>) -> bool {
+    let d = fract(52.9829189 * fract(dot(floor(pixel), vec2<f32>(0.06711056, 0.00583715))));
+    return d >= fade.x && d < fade.y;
+}
 
 @group(1) @binding(0) var bark_texture: texture_2d<f32>;
 @group(1) @binding(1) var leaf_texture: texture_2d<f32>;
@@ -84,22 +104,35 @@ fn tree_to_world(p: vec3<f32>, base: vec4<f32>, scale: f32) -> vec3<f32> {
 fn sky_colour(dir: vec3<f32>) -> vec3<f32> {
     let up = clamp(dir.z, -1.0, 1.0);
     let t = pow(clamp(up, 0.0, 1.0), 0.6);
-    var c = mix(globals.sky_horizon.rgb, globals.sky_zenith.rgb, t);
+    var c = mix(globals.sky_horizon, globals.sky_zenith, t);
     // Below the horizon the haze continues.
-    c = select(c, globals.sky_horizon.rgb * 0.9, up < 0.0);
-    let sun = max(dot(dir, globals.sun.xyz), 0.0);
+    c = select(c, globals.sky_horizon * 0.9, up < 0.0);
+    let sun = max(dot(dir, globals.sun_dir), 0.0);
     return c + vec3<f32>(1.0, 0.9, 0.7) * (pow(sun, 600.0) * 4.0 + pow(sun, 12.0) * 0.15);
 }
 
 fn apply_fog(colour: vec3<f32>, world: vec3<f32>) -> vec3<f32> {
-    let d = distance(world, globals.eye.xyz);
-    let f = 1.0 - exp(-globals.fog.a * d);
-    return mix(colour, globals.fog.rgb, clamp(f, 0.0, 1.0));
+    let d = distance(world, globals.eye);
+    let f = 1.0 - exp(-globals.fog_density * d);
+    return mix(colour, globals.sky_horizon, clamp(f, 0.0, 1.0));
 }
 
 // Ambient from the sky plus one directional light.
 fn lighting(n: vec3<f32>) -> vec3<f32> {
-    let sky = mix(vec3<f32>(0.22, 0.2, 0.16), vec3<f32>(0.32, 0.38, 0.48), 0.5 + 0.5 * n.z);
-    let sun = max(dot(n, globals.sun.xyz), 0.0) * globals.sun.w;
-    return sky + vec3<f32>(1.0, 0.95, 0.85) * sun;
+    let sky = mix(globals.ambient_ground, globals.ambient_sky, 0.5 + 0.5 * n.z);
+    let sun = max(dot(n, globals.sun_dir), 0.0) * globals.sun_intensity;
+    return sky + globals.sun_colour * sun;
 }
+
+// Thin leaves pass some light: a little sun shows through from behind.
+fn translucency(world: vec3<f32>) -> vec3<f32> {
+    let through = 0.25 * max(-dot(normalize(world - globals.eye), -globals.sun_dir), 0.0);
+    return vec3<f32>(0.5, 0.6, 0.2) * through;
+}
+
+// What the impostor bake writes: albedo (alpha 1 where the tree is) and the tree-space unit
+// normal as n * 0.5 + 0.5 (alpha: 1 leaf, 0 bark).
+struct BakeOut {
+    @location(0) albedo: vec4<f32>,
+    @location(1) normal: vec4<f32>,
+};

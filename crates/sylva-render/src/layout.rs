@@ -1,0 +1,305 @@
+//! Every type the shaders read, in one place: the Rust twin of each WGSL struct or vertex
+//! input, with named fields, and the vertex-attribute tables that bind them.
+//!
+//! The per-instance data is sylva-forest's [`Instance`], reinterpreted as it is: its vertex
+//! attributes are built here from the struct's own field offsets (`offset_of!`), so the
+//! layout cannot drift; the tests check every struct's size and field offsets against the
+//! WGSL (naga's layouter) and every attribute's format against the shader input's type.
+//!
+//! Palettes stay in the lane layout of the sway step (see [`sylva_forest::FrameData::palettes`]):
+//! element `e` of joint `j` of an instance is at `palette + (12 j + e) · palette_stride`,
+//! read by `palette()` in `common.wgsl`.
+
+use std::mem::{offset_of, size_of};
+
+use bytemuck::{Pod, Zeroable};
+use sylva_forest::{Camera, Instance, Lighting};
+
+/// `Globals` in common.wgsl: camera, time, sun, sky and fog (uniform, 288 bytes).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+pub struct Globals {
+    /// World → clip.
+    pub view_proj: [[f32; 4]; 4],
+    /// Clip → world.
+    pub inv_view_proj: [[f32; 4]; 4],
+    /// Eye, world m.
+    pub eye: [f32; 3],
+    /// Simulation time, s.
+    pub time: f32,
+    /// Camera right, world (billboards).
+    pub cam_right: [f32; 3],
+    /// Fog density, per m.
+    pub fog_density: f32,
+    /// Camera up, world (billboards).
+    pub cam_up: [f32; 3],
+    /// Sun intensity.
+    pub sun_intensity: f32,
+    /// Unit direction towards the sun.
+    pub sun_dir: [f32; 3],
+    /// Padding.
+    pub pad0: f32,
+    /// Sun colour.
+    pub sun_colour: [f32; 3],
+    /// Padding.
+    pub pad1: f32,
+    /// Ambient light from above.
+    pub ambient_sky: [f32; 3],
+    /// Padding.
+    pub pad2: f32,
+    /// Ambient light from below.
+    pub ambient_ground: [f32; 3],
+    /// Padding.
+    pub pad3: f32,
+    /// Sky at the zenith.
+    pub sky_zenith: [f32; 3],
+    /// Padding.
+    pub pad4: f32,
+    /// Sky at the horizon and fog colour.
+    pub sky_horizon: [f32; 3],
+    /// Padding.
+    pub pad5: f32,
+}
+
+impl Globals {
+    /// The globals for `view_proj` (and its inverse), seen from `eye` with billboard axes
+    /// `right` and `up`, at `time`, under `light`.
+    pub fn new(
+        view_proj: [[f32; 4]; 4],
+        eye: [f32; 3],
+        right: [f32; 3],
+        up: [f32; 3],
+        time: f32,
+        light: &Lighting,
+    ) -> Globals {
+        Globals {
+            view_proj,
+            inv_view_proj: invert(&view_proj),
+            eye,
+            time,
+            cam_right: right,
+            fog_density: light.fog_density,
+            cam_up: up,
+            sun_intensity: light.sun_intensity,
+            sun_dir: light.sun_unit(),
+            sun_colour: light.sun_colour,
+            ambient_sky: light.ambient_sky,
+            ambient_ground: light.ambient_ground,
+            sky_zenith: light.sky_zenith,
+            sky_horizon: light.sky_horizon,
+            ..Zeroable::zeroed()
+        }
+    }
+
+    /// The globals of a perspective `camera` for an image of `aspect` = width / height.
+    pub fn for_camera(camera: &Camera, aspect: f32, time: f32, light: &Lighting) -> Globals {
+        let view = camera.view();
+        let right = [view[0][0], view[1][0], view[2][0]];
+        let up = [view[0][1], view[1][1], view[2][1]];
+        Globals::new(camera.view_projection(aspect), camera.eye, right, up, time, light)
+    }
+}
+
+/// `BranchIn` in branch.wgsl.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+pub struct BranchVertex {
+    /// Rest position, tree space, m.
+    pub position: [f32; 3],
+    /// Unit normal, tree space.
+    pub normal: [f32; 3],
+    /// Bark texture coordinates.
+    pub uv: [f32; 2],
+    /// Up to four joints.
+    pub joints: [u32; 4],
+    /// Their weights (sum 1).
+    pub weights: [f32; 4],
+}
+
+/// `LeafIn` in leaf.wgsl: one corner of a leaf-cluster billboard.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+pub struct LeafVertex {
+    /// Billboard centre (rest pose, tree space), m.
+    pub center: [f32; 3],
+    /// Hanging point, m.
+    pub hang: [f32; 3],
+    /// Corner, ±0.5 each.
+    pub corner: [f32; 2],
+    /// Side, m.
+    pub size: f32,
+    /// Roll in the billboard's plane, rad.
+    pub roll: f32,
+    /// Flutter phase offset, rad.
+    pub phase: f32,
+    /// Joint it hangs on.
+    pub joint: u32,
+    /// Top-left of its atlas cell, texture coordinates.
+    pub uv_origin: [f32; 2],
+    /// Side of its atlas cell, texture coordinates.
+    pub uv_size: f32,
+}
+
+/// `GroundIn` in ground.wgsl.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+pub struct GroundVertex {
+    /// World position, m.
+    pub position: [f32; 3],
+    /// Unit normal.
+    pub normal: [f32; 3],
+}
+
+/// `FarSpecies` in far.wgsl: one species' impostor (uniform).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+pub struct FarSpecies {
+    /// Trunk-top point (rest, tree space), m.
+    pub tip: [f32; 3],
+    /// Side of the square each view covers, m.
+    pub extent: f32,
+    /// Height of the views' bottom edge, tree space, m.
+    pub bottom: f32,
+    /// Views around the tree.
+    pub views: u32,
+    /// Padding.
+    pub pad0: u32,
+    /// Padding.
+    pub pad1: u32,
+}
+
+macro_rules! attr {
+    ($t:ty, $field:ident, $format:ident, $loc:expr) => {
+        wgpu::VertexAttribute {
+            format: wgpu::VertexFormat::$format,
+            offset: offset_of!($t, $field) as u64,
+            shader_location: $loc,
+        }
+    };
+}
+
+/// `InstanceIn` in common.wgsl, read from [`Instance`] as sylva-forest lays it out.
+pub const INSTANCE_ATTRIBUTES: [wgpu::VertexAttribute; 6] = [
+    // position (vec3) followed by yaw: read together as `base`.
+    attr!(Instance, position, Float32x4, 5),
+    attr!(Instance, scale, Float32, 6),
+    attr!(Instance, palette, Uint32, 7),
+    // leaf_phase and leaf_amplitude: read together as `leaf`.
+    attr!(Instance, leaf_phase, Float32x2, 8),
+    attr!(Instance, palette_stride, Uint32, 9),
+    attr!(Instance, fade, Float32x2, 10),
+];
+
+/// `BranchIn`.
+pub const BRANCH_ATTRIBUTES: [wgpu::VertexAttribute; 5] = [
+    attr!(BranchVertex, position, Float32x3, 0),
+    attr!(BranchVertex, normal, Float32x3, 1),
+    attr!(BranchVertex, uv, Float32x2, 2),
+    attr!(BranchVertex, joints, Uint32x4, 3),
+    attr!(BranchVertex, weights, Float32x4, 4),
+];
+
+/// `LeafIn`.
+pub const LEAF_ATTRIBUTES: [wgpu::VertexAttribute; 9] = [
+    attr!(LeafVertex, center, Float32x3, 0),
+    attr!(LeafVertex, hang, Float32x3, 1),
+    attr!(LeafVertex, corner, Float32x2, 2),
+    attr!(LeafVertex, size, Float32, 3),
+    attr!(LeafVertex, roll, Float32, 4),
+    attr!(LeafVertex, phase, Float32, 11),
+    attr!(LeafVertex, joint, Uint32, 12),
+    attr!(LeafVertex, uv_origin, Float32x2, 13),
+    attr!(LeafVertex, uv_size, Float32, 14),
+];
+
+/// `GroundIn`.
+pub const GROUND_ATTRIBUTES: [wgpu::VertexAttribute; 2] =
+    [attr!(GroundVertex, position, Float32x3, 0), attr!(GroundVertex, normal, Float32x3, 1)];
+
+/// The per-instance buffer layout of every tree pipeline.
+pub fn instance_layout() -> wgpu::VertexBufferLayout<'static> {
+    wgpu::VertexBufferLayout {
+        array_stride: size_of::<Instance>() as u64,
+        step_mode: wgpu::VertexStepMode::Instance,
+        attributes: &INSTANCE_ATTRIBUTES,
+    }
+}
+
+/// A per-vertex buffer layout of `T` with `attributes`.
+pub fn vertex_layout<T>(
+    attributes: &'static [wgpu::VertexAttribute],
+) -> wgpu::VertexBufferLayout<'static> {
+    wgpu::VertexBufferLayout {
+        array_stride: size_of::<T>() as u64,
+        step_mode: wgpu::VertexStepMode::Vertex,
+        attributes,
+    }
+}
+
+/// Inverse of a column-major 4×4 matrix (Gauss–Jordan with partial pivoting, in f64);
+/// the identity for a singular one.
+pub fn invert(m: &[[f32; 4]; 4]) -> [[f32; 4]; 4] {
+    // a[row][col], augmented with the identity.
+    let mut a = [[0.0f64; 8]; 4];
+    for r in 0..4 {
+        for c in 0..4 {
+            a[r][c] = m[c][r] as f64;
+        }
+        a[r][4 + r] = 1.0;
+    }
+    let mut out = [[0.0f32; 4]; 4];
+    for col in 0..4 {
+        let pivot =
+            (col..4).max_by(|&x, &y| a[x][col].abs().total_cmp(&a[y][col].abs())).unwrap_or(col);
+        if a[pivot][col].abs() < 1e-30 {
+            for (i, row) in out.iter_mut().enumerate() {
+                row[i] = 1.0;
+            }
+            return out;
+        }
+        a.swap(col, pivot);
+        let p = a[col][col];
+        for v in &mut a[col] {
+            *v /= p;
+        }
+        for r in 0..4 {
+            if r != col {
+                let f = a[r][col];
+                let pivot_row = a[col];
+                for (v, pv) in a[r].iter_mut().zip(pivot_row) {
+                    *v -= f * pv;
+                }
+            }
+        }
+    }
+    for r in 0..4 {
+        for c in 0..4 {
+            out[c][r] = a[r][4 + c] as f32;
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn inverse_times_matrix_is_identity() {
+        let cam = Camera {
+            eye: [3.0, -20.0, 5.0],
+            target: [0.0, 0.0, 4.0],
+            fov_deg: 50.0,
+            near: 0.5,
+            far: 500.0,
+        };
+        let m = cam.view_projection(1.33);
+        let p = sylva_forest::camera::mul(&invert(&m), &m);
+        for c in 0..4 {
+            for r in 0..4 {
+                let want = if c == r { 1.0 } else { 0.0 };
+                assert!((p[c][r] - want).abs() < 1e-3, "({c},{r}) = {}", p[c][r]);
+            }
+        }
+    }
+}

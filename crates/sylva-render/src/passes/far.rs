@@ -1,0 +1,480 @@
+//! Far trees as impostors (`far.wgsl`): each species is rendered once, at start-up, from
+//! [`VIEWS`] directions around it (level [`BAKE_LEVEL`] of its LOD chain, rest pose,
+//! orthographic, horizontal) into an atlas of albedo and tree-space normals; a far tree is
+//! then one camera-facing quad (two triangles) showing the nearest view, lit per pixel like
+//! the near trees and swayed by its trunk-top joint.
+//!
+//! The atlas keeps the crown's look at every distance: its mip chain averages colour
+//! weighted by opacity (no dark fringes from the transparent background) and rescales each
+//! level's alpha so the share of texels passing the alpha test stays that of level 0
+//! (coverage-preserving alpha mips), so far crowns neither thin out nor darken.
+
+use sylva_forest::{Instance, Lighting};
+use sylva_tree::mesh::TreeModel;
+
+use crate::gpu::{Gpu, RenderError};
+use crate::layout::{FarSpecies, Globals, instance_layout};
+use crate::shared::{
+    Mesh, PipelineSpec, buffer, globals_group, palette_buffer, pipeline, texture_entry, upload_mips,
+};
+
+/// Views baked around each tree.
+pub const VIEWS: u32 = 8;
+/// Side of one view in the atlas, texels.
+pub const VIEW_SIZE: u32 = 256;
+/// The LOD level the impostors are rendered from.
+pub const BAKE_LEVEL: usize = 1;
+/// Formats of the bake targets: albedo (sRGB) and normals (linear).
+pub const BAKE_TARGETS: [wgpu::TextureFormat; 2] =
+    [wgpu::TextureFormat::Rgba8UnormSrgb, wgpu::TextureFormat::Rgba8Unorm];
+
+/// The impostor pass.
+#[derive(Debug)]
+pub struct FarPass {
+    pipeline: wgpu::RenderPipeline,
+    /// Group 1 of the pipeline: albedo, normals, [`FarSpecies`].
+    pub species_layout: wgpu::BindGroupLayout,
+}
+
+/// One species' impostor on the GPU.
+#[derive(Debug)]
+pub struct FarSpeciesGpu {
+    group: wgpu::BindGroup,
+    /// What the shader places the quad with.
+    pub params: FarSpecies,
+    /// The baked views, level 0: albedo RGBA8 (sRGB), `VIEWS·VIEW_SIZE × VIEW_SIZE`.
+    pub albedo: Vec<u8>,
+}
+
+/// What the bake needs of the renderer: the tree pipelines, their bind group layouts and
+/// the sampler.
+#[derive(Debug)]
+pub struct BakeContext<'a> {
+    /// Branch bake pipeline.
+    pub branch: &'a wgpu::RenderPipeline,
+    /// Leaf bake pipeline.
+    pub leaf: &'a wgpu::RenderPipeline,
+    /// Group 0 layout.
+    pub globals_layout: &'a wgpu::BindGroupLayout,
+    /// The linear sampler.
+    pub sampler: &'a wgpu::Sampler,
+}
+
+impl FarPass {
+    /// The pipeline; `globals_layout` is group 0.
+    pub fn new(
+        dev: &wgpu::Device,
+        globals_layout: &wgpu::BindGroupLayout,
+        format: wgpu::TextureFormat,
+        samples: u32,
+    ) -> FarPass {
+        let species_layout = dev.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("impostor"),
+            entries: &[
+                texture_entry(0),
+                texture_entry(1),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 2,
+                    visibility: wgpu::ShaderStages::VERTEX,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
+            ],
+        });
+        let layout =
+            crate::shared::pipeline_layout(dev, "impostors", &[globals_layout, &species_layout]);
+        let buffers = [Some(instance_layout())];
+        let spec = PipelineSpec {
+            shader: "far.wgsl",
+            fragment: "fs_main",
+            layout: &layout,
+            buffers: &buffers,
+            depth: true,
+            cull: None,
+            samples,
+            targets: &[format],
+        };
+        FarPass { pipeline: pipeline(dev, &spec), species_layout }
+    }
+
+    /// Bake `model`'s impostor: render its views, read them back, build the mip chains and
+    /// upload them. `textures` is the species' bark and leaf bind group; `meshes` its
+    /// branch and leaf meshes at [`BAKE_LEVEL`].
+    pub fn bake(
+        &self,
+        gpu: &Gpu,
+        ctx: &BakeContext<'_>,
+        model: &TreeModel,
+        textures: &wgpu::BindGroup,
+        meshes: (Option<&Mesh>, Option<&Mesh>),
+    ) -> Result<FarSpeciesGpu, RenderError> {
+        let dev = &gpu.device;
+        let level = &model.lods[BAKE_LEVEL.min(model.lods.len() - 1)];
+        // Bounds: horizontal radius about the trunk axis and height range, billboards
+        // counted with their half diagonal.
+        let (mut radius, mut z0, mut z1) = (0.1f32, f32::INFINITY, f32::NEG_INFINITY);
+        for p in &level.branches.positions {
+            radius = radius.max(p[0].hypot(p[1]));
+            z0 = z0.min(p[2]);
+            z1 = z1.max(p[2]);
+        }
+        for c in &level.clusters {
+            let half = 0.71 * c.size;
+            radius = radius.max(c.center[0].hypot(c.center[1]) + half);
+            z0 = z0.min(c.center[2] - half);
+            z1 = z1.max(c.center[2] + half);
+        }
+        if !z0.is_finite() {
+            (z0, z1) = (0.0, 1.0);
+        }
+        let extent = (2.0 * radius).max(z1 - z0) * 1.04;
+        let bottom = z0 - 0.02 * extent;
+        let depth_range = radius + 1.0;
+        // Rest pose: identity palettes, one instance at the origin.
+        let joints = model.tree.skeleton.len().max(1);
+        let identity: Vec<f32> = (0..joints)
+            .flat_map(|_| [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0])
+            .collect();
+        let palettes = palette_buffer(dev, (identity.len() * 4) as u64);
+        gpu.queue.write_buffer(&palettes, 0, bytemuck::cast_slice(&identity));
+        let instance =
+            Instance { scale: 1.0, palette_stride: 1, fade: [0.0, 2.0], ..Default::default() };
+        let instances =
+            buffer(gpu, "bake instance", bytemuck::bytes_of(&instance), wgpu::BufferUsages::VERTEX);
+        let light = Lighting::default();
+        let groups: Vec<wgpu::BindGroup> = (0..VIEWS)
+            .map(|k| {
+                let a = std::f32::consts::TAU * k as f32 / VIEWS as f32;
+                let (s, c) = a.sin_cos();
+                let (d, right) = ([c, s], [s, -c]);
+                let h = 0.5 * extent;
+                let mid = bottom + h;
+                let zs = 1.0 / (2.0 * depth_range);
+                // Column-major: m[column][row].
+                let view_proj = [
+                    [right[0] / h, 0.0, d[0] * zs, 0.0],
+                    [right[1] / h, 0.0, d[1] * zs, 0.0],
+                    [0.0, 1.0 / h, 0.0, 0.0],
+                    [0.0, -mid / h, 0.5, 1.0],
+                ];
+                let eye = [-d[0] * depth_range, -d[1] * depth_range, mid];
+                let g = Globals::new(
+                    view_proj,
+                    eye,
+                    [right[0], right[1], 0.0],
+                    [0.0, 0.0, 1.0],
+                    0.0,
+                    &light,
+                );
+                let buf = buffer(
+                    gpu,
+                    "bake globals",
+                    bytemuck::bytes_of(&g),
+                    wgpu::BufferUsages::UNIFORM,
+                );
+                globals_group(dev, ctx.globals_layout, &buf, &palettes, ctx.sampler)
+            })
+            .collect();
+        let (w, h) = (VIEWS * VIEW_SIZE, VIEW_SIZE);
+        let target = |format, label| {
+            dev.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+                view_formats: &[],
+            })
+        };
+        let albedo_tex = target(BAKE_TARGETS[0], "impostor albedo");
+        let normal_tex = target(BAKE_TARGETS[1], "impostor normals");
+        let depth_tex = target(crate::shared::DEPTH, "impostor depth");
+        let view = |t: &wgpu::Texture| t.create_view(&wgpu::TextureViewDescriptor::default());
+        let (av, nv, dv) = (view(&albedo_tex), view(&normal_tex), view(&depth_tex));
+        let mut enc =
+            dev.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("bake") });
+        {
+            let clear = |v| {
+                Some(wgpu::RenderPassColorAttachment {
+                    view: v,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })
+            };
+            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("impostor bake"),
+                color_attachments: &[clear(&av), clear(&nv)],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &dv,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Discard,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_bind_group(1, textures, &[]);
+            pass.set_vertex_buffer(1, instances.slice(..));
+            for (k, group) in groups.iter().enumerate() {
+                let x = (k as u32 * VIEW_SIZE) as f32;
+                pass.set_viewport(x, 0.0, VIEW_SIZE as f32, VIEW_SIZE as f32, 0.0, 1.0);
+                pass.set_bind_group(0, group, &[]);
+                for (pipeline, mesh) in [(ctx.branch, meshes.0), (ctx.leaf, meshes.1)] {
+                    if let Some(mesh) = mesh {
+                        pass.set_pipeline(pipeline);
+                        mesh.draw(&mut pass, 0..1);
+                    }
+                }
+            }
+        }
+        let albedo = read_back(gpu, enc, &[&albedo_tex, &normal_tex], w, h)?;
+        let (albedo, normal) = (&albedo[0], &albedo[1]);
+        let (albedo_mips, normal_mips) = impostor_mips(albedo, normal, w, h);
+        let av = upload_mips(gpu, &albedo_mips, w, h, BAKE_TARGETS[0], "impostor albedo");
+        let nv = upload_mips(gpu, &normal_mips, w, h, BAKE_TARGETS[1], "impostor normals");
+        let sk = &model.tree.skeleton;
+        let tip = sk.joints().get(sk.trunk_top()).map(|j| j.tip()).unwrap_or([0.0, 0.0, 1.0]);
+        let params = FarSpecies { tip, extent, bottom, views: VIEWS, pad0: 0, pad1: 0 };
+        let uniform =
+            buffer(gpu, "impostor", bytemuck::bytes_of(&params), wgpu::BufferUsages::UNIFORM);
+        let group = dev.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("impostor"),
+            layout: &self.species_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::TextureView(&av),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(&nv),
+                },
+                wgpu::BindGroupEntry { binding: 2, resource: uniform.as_entire_binding() },
+            ],
+        });
+        Ok(FarSpeciesGpu {
+            group,
+            params,
+            albedo: albedo_mips.into_iter().next().unwrap_or_default(),
+        })
+    }
+
+    /// Bind the pipeline (globals at group 0 and the instance buffer at slot 0 are the
+    /// caller's).
+    pub fn begin(&self, pass: &mut wgpu::RenderPass<'_>) {
+        pass.set_pipeline(&self.pipeline);
+    }
+
+    /// Draw `instances` of one species' impostor.
+    pub fn draw(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        species: &FarSpeciesGpu,
+        instances: std::ops::Range<u32>,
+    ) {
+        pass.set_bind_group(1, &species.group, &[]);
+        pass.draw(0..6, instances);
+    }
+}
+
+/// Submit `enc` with copies of `textures` (RGBA8, `w × h`) and read them back, rows top
+/// first.
+fn read_back(
+    gpu: &Gpu,
+    mut enc: wgpu::CommandEncoder,
+    textures: &[&wgpu::Texture],
+    w: u32,
+    h: u32,
+) -> Result<Vec<Vec<u8>>, RenderError> {
+    let padded = (w * 4).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
+    let buffers: Vec<wgpu::Buffer> = textures
+        .iter()
+        .map(|t| {
+            let b = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("bake readback"),
+                size: (padded * h) as u64,
+                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+                mapped_at_creation: false,
+            });
+            enc.copy_texture_to_buffer(
+                t.as_image_copy(),
+                wgpu::TexelCopyBufferInfo {
+                    buffer: &b,
+                    layout: wgpu::TexelCopyBufferLayout {
+                        offset: 0,
+                        bytes_per_row: Some(padded),
+                        rows_per_image: Some(h),
+                    },
+                },
+                wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+            );
+            b
+        })
+        .collect();
+    gpu.queue.submit([enc.finish()]);
+    let mut out = Vec::with_capacity(buffers.len());
+    for b in &buffers {
+        let slice = b.slice(..);
+        let (tx, rx) = std::sync::mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send(r);
+        });
+        gpu.device
+            .poll(wgpu::PollType::Wait { submission_index: None, timeout: None })
+            .map_err(|e| RenderError::Readback(e.to_string()))?;
+        rx.recv()
+            .map_err(|e| RenderError::Readback(e.to_string()))?
+            .map_err(|e| RenderError::Readback(e.to_string()))?;
+        let mut img = Vec::with_capacity((w * h * 4) as usize);
+        {
+            let data =
+                slice.get_mapped_range().map_err(|e| RenderError::Readback(e.to_string()))?;
+            for row in data.chunks(padded as usize) {
+                img.extend_from_slice(&row[..(w * 4) as usize]);
+            }
+        }
+        b.unmap();
+        out.push(img);
+    }
+    Ok(out)
+}
+
+/// Mip chains of the baked albedo and normals (`w × h`, RGBA8), down to 4 texels a side.
+/// Colour and normals average weighted by the albedo's alpha (transparent texels take the
+/// opaque mean, so filtering at an edge does not pull in black); each level's alpha is
+/// rescaled so that the share of texels at or above 128 (the alpha test) equals level 0's.
+pub fn impostor_mips(albedo: &[u8], normal: &[u8], w: u32, h: u32) -> (Vec<Vec<u8>>, Vec<Vec<u8>>) {
+    let n = (w * h) as usize;
+    let opaque = |img: &[u8], i: usize| img[4 * i + 3] >= 128;
+    let covered = (0..n).filter(|&i| opaque(albedo, i)).count();
+    let coverage = covered as f64 / n.max(1) as f64;
+    // Mean opaque colour and normal fill the transparent texels.
+    let mut mean = [[0.0f64; 4]; 2];
+    for i in (0..n).filter(|&i| opaque(albedo, i)) {
+        for c in 0..4 {
+            mean[0][c] += albedo[4 * i + c] as f64;
+            mean[1][c] += normal[4 * i + c] as f64;
+        }
+    }
+    let fill = |m: [f64; 4]| -> [u8; 4] {
+        let k = covered.max(1) as f64;
+        [(m[0] / k) as u8, (m[1] / k) as u8, (m[2] / k) as u8, (m[3] / k) as u8]
+    };
+    let (fa, fn_) = (fill(mean[0]), fill(mean[1]));
+    let mut a0 = albedo.to_vec();
+    let mut n0 = normal.to_vec();
+    for i in (0..n).filter(|&i| !opaque(albedo, i)) {
+        a0[4 * i..4 * i + 3].copy_from_slice(&fa[..3]);
+        n0[4 * i..4 * i + 4].copy_from_slice(&fn_);
+    }
+    // Raw (box-filtered, unscaled) alpha per level, and the outputs.
+    let mut raw: Vec<f32> = albedo.chunks(4).map(|p| p[3] as f32).collect();
+    let (mut albedo_out, mut normal_out) = (vec![a0], vec![n0]);
+    let (mut cw, mut ch) = (w, h);
+    while cw > 4 && ch > 4 {
+        let (nw, nh) = (cw / 2, ch / 2);
+        let (pa, pn) = (&albedo_out[albedo_out.len() - 1], &normal_out[normal_out.len() - 1]);
+        let mut next_raw = vec![0.0f32; (nw * nh) as usize];
+        let mut na = vec![0u8; (nw * nh * 4) as usize];
+        let mut nn = vec![0u8; (nw * nh * 4) as usize];
+        for y in 0..nh {
+            for x in 0..nw {
+                let texels = [
+                    (2 * x, 2 * y),
+                    (2 * x + 1, 2 * y),
+                    (2 * x, 2 * y + 1),
+                    (2 * x + 1, 2 * y + 1),
+                ]
+                .map(|(xx, yy)| (yy * cw + xx) as usize);
+                let weight: f32 = texels.iter().map(|&t| raw[t]).sum();
+                let o = (y * nw + x) as usize;
+                next_raw[o] = weight / 4.0;
+                for c in 0..3 {
+                    let avg = |img: &[u8]| {
+                        if weight > 0.0 {
+                            texels.iter().map(|&t| raw[t] * img[4 * t + c] as f32).sum::<f32>()
+                                / weight
+                        } else {
+                            texels.iter().map(|&t| img[4 * t + c] as f32).sum::<f32>() / 4.0
+                        }
+                    };
+                    na[4 * o + c] = avg(pa).round() as u8;
+                    nn[4 * o + c] = avg(pn).round() as u8;
+                }
+                nn[4 * o + 3] =
+                    (texels.iter().map(|&t| pn[4 * t + 3] as f32).sum::<f32>() / 4.0).round() as u8;
+            }
+        }
+        // Alpha scale keeping the alpha-tested coverage: the raw value at the coverage
+        // quantile maps to 128.
+        let mut sorted = next_raw.clone();
+        sorted.sort_by(|a, b| b.total_cmp(a));
+        let k = ((coverage * sorted.len() as f64).round() as usize).clamp(1, sorted.len());
+        let at_quantile = sorted[k - 1].max(1.0);
+        let scale = 128.0 / at_quantile;
+        for (o, r) in next_raw.iter().enumerate() {
+            na[4 * o + 3] = (r * scale).round().min(255.0) as u8;
+        }
+        raw = next_raw;
+        albedo_out.push(na);
+        normal_out.push(nn);
+        cw = nw;
+        ch = nh;
+    }
+    (albedo_out, normal_out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn alpha_mips_keep_the_crown_from_thinning_out_and_within_its_silhouette() {
+        // Left half: isolated opaque texels (thin leaves) at 25 % density; right half empty.
+        // A plain box filter turns them into alpha 64: every texel fails the alpha test.
+        let (w, h) = (64u32, 64u32);
+        let mut albedo = vec![0u8; (w * h * 4) as usize];
+        for y in 0..h {
+            for x in 0..w / 2 {
+                if x % 2 == 0 && y % 2 == 0 {
+                    let i = ((y * w + x) * 4) as usize;
+                    albedo[i..i + 4].copy_from_slice(&[40, 120, 30, 255]);
+                }
+            }
+        }
+        let normal = vec![128u8; albedo.len()];
+        let (mips, normals) = impostor_mips(&albedo, &normal, w, h);
+        assert_eq!(mips.len(), normals.len());
+        assert!(mips.len() >= 4);
+        let share = |m: &[u8], pred: &dyn Fn(&[u8]) -> bool| {
+            m.chunks(4).filter(|p| pred(p)).count() as f64 / (m.len() / 4) as f64
+        };
+        let level0 = share(&mips[0], &|p| p[3] >= 128);
+        assert!((level0 - 0.125).abs() < 1e-9);
+        for (l, m) in mips.iter().enumerate().skip(1) {
+            let pass = share(m, &|p| p[3] >= 128);
+            let silhouette = share(m, &|p| p[3] > 0);
+            assert!(pass >= level0 - 0.01, "level {l}: {pass:.3} pass, level 0 {level0:.3}");
+            assert!(pass <= silhouette + 1e-9, "level {l}: {pass:.3} pass outside the silhouette");
+            // Colour is the leaves' colour, not darkened by the transparent background.
+            for p in m.chunks(4).filter(|p| p[3] >= 128) {
+                assert!((p[1] as i32 - 120).abs() <= 2, "level {l}: green {}", p[1]);
+            }
+        }
+        let plain = crate::shared::box_mips(&albedo, w, h);
+        assert_eq!(share(&plain[1], &|p| p[3] >= 128), 0.0, "the case a plain box filter loses");
+    }
+}

@@ -1,0 +1,84 @@
+// Impostors: a far tree as one quad (two triangles) turned about the vertical to face the
+// camera, showing the view of the tree (rendered once at start-up from `views` directions
+// around it, far.rs) nearest the direction it is seen from. Lit per pixel from the baked
+// tree-space normals like the near trees, swayed by its trunk-top joint: the quad shears with
+// the trunk top's displacement, in proportion to height.
+
+// One species' impostor: where its views lie in the atlas and how to place the quad.
+struct FarSpecies {
+    // Trunk-top point (rest pose, tree space), m.
+    tip: vec3<f32>,
+    // Side of the square each view covers, m.
+    extent: f32,
+    // Height of the views' bottom edge (tree space), m.
+    bottom: f32,
+    // Views around the tree (atlas cells in one row).
+    views: u32,
+    pad0: u32,
+    pad1: u32,
+};
+
+@group(1) @binding(0) var far_albedo: texture_2d<f32>;
+@group(1) @binding(1) var far_normal: texture_2d<f32>;
+@group(1) @binding(2) var<uniform> far: FarSpecies;
+
+struct FarOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) world: vec3<f32>,
+    @location(1) uv: vec2<f32>,
+    @location(2) @interpolate(flat) yaw: f32,
+    @location(3) @interpolate(flat) fade: vec2<f32>,
+};
+
+const TAU: f32 = 6.28318530718;
+
+@vertex
+fn vs_main(@builtin(vertex_index) vi: u32, inst: InstanceIn) -> FarOut {
+    // Two triangles: corners (0,0) (1,0) (1,1), (0,0) (1,1) (0,1).
+    var corners = array<u32, 6>(0u, 1u, 2u, 0u, 2u, 3u);
+    let corner_index = corners[vi % 6u];
+    let corner = vec2<f32>(f32(corner_index == 1u || corner_index == 2u), f32(corner_index >= 2u));
+    let base = inst.base.xyz;
+    let yaw = inst.base.w;
+    // Direction seen along (eye -> tree), horizontal.
+    var d = base.xy - globals.eye.xy;
+    if (dot(d, d) < 1e-8) {
+        d = vec2<f32>(1.0, 0.0);
+    }
+    d = normalize(d);
+    let right = vec3<f32>(d.y, -d.x, 0.0);
+    // Nearest baked view: view k looked along azimuth k * TAU / views in tree space.
+    let n = f32(far.views);
+    let azimuth = atan2(d.y, d.x) - yaw;
+    let k = u32(((round(azimuth / TAU * n) % n) + n) % n);
+    let z = far.bottom + corner.y * far.extent;
+    var p = right * ((corner.x - 0.5) * far.extent * inst.scale) + vec3<f32>(0.0, 0.0, z * inst.scale);
+    // Sway: the trunk top's displacement, sheared in with height.
+    let m = palette(inst.palette, inst.stride, 0u);
+    let shift = rotate_z(palette_apply(m, far.tip) - far.tip, yaw) * inst.scale;
+    p = p + shift * clamp(z / max(far.tip.z, 0.1), 0.0, 1.5);
+    let world = base + p;
+    var out: FarOut;
+    out.clip = globals.view_proj * vec4<f32>(world, 1.0);
+    out.world = world;
+    out.uv = vec2<f32>((f32(k) + corner.x) / n, 1.0 - corner.y);
+    out.yaw = yaw;
+    out.fade = inst.fade;
+    return out;
+}
+
+@fragment
+fn fs_main(in: FarOut) -> @location(0) vec4<f32> {
+    let albedo = textureSample(far_albedo, linear_sampler, in.uv);
+    if (albedo.a < 0.5 || !dither_keeps(in.clip.xy, in.fade)) {
+        discard;
+    }
+    let baked = textureSample(far_normal, linear_sampler, in.uv);
+    var n = baked.xyz * 2.0 - 1.0;
+    if (dot(n, n) < 1e-6) {
+        n = vec3<f32>(0.0, 0.0, 1.0);
+    }
+    n = rotate_z(normalize(n), in.yaw);
+    let lit = albedo.rgb * (lighting(n) + baked.a * translucency(in.world));
+    return vec4<f32>(apply_fog(lit, in.world), 1.0);
+}

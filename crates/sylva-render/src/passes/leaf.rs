@@ -1,0 +1,79 @@
+//! Leaves: the LOD's leaf-cluster billboards, facing the camera, swung about their hanging
+//! point and skinned to their joint, alpha-tested against the species' leaf atlas
+//! (`leaf.wgsl`). A second pipeline (`fs_bake`) writes albedo and normals for the impostor
+//! atlas.
+
+use sylva_tree::mesh::TreeLod;
+
+use crate::gpu::Gpu;
+use crate::layout::{LEAF_ATTRIBUTES, LeafVertex, instance_layout, vertex_layout};
+use crate::shared::{Mesh, PipelineSpec, pipeline};
+
+/// The leaf pass: a pipeline for the frame and one for the impostor bake.
+#[derive(Debug)]
+pub struct LeafPass {
+    /// Lit, fogged, dithered for cross-fades.
+    pub draw: wgpu::RenderPipeline,
+    /// Albedo and normal into the impostor atlas (two targets, no MSAA).
+    pub bake: wgpu::RenderPipeline,
+}
+
+impl LeafPass {
+    /// Pipelines; `layout` holds the globals and a species' textures.
+    pub fn new(
+        dev: &wgpu::Device,
+        layout: &wgpu::PipelineLayout,
+        format: wgpu::TextureFormat,
+        samples: u32,
+        bake_targets: &[wgpu::TextureFormat],
+    ) -> LeafPass {
+        let buffers =
+            [Some(vertex_layout::<LeafVertex>(&LEAF_ATTRIBUTES)), Some(instance_layout())];
+        let mut spec = PipelineSpec {
+            shader: "leaf.wgsl",
+            fragment: "fs_main",
+            layout,
+            buffers: &buffers,
+            depth: true,
+            cull: None,
+            samples,
+            targets: &[format],
+        };
+        let draw = pipeline(dev, &spec);
+        spec.fragment = "fs_bake";
+        spec.samples = 1;
+        spec.targets = bake_targets;
+        LeafPass { draw, bake: pipeline(dev, &spec) }
+    }
+}
+
+/// The billboards of `lod` on the GPU (none without clusters); `cells` atlas cells a side.
+pub fn mesh(gpu: &Gpu, lod: &TreeLod, cells: u32) -> Option<Mesh> {
+    if lod.clusters.is_empty() {
+        return None;
+    }
+    let cells = cells.max(1);
+    let uv_size = 1.0 / cells as f32;
+    let mut verts = Vec::with_capacity(4 * lod.clusters.len());
+    let mut indices: Vec<u32> = Vec::with_capacity(6 * lod.clusters.len());
+    for c in &lod.clusters {
+        let first = verts.len() as u32;
+        let cell = c.atlas % (cells * cells);
+        let uv_origin = [(cell % cells) as f32 * uv_size, (cell / cells) as f32 * uv_size];
+        for corner in [[-0.5, -0.5], [0.5, -0.5], [0.5, 0.5], [-0.5, 0.5]] {
+            verts.push(LeafVertex {
+                center: c.center,
+                hang: c.hang,
+                corner,
+                size: c.size,
+                roll: c.roll,
+                phase: c.phase,
+                joint: c.joint,
+                uv_origin,
+                uv_size,
+            });
+        }
+        indices.extend_from_slice(&[first, first + 1, first + 2, first, first + 2, first + 3]);
+    }
+    Some(Mesh::new(gpu, "leaves", &verts, &indices))
+}

@@ -1,0 +1,8 @@
+//! The render passes, one module each with its pipeline, bind groups and `.wgsl` side by
+//! side: sky, ground, branches, leaves and far-tree impostors.
+
+pub mod branch;
+pub mod far;
+pub mod ground;
+pub mod leaf;
+pub mod sky;

@@ -1,0 +1,39 @@
+//! Sky: one full-screen triangle, a gradient from horizon to zenith with the sun's glow
+//! (`sky.wgsl`). Drawn first, without depth writes.
+
+use crate::shared::{PipelineSpec, pipeline};
+
+/// The sky pass.
+#[derive(Debug)]
+pub struct SkyPass {
+    pipeline: wgpu::RenderPipeline,
+}
+
+impl SkyPass {
+    /// The pipeline for colour `format` with `samples` MSAA samples; `layout` holds the
+    /// globals.
+    pub fn new(
+        dev: &wgpu::Device,
+        layout: &wgpu::PipelineLayout,
+        format: wgpu::TextureFormat,
+        samples: u32,
+    ) -> SkyPass {
+        let spec = PipelineSpec {
+            shader: "sky.wgsl",
+            fragment: "fs_main",
+            layout,
+            buffers: &[],
+            depth: false,
+            cull: None,
+            samples,
+            targets: &[format],
+        };
+        SkyPass { pipeline: pipeline(dev, &spec) }
+    }
+
+    /// Draw (globals bound at group 0).
+    pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>) {
+        pass.set_pipeline(&self.pipeline);
+        pass.draw(0..3, 0..1);
+    }
+}

@@ -1,0 +1,303 @@
+//! What the passes share: meshes in GPU buffers, texture upload with mip chains, the bind
+//! group layouts of the globals and of a species, and one render-pipeline builder.
+
+use wgpu::util::DeviceExt;
+
+use crate::gpu::Gpu;
+
+/// Depth buffer format.
+pub const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+const COMMON: &str = include_str!("common.wgsl");
+
+/// Every shader: (file name, source as on disk). `common.wgsl` is prepended to each
+/// pass's file.
+pub const SHADERS: [(&str, &str); 6] = [
+    ("common.wgsl", COMMON),
+    ("sky.wgsl", include_str!("passes/sky.wgsl")),
+    ("ground.wgsl", include_str!("passes/ground.wgsl")),
+    ("branch.wgsl", include_str!("passes/branch.wgsl")),
+    ("leaf.wgsl", include_str!("passes/leaf.wgsl")),
+    ("far.wgsl", include_str!("passes/far.wgsl")),
+];
+
+/// The source the renderer compiles for shader file `name`: `common.wgsl` alone, or
+/// prepended to the pass's file.
+pub fn shader_source(name: &str) -> Option<String> {
+    let (_, src) = SHADERS.iter().find(|(n, _)| *n == name)?;
+    Some(if name == "common.wgsl" { src.to_string() } else { format!("{COMMON}\n{src}") })
+}
+
+/// Compile shader file `name` (with `common.wgsl`).
+pub fn shader_module(dev: &wgpu::Device, name: &str) -> wgpu::ShaderModule {
+    let src = shader_source(name).unwrap_or_default();
+    dev.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(name),
+        source: wgpu::ShaderSource::Wgsl(src.into()),
+    })
+}
+
+/// An indexed mesh on the GPU.
+#[derive(Debug)]
+pub struct Mesh {
+    /// Vertices.
+    pub vertices: wgpu::Buffer,
+    /// u32 indices.
+    pub indices: wgpu::Buffer,
+    /// Index count.
+    pub count: u32,
+}
+
+impl Mesh {
+    /// Upload `vertices` and `indices`.
+    pub fn new<V: bytemuck::Pod>(gpu: &Gpu, label: &str, vertices: &[V], indices: &[u32]) -> Mesh {
+        Mesh {
+            vertices: buffer(
+                gpu,
+                label,
+                bytemuck::cast_slice(vertices),
+                wgpu::BufferUsages::VERTEX,
+            ),
+            indices: buffer(gpu, label, bytemuck::cast_slice(indices), wgpu::BufferUsages::INDEX),
+            count: indices.len() as u32,
+        }
+    }
+
+    /// Bind and draw `instances`.
+    pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>, instances: std::ops::Range<u32>) {
+        pass.set_vertex_buffer(0, self.vertices.slice(..));
+        pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
+        pass.draw_indexed(0..self.count, 0, instances);
+    }
+}
+
+/// A buffer holding `data`.
+pub fn buffer(gpu: &Gpu, label: &str, data: &[u8], usage: wgpu::BufferUsages) -> wgpu::Buffer {
+    gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some(label),
+        contents: data,
+        usage,
+    })
+}
+
+/// A 2×2 box-filtered mip chain of an RGBA8 image, down to 4 texels a side.
+pub fn box_mips(rgba: &[u8], width: u32, height: u32) -> Vec<Vec<u8>> {
+    let mut levels = vec![rgba.to_vec()];
+    let (mut w, mut h) = (width, height);
+    while w > 4 && h > 4 {
+        let prev = levels.last().map(Vec::as_slice).unwrap_or(&[]);
+        let (nw, nh) = (w / 2, h / 2);
+        let mut next = vec![0u8; (nw * nh * 4) as usize];
+        for y in 0..nh {
+            for x in 0..nw {
+                for c in 0..4 {
+                    let at = |xx: u32, yy: u32| prev[((yy * w + xx) * 4 + c) as usize] as u32;
+                    let s = at(2 * x, 2 * y)
+                        + at(2 * x + 1, 2 * y)
+                        + at(2 * x, 2 * y + 1)
+                        + at(2 * x + 1, 2 * y + 1);
+                    next[((y * nw + x) * 4 + c) as usize] = ((s + 2) / 4) as u8;
+                }
+            }
+        }
+        levels.push(next);
+        w = nw;
+        h = nh;
+    }
+    levels
+}
+
+/// Upload a mip chain (level 0 first, each half the last) as a sampled texture.
+pub fn upload_mips(
+    gpu: &Gpu,
+    levels: &[Vec<u8>],
+    width: u32,
+    height: u32,
+    format: wgpu::TextureFormat,
+    label: &str,
+) -> wgpu::TextureView {
+    let data: Vec<u8> = levels.concat();
+    let texture = gpu.device.create_texture_with_data(
+        &gpu.queue,
+        &wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+            mip_level_count: levels.len() as u32,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        },
+        wgpu::util::TextureDataOrder::LayerMajor,
+        &data,
+    );
+    texture.create_view(&wgpu::TextureViewDescriptor::default())
+}
+
+/// A bind-group layout entry for a filterable 2D texture seen by the fragment stage.
+pub fn texture_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Float { filterable: true },
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        },
+        count: None,
+    }
+}
+
+/// Group 0 of every pipeline: globals (uniform), palettes (storage), linear sampler.
+pub fn globals_layout(dev: &wgpu::Device) -> wgpu::BindGroupLayout {
+    let buffer_entry = |binding, visibility, ty| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty: wgpu::BindingType::Buffer { ty, has_dynamic_offset: false, min_binding_size: None },
+        count: None,
+    };
+    dev.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("globals"),
+        entries: &[
+            buffer_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT, wgpu::BufferBindingType::Uniform),
+            buffer_entry(
+                1,
+                wgpu::ShaderStages::VERTEX,
+                wgpu::BufferBindingType::Storage { read_only: true },
+            ),
+            wgpu::BindGroupLayoutEntry {
+                binding: 2,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                count: None,
+            },
+        ],
+    })
+}
+
+/// The bind group of [`globals_layout`].
+pub fn globals_group(
+    dev: &wgpu::Device,
+    layout: &wgpu::BindGroupLayout,
+    globals: &wgpu::Buffer,
+    palettes: &wgpu::Buffer,
+    sampler: &wgpu::Sampler,
+) -> wgpu::BindGroup {
+    dev.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("globals"),
+        layout,
+        entries: &[
+            wgpu::BindGroupEntry { binding: 0, resource: globals.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 1, resource: palettes.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::Sampler(sampler) },
+        ],
+    })
+}
+
+/// A storage buffer of `size` bytes for palettes.
+pub fn palette_buffer(dev: &wgpu::Device, size: u64) -> wgpu::Buffer {
+    dev.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("palettes"),
+        size,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
+}
+
+/// A vertex buffer of `size` bytes for instances.
+pub fn instance_buffer(dev: &wgpu::Device, size: u64) -> wgpu::Buffer {
+    dev.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("instances"),
+        size,
+        usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
+}
+
+/// How a pass's pipeline is built.
+#[derive(Debug)]
+pub struct PipelineSpec<'a> {
+    /// Shader file (see [`SHADERS`]).
+    pub shader: &'a str,
+    /// Fragment entry point.
+    pub fragment: &'a str,
+    /// Bind group layouts.
+    pub layout: &'a wgpu::PipelineLayout,
+    /// Vertex buffers.
+    pub buffers: &'a [Option<wgpu::VertexBufferLayout<'a>>],
+    /// Depth test and write (else: always passes, no write).
+    pub depth: bool,
+    /// Back-face culling.
+    pub cull: Option<wgpu::Face>,
+    /// MSAA samples.
+    pub samples: u32,
+    /// Colour targets.
+    pub targets: &'a [wgpu::TextureFormat],
+}
+
+/// Build the render pipeline `spec` describes (entry points `vs_main` and `spec.fragment`).
+pub fn pipeline(dev: &wgpu::Device, spec: &PipelineSpec<'_>) -> wgpu::RenderPipeline {
+    let module = shader_module(dev, spec.shader);
+    let targets: Vec<Option<wgpu::ColorTargetState>> = spec
+        .targets
+        .iter()
+        .map(|&format| {
+            Some(wgpu::ColorTargetState { format, blend: None, write_mask: wgpu::ColorWrites::ALL })
+        })
+        .collect();
+    dev.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(spec.shader),
+        layout: Some(spec.layout),
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some("vs_main"),
+            compilation_options: Default::default(),
+            buffers: spec.buffers,
+        },
+        primitive: wgpu::PrimitiveState {
+            topology: wgpu::PrimitiveTopology::TriangleList,
+            front_face: wgpu::FrontFace::Ccw,
+            cull_mode: spec.cull,
+            ..Default::default()
+        },
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: DEPTH,
+            depth_write_enabled: Some(spec.depth),
+            depth_compare: Some(if spec.depth {
+                wgpu::CompareFunction::Less
+            } else {
+                wgpu::CompareFunction::Always
+            }),
+            stencil: Default::default(),
+            bias: Default::default(),
+        }),
+        multisample: wgpu::MultisampleState {
+            count: spec.samples,
+            mask: !0,
+            alpha_to_coverage_enabled: false,
+        },
+        fragment: Some(wgpu::FragmentState {
+            module: &module,
+            entry_point: Some(spec.fragment),
+            compilation_options: Default::default(),
+            targets: &targets,
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
+}
+
+/// A pipeline layout of `groups`.
+pub fn pipeline_layout(
+    dev: &wgpu::Device,
+    label: &str,
+    groups: &[&wgpu::BindGroupLayout],
+) -> wgpu::PipelineLayout {
+    let groups: Vec<Option<&wgpu::BindGroupLayout>> = groups.iter().map(|g| Some(*g)).collect();
+    dev.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some(label),
+        bind_group_layouts: &groups,
+        immediate_size: 0,
+    })
+}
