@@ -19,18 +19,25 @@
 //! dither: the two draws keep complementary pixel sets ([`Instance::fade`]), so no frame
 //! shows a tree jump from one level to the next. Trees outside the view cone are culled.
 //!
-//! **Uploads.** Only the palettes of lane groups with a drawn tree go into the frame: the
-//! whole group when one of its trees is drawn as a mesh, else only the trunk-top joint the
-//! impostor sways with.
+//! **Joint order, uploads and animation LOD.** Each species' skeleton is put in LOD order
+//! (`sylva_tree::lod_order`): the trunk first, then the joints of the coarsest level, and
+//! so on, so the joints a level draws are a prefix (an impostor needs only the trunk). Per
+//! lane group of 16 simulated instances, [`Forest::frame`] uploads the prefix its finest
+//! drawn level needs (nothing for a group with no tree in view), and records the prefix
+//! the next [`Forest::step`] simulates: that of the level half a level finer
+//! ([`SIM_MARGIN`]), so a tree about to move closer is already simulated when drawn. The
+//! joints beyond are not stepped at all (their drag is felt as a lumped static load by the
+//! simulated ones, see `sylva_sway::batch`), and blend in from rest when switched back on.
 
+use std::sync::atomic::{AtomicU32, Ordering};
 use std::time::Instant;
 
 use bytemuck::{Pod, Zeroable};
 use rayon::prelude::*;
 use sylva_sway::{LANES, LeafParams, LeafSway, SwayBatch, SwayParams, SwaySpecies};
 
-use sylva_tree::Species;
 use sylva_tree::mesh::{LOD_LEVELS, TreeModel};
+use sylva_tree::{LodOrder, Species, lod_order};
 use sylva_wind::{Grid, Preset, SynthParams, WindField, WindParams};
 use thiserror::Error;
 
@@ -95,7 +102,14 @@ pub struct LodSettings {
     pub band: f32,
     /// Hysteresis half-width, in levels (0 … 0.5). Default 0.1.
     pub hysteresis: f32,
+    /// Animation LOD on: each lane group simulates only the joints its drawn levels use.
+    /// Off: every joint of every simulated tree, every step.
+    pub animation: bool,
 }
+
+/// How much finer (in levels) than it is drawn a tree is simulated, so the simulation
+/// leads the camera by a frame.
+pub const SIM_MARGIN: f32 = 0.5;
 
 impl Default for LodSettings {
     fn default() -> LodSettings {
@@ -105,6 +119,7 @@ impl Default for LodSettings {
             far_level: 4,
             band: 0.3,
             hysteresis: 0.1,
+            animation: true,
         }
     }
 }
@@ -163,7 +178,7 @@ pub struct FrameStats {
     pub triangles: usize,
     /// Simulated instances (instance groups).
     pub simulated: usize,
-    /// Joints stepped by the last simulation step.
+    /// Joint updates (joints × simulated instances) of the last simulation step.
     pub joints: usize,
     /// Trees drawn as impostors (fully or fading in).
     pub impostors: usize,
@@ -201,10 +216,12 @@ pub struct FrameData {
     keys: Vec<(u32, u32)>,
     /// Per tree: continuous level after hysteresis (NaN: not seen yet).
     lod_state: Vec<f32>,
-    /// Per species lane group (all species in a row): bit 0 a mesh draw, bit 1 an impostor.
-    needs: Vec<u8>,
-    /// Per species lane group: palette offset of the full block and of the trunk-top block.
-    offsets: Vec<(u32, u32)>,
+    /// Per lane group (all species in a row): joints to upload (a prefix; 0: not drawn).
+    upload: Vec<u32>,
+    /// Per lane group: joints the next step is to simulate.
+    simulate: Vec<u32>,
+    /// Per lane group: offset of its palettes in `palettes`.
+    offsets: Vec<u32>,
 }
 
 /// One species of a forest: its model, simulation and instance groups.
@@ -220,8 +237,24 @@ pub struct SpeciesRuntime {
     winds: Vec<[f32; 3]>,
     /// Index of this species' first lane group in the forest's list of lane groups.
     lane_base: usize,
-    /// The trunk-top joint (impostors sway with its palette).
-    trunk_top: usize,
+    /// The skeleton's LOD order: joints each level uses, joints of the trunk.
+    pub order: LodOrder,
+}
+
+impl SpeciesRuntime {
+    /// Simulated instances (instance groups) of this species.
+    pub fn simulated(&self) -> usize {
+        self.groups.len()
+    }
+
+    /// Joints (a prefix in LOD order) a tree drawn in bucket level `lod` reads palettes of:
+    /// its mesh level's, or the trunk's for the impostor (`lod` = the chain's length).
+    pub fn joints_drawn(&self, lod: u32) -> usize {
+        match self.order.prefix.get(lod as usize) {
+            Some(&p) if (lod as usize) < self.model.lods.len() => p,
+            _ => self.order.trunk,
+        }
+    }
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -252,6 +285,8 @@ pub struct Forest {
     last_sim_ms: f64,
     lod: LodSettings,
     lane_groups: usize,
+    /// Per lane group: joints to simulate, as the last frame asked (animation LOD).
+    simulate: Vec<AtomicU32>,
 }
 
 /// Default image-height fraction above which a tree is drawn at full detail.
@@ -299,7 +334,13 @@ impl Forest {
         let side = spec.side();
         let mut lane_base = 0;
         for (si, m) in models.into_iter().enumerate() {
-            let model = m?;
+            let original = m?;
+            // Joints in LOD order: each level's joints a prefix, the trunk first.
+            let order = lod_order(&original);
+            let model = original.reordered(&order.order).map_err(|e| ForestError::Species {
+                name: spec.species[si].name.clone(),
+                message: e.to_string(),
+            })?;
             let joints = model.tree.skeleton.len();
             let mut members: Vec<usize> =
                 (0..trees.len()).filter(|&t| trees[t].0.species == si as u32).collect();
@@ -337,8 +378,10 @@ impl Forest {
                         message: e.to_string(),
                     }
                 })?;
-            let batch = SwayBatch::new(sway, n_groups);
-            let trunk_top = model.tree.skeleton.trunk_top();
+            let mut batch = SwayBatch::new(sway, n_groups);
+            let mut prefixes = order.prefix.clone();
+            prefixes.push(order.trunk);
+            batch.set_prefixes(&prefixes);
             species.push(SpeciesRuntime {
                 name: spec.species[si].name.clone(),
                 model,
@@ -346,7 +389,7 @@ impl Forest {
                 winds: vec![[0.0; 3]; n_groups],
                 groups,
                 lane_base,
-                trunk_top,
+                order,
             });
             lane_base += n_groups.div_ceil(LANES);
         }
@@ -365,6 +408,7 @@ impl Forest {
             last_sim_ms: 0.0,
             lod: LodSettings::default(),
             lane_groups: lane_base,
+            simulate: (0..lane_base).map(|_| AtomicU32::new(u32::MAX)).collect(),
         })
     }
 
@@ -391,6 +435,7 @@ impl Forest {
             far_level: lod.far_level.clamp(1, chain.max(1)),
             band: finite(lod.band, d.band).clamp(0.0, 1.0),
             hysteresis: finite(lod.hysteresis, d.hysteresis).clamp(0.0, 0.5),
+            animation: lod.animation,
         };
     }
 
@@ -434,8 +479,14 @@ impl Forest {
         let t = self.time;
         let leaf = self.leaf_params;
         let (field, gain, turn) = (&self.wind, self.gain, self.turn);
+        let (simulate, animation) = (&self.simulate, self.lod.animation);
         // Species in parallel; each samples the shared, read-only field for its groups.
         self.species.par_iter_mut().for_each(|s| {
+            let all = s.batch.species().len();
+            for k in 0..s.groups.len().div_ceil(LANES) {
+                let want = simulate[s.lane_base + k].load(Ordering::Relaxed) as usize;
+                s.batch.set_active(k, if animation { want } else { all });
+            }
             for (g, out) in s.groups.iter_mut().zip(&mut s.winds) {
                 let w = sample_wind(field, gain, turn, g.sample, t);
                 let (sn, cs) = g.yaw.sin_cos();
@@ -458,8 +509,10 @@ impl Forest {
             out.lod_state.clear();
             out.lod_state.resize(self.trees.len(), f32::NAN);
         }
-        out.needs.clear();
-        out.needs.resize(self.lane_groups, 0);
+        for v in [&mut out.upload, &mut out.simulate] {
+            v.clear();
+            v.resize(self.lane_groups, 0);
+        }
         let lod = self.lod;
         let mut stats = FrameStats { trees: self.trees.len(), ..FrameStats::default() };
         for (i, (p, g)) in self.trees.iter().enumerate() {
@@ -470,55 +523,59 @@ impl Forest {
                 continue;
             }
             let chain = sp.model.lods.len() as u32;
-            let (a, b) = if lod.geometry {
+            let far = lod.far_level.min(chain);
+            // Joints level `l` draws (a prefix in LOD order).
+            let joints = |l: u32| {
+                if lod.geometry && l >= far { sp.order.trunk } else { sp.order.prefix[l as usize] }
+            };
+            let (a, b, sim) = if lod.geometry {
                 let x = lod_coordinate(camera.screen_fraction(c, h), lod.fraction);
                 let x = hysteresis(out.lod_state[i], x, lod.hysteresis);
                 out.lod_state[i] = x;
-                let (a, b, _) = blend_levels(x, lod.far_level.min(chain), lod.band);
-                (a, b)
+                let (a, b, _) = blend_levels(x, far, lod.band);
+                (a, b, blend_levels((x - SIM_MARGIN).max(0.0), far, 0.0).0)
             } else {
-                (0, 0)
+                (0, 0, 0)
             };
             let lane = sp.lane_base + *g as usize / LANES;
+            out.upload[lane] = out.upload[lane].max(joints(a) as u32);
+            out.simulate[lane] = out.simulate[lane].max(joints(sim) as u32);
             for level in a..=b {
                 out.keys.push(((p.species << 8) | level, i as u32));
-                out.needs[lane] |=
-                    if level >= lod.far_level.min(chain) && lod.geometry { 2 } else { 1 };
             }
             stats.fading += (a != b) as usize;
             stats.impostors += (lod.geometry && b >= lod.far_level.min(chain)) as usize;
         }
         out.keys.sort_unstable();
-        // Palettes of the lane groups that are drawn: all joints for meshes, the trunk top
-        // alone for impostors.
+        // Palettes of the lane groups that are drawn: the prefix of joints their finest
+        // drawn level uses (a contiguous run: the batch lays palettes out joint-major).
         out.palettes.clear();
         out.offsets.clear();
-        out.offsets.resize(self.lane_groups, (u32::MAX, u32::MAX));
+        out.offsets.resize(self.lane_groups, u32::MAX);
         for s in &self.species {
             let n = s.batch.species().len();
             for (k, block) in s.batch.lane_palettes().chunks(n).enumerate() {
-                let need = out.needs[s.lane_base + k];
+                let lane = s.lane_base + k;
+                let joints = (out.upload[lane] as usize).min(n);
+                if joints == 0 {
+                    continue;
+                }
+                out.offsets[lane] = out.palettes.len() as u32;
                 // The batch pads its last lane group to 16; copy only the simulated lanes.
                 let used = (s.groups.len() - k * LANES).min(LANES);
-                if need & 1 != 0 {
-                    out.offsets[s.lane_base + k].0 = out.palettes.len() as u32;
-                    if used == LANES {
-                        out.palettes.extend_from_slice(block.as_flattened().as_flattened());
-                    } else {
-                        for lanes in block.iter().flatten() {
-                            out.palettes.extend_from_slice(&lanes[..used]);
-                        }
-                    }
-                }
-                if need & 2 != 0 {
-                    out.offsets[s.lane_base + k].1 = out.palettes.len() as u32;
-                    for lanes in &block[s.trunk_top] {
+                if used == LANES {
+                    out.palettes.extend_from_slice(block[..joints].as_flattened().as_flattened());
+                } else {
+                    for lanes in block[..joints].iter().flatten() {
                         out.palettes.extend_from_slice(&lanes[..used]);
                     }
                 }
             }
             stats.simulated += s.groups.len();
-            stats.joints += s.groups.len() * n;
+            stats.joints += s.batch.joint_updates();
+        }
+        for (a, &v) in self.simulate.iter().zip(&out.simulate) {
+            a.store(v, Ordering::Relaxed);
         }
         out.instances.clear();
         out.buckets.clear();
@@ -558,8 +615,7 @@ impl Forest {
             // Lane group of this simulated instance: its palette block and its width.
             let first_lane = g as usize / LANES * LANES;
             let used = (sp.groups.len() - first_lane).min(LANES);
-            let (full, trunk) = out.offsets[sp.lane_base + g as usize / LANES];
-            let block = if far { trunk } else { full };
+            let block = out.offsets[sp.lane_base + g as usize / LANES];
             out.instances.push(Instance {
                 position: p.position,
                 yaw: p.yaw,

@@ -63,12 +63,16 @@ fn frames_draw_every_visible_tree_once_with_valid_palettes_and_trees_move() {
     forest.frame(&cam, 4.0 / 3.0, &mut f);
     assert_eq!(f.stats.drawn, 5, "the small scene is all in view");
     assert_eq!(f.buckets.iter().map(|b| b.count).sum::<u32>() as usize, f.instances.len());
-    // The palette values (12 per joint) every drawn tree uses.
-    let joints: Vec<usize> = forest.species.iter().map(|s| s.model.tree.skeleton.len()).collect();
+    // The palette values (12 per joint) every drawn tree uses: the joints of its level.
+    let drawn: Vec<Vec<usize>> = forest
+        .species
+        .iter()
+        .map(|s| (0..=s.model.lods.len() as u32).map(|l| s.joints_drawn(l)).collect())
+        .collect();
     let used = |f: &FrameData| -> Vec<usize> {
         let mut out = Vec::new();
         for b in &f.buckets {
-            let joints = joints[b.species as usize];
+            let joints = drawn[b.species as usize][b.lod as usize];
             for inst in &f.instances[b.first as usize..(b.first + b.count) as usize] {
                 let stride = inst.palette_stride as usize;
                 out.extend((0..12 * joints).map(|k| inst.palette as usize + k * stride));
@@ -86,7 +90,8 @@ fn frames_draw_every_visible_tree_once_with_valid_palettes_and_trees_move() {
                 let stride = inst.palette_stride as usize;
                 std::array::from_fn(|e| f.palettes[inst.palette as usize + (12 * j + e) * stride])
             };
-            for (j, joint) in sk.joints().iter().enumerate().skip(1) {
+            let drawn = forest.species[b.species as usize].joints_drawn(b.lod);
+            for (j, joint) in sk.joints().iter().enumerate().take(drawn).skip(1) {
                 let a = sylva_sway::transform(&pal(j), joint.origin);
                 let p = sylva_sway::transform(&pal(joint.parent as usize), joint.origin);
                 let d = (0..3).map(|c| (a[c] - p[c]).abs()).fold(0.0, f32::max);

@@ -162,10 +162,10 @@ pub struct FarSpecies {
     pub bottom: f32,
     /// Views around the tree.
     pub views: u32,
+    /// The trunk-top joint, whose palette sways the quad.
+    pub joint: u32,
     /// Padding.
     pub pad0: u32,
-    /// Padding.
-    pub pad1: u32,
 }
 
 macro_rules! attr {

@@ -11,6 +11,16 @@
 //! rotation about its rest position composed with its parent's into one 3×4 matrix per
 //! joint (rest pose → animated pose, tree space).
 //!
+//! Animation LOD by prefix: a group may simulate only its first joints (see
+//! [`SwayBatch::set_active`]; with a skeleton in LOD order — `sylva_tree::lod_order` — those
+//! are the joints a coarse level draws). The joints beyond are not touched at all: no
+//! loads, springs or palettes. Held at rest, their drag is still felt by the simulated
+//! joints as a lumped static load — with one wind velocity `u` per instance, the drag of a
+//! rigid segment k is `c_k |u| u`, so everything hanging from simulated joint i adds force
+//! `D_i |u| u` and moment `(P_i − D_i o_i) × |u| u` about its origin, `D_i = Σ c_k`,
+//! `P_i = Σ c_k (o_k + arm_k)`, precomputed per prefix. Joints switched back on restart at
+//! their static equilibrium and blend in over `blend_time`.
+//!
 //! Layout: instances are gathered in groups of [`LANES`]; within a group every array is
 //! (joint, …, lane), so each joint is computed for all lanes of a group at once and the
 //! compiler vectorises across instances (AVX-512, AVX2 or the baseline, picked at run
@@ -57,6 +67,13 @@ pub struct SwayBatch {
     /// Palette scratch per (group, joint), lanes inner (parents are read from here).
     pal_lanes: Vec<[Lanes; 12]>,
     budget: Vec<u32>,
+    /// Per group: joints simulated (a prefix).
+    active: Vec<u32>,
+    /// Registered prefixes and, per joint of each, the lumped static drag [D, c] with
+    /// `c = P − D o` (see the module documentation).
+    lumped: Vec<(usize, Vec<[f32; 4]>)>,
+    /// Joint updates (joints × instances) of the last step.
+    updates: usize,
     transitions: Vec<Transition>,
     /// Per joint, aerodynamic damping rate per unit wind speed × dt (see `loads`).
     aero_dt: Vec<f32>,
@@ -131,6 +148,9 @@ impl SwayBatch {
             loads: vec![[ZERO; 6]; groups * n],
             pal_lanes: vec![std::array::from_fn(|e| [IDENTITY[e]; LANES]); groups * n],
             budget: vec![n as u32; instances],
+            active: vec![n as u32; groups],
+            lumped: Vec::new(),
+            updates: 0,
             transitions: Vec::with_capacity(n),
             aero_dt: Vec::with_capacity(n),
             dt: f32::NAN,
@@ -152,6 +172,73 @@ impl SwayBatch {
     /// mass). Clamped to the joint count.
     pub fn set_budget(&mut self, i: usize, budget: usize) {
         self.budget[i] = budget.min(self.species.len()) as u32;
+    }
+
+    /// Make `prefixes` (joint counts) available to [`SwayBatch::set_active`]: the lumped
+    /// static drag of the joints beyond each is precomputed here. Call once, at set-up.
+    pub fn set_prefixes(&mut self, prefixes: &[usize]) {
+        let sp = &self.species;
+        let n = sp.len();
+        self.lumped.clear();
+        for &p in prefixes {
+            let p = p.clamp(1, n);
+            if p == n || self.lumped.iter().any(|(q, _)| *q == p) {
+                continue;
+            }
+            let mut sums = vec![[0.0f32; 4]; p];
+            // The simulated ancestor each held joint hangs from (parents come first).
+            let mut anchor: Vec<u32> = (0..n as u32).collect();
+            for k in p..n {
+                let parent = sp.parent[k] as usize;
+                let a = if parent < p { parent } else { anchor[parent] as usize };
+                anchor[k] = a as u32;
+                let c = sp.drag[k];
+                let at = [
+                    sp.origin[k][0] + sp.arm[k][0],
+                    sp.origin[k][1] + sp.arm[k][1],
+                    sp.origin[k][2] + sp.arm[k][2],
+                ];
+                sums[a][0] += c;
+                for d in 0..3 {
+                    sums[a][1 + d] += c * at[d];
+                }
+            }
+            for (i, s) in sums.iter_mut().enumerate() {
+                for d in 0..3 {
+                    s[1 + d] -= s[0] * sp.origin[i][d];
+                }
+            }
+            self.lumped.push((p, sums));
+        }
+    }
+
+    /// Simulate only the first `joints` joints of group `group` (instances `16 group …
+    /// 16 group + 15`): rounded up to the joint count or the nearest prefix registered with
+    /// [`SwayBatch::set_prefixes`]. Joints switched back on restart at equilibrium and blend
+    /// in; joints beyond are left untouched (their palettes keep old values: do not draw
+    /// them).
+    pub fn set_active(&mut self, group: usize, joints: usize) {
+        let n = self.species.len();
+        let Some(cur) = self.active.get(group).copied() else { return };
+        let p =
+            self.lumped.iter().map(|(q, _)| *q).filter(|&q| q >= joints).min().unwrap_or(n).min(n)
+                as u32;
+        if p > cur {
+            for w in &mut self.weight[group * n + cur as usize..group * n + p as usize] {
+                *w = ZERO;
+            }
+        }
+        self.active[group] = p;
+    }
+
+    /// Joints simulated in group `group`.
+    pub fn active(&self, group: usize) -> usize {
+        self.active.get(group).copied().unwrap_or(0) as usize
+    }
+
+    /// Joint updates (joints stepped × instances) of the last step.
+    pub fn joint_updates(&self) -> usize {
+        self.updates
     }
 
     /// Active-joint budget of instance `i`.
@@ -219,6 +306,10 @@ impl SwayBatch {
         let blend = dt / sp.params.blend_time;
         let (tr, aero, budget, ni) =
             (&self.transitions, &self.aero_dt, &self.budget, self.instances);
+        let (active, lumped) = (&self.active, &self.lumped);
+        self.updates = (0..self.instances.div_ceil(LANES))
+            .map(|g| active[g] as usize * LANES.min(ni - g * LANES))
+            .sum();
         self.theta
             .par_chunks_mut(n)
             .zip(self.rate.par_chunks_mut(n))
@@ -236,7 +327,9 @@ impl SwayBatch {
                     }
                     bud[l] = budget[g * LANES + l];
                 }
-                let mut st = Group { theta, rate, weight, loads, lanes };
+                let p = active[g] as usize;
+                let held = lumped.iter().find(|(q, _)| *q == p).map(|(_, v)| v.as_slice());
+                let mut st = Group { theta, rate, weight, loads, lanes, active: p, held };
                 step_group(sp, tr, aero, blend, &bud, &u, &mut st);
             });
     }
@@ -249,6 +342,10 @@ struct Group<'a> {
     weight: &'a mut [Lanes],
     loads: &'a mut [[Lanes; 6]],
     lanes: &'a mut [[Lanes; 12]],
+    /// Joints simulated (a prefix).
+    active: usize,
+    /// Lumped static drag of the held joints, per simulated joint (none: all simulated).
+    held: Option<&'a [[f32; 4]]>,
 }
 
 /// Step one group, vectorised with the widest instruction set the CPU has.
@@ -311,7 +408,17 @@ fn step_group_impl(
     u: &[Lanes; 3],
     st: &mut Group<'_>,
 ) {
-    let n = st.theta.len();
+    let n = st.active.min(st.theta.len());
+    // |u| u per lane: the drag on held (rigid) joints.
+    let mut q = [ZERO; 3];
+    if st.held.is_some() {
+        for l in 0..LANES {
+            let speed = (u[0][l] * u[0][l] + u[1][l] * u[1][l] + u[2][l] * u[2][l]).sqrt();
+            for c in 0..3 {
+                q[c][l] = speed * u[c][l];
+            }
+        }
+    }
     // (1) Loads, tips inwards: loads[i] = (force on the subtree, moment about joint i). They
     // start at zero: pass (2) clears each joint's loads once it has used them.
     for i in (0..n).rev() {
@@ -351,6 +458,17 @@ fn step_group_impl(
             li[3][l] += arm[1] * f[2][l] - arm[2] * f[1][l];
             li[4][l] += arm[2] * f[0][l] - arm[0] * f[2][l];
             li[5][l] += arm[0] * f[1][l] - arm[1] * f[0][l];
+        }
+        if let Some(held) = st.held {
+            let [d, cx, cy, cz] = held[i];
+            for l in 0..LANES {
+                li[0][l] += d * q[0][l];
+                li[1][l] += d * q[1][l];
+                li[2][l] += d * q[2][l];
+                li[3][l] += cy * q[2][l] - cz * q[1][l];
+                li[4][l] += cz * q[0][l] - cx * q[2][l];
+                li[5][l] += cx * q[1][l] - cy * q[0][l];
+            }
         }
         let p = sp.parent[i];
         if p != sylva_tree::NO_PARENT {

@@ -12,6 +12,7 @@
 pub mod generate;
 pub mod gltf;
 pub mod mesh;
+pub mod order;
 pub mod skeleton;
 pub mod species;
 pub mod texture;
@@ -19,6 +20,7 @@ mod v3;
 
 pub use generate::{Tree, TreeStats, shape_ratio};
 pub use mesh::{BranchMesh, LeafCluster, TreeLod, TreeModel};
+pub use order::{LodOrder, lod_order};
 pub use skeleton::{Joint, NO_PARENT, Skeleton, SkeletonError};
 pub use species::{LevelParams, PARAMS, PRESETS, Species, SpeciesError};
 pub use texture::{Image, LeafAtlas};

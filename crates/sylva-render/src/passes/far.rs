@@ -246,8 +246,9 @@ impl FarPass {
         let av = upload_mips(gpu, &albedo_mips, w, h, BAKE_TARGETS[0], "impostor albedo");
         let nv = upload_mips(gpu, &normal_mips, w, h, BAKE_TARGETS[1], "impostor normals");
         let sk = &model.tree.skeleton;
-        let tip = sk.joints().get(sk.trunk_top()).map(|j| j.tip()).unwrap_or([0.0, 0.0, 1.0]);
-        let params = FarSpecies { tip, extent, bottom, views: VIEWS, pad0: 0, pad1: 0 };
+        let top = sk.trunk_top();
+        let tip = sk.joints().get(top).map(|j| j.tip()).unwrap_or([0.0, 0.0, 1.0]);
+        let params = FarSpecies { tip, extent, bottom, views: VIEWS, joint: top as u32, pad0: 0 };
         let uniform =
             buffer(gpu, "impostor", bytemuck::bytes_of(&params), wgpu::BufferUsages::UNIFORM);
         let group = dev.create_bind_group(&wgpu::BindGroupDescriptor {

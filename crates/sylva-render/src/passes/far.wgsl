@@ -14,8 +14,9 @@ struct FarSpecies {
     bottom: f32,
     // Views around the tree (atlas cells in one row).
     views: u32,
+    // The trunk-top joint, whose palette sways the quad.
+    joint: u32,
     pad0: u32,
-    pad1: u32,
 };
 
 @group(1) @binding(0) var far_albedo: texture_2d<f32>;
@@ -54,7 +55,7 @@ fn vs_main(@builtin(vertex_index) vi: u32, inst: InstanceIn) -> FarOut {
     let z = far.bottom + corner.y * far.extent;
     var p = right * ((corner.x - 0.5) * far.extent * inst.scale) + vec3<f32>(0.0, 0.0, z * inst.scale);
     // Sway: the trunk top's displacement, sheared in with height.
-    let m = palette(inst.palette, inst.stride, 0u);
+    let m = palette(inst.palette, inst.stride, far.joint);
     let shift = rotate_z(palette_apply(m, far.tip) - far.tip, yaw) * inst.scale;
     p = p + shift * clamp(z / max(far.tip.z, 0.1), 0.0, 1.5);
     let world = base + p;

@@ -1,0 +1,169 @@
+//! The geometry and animation LODs in the frame driver: level choice, hysteresis and
+//! cross-fade weights; what is uploaded and what is stepped; determinism.
+
+use sylva_forest::{
+    Camera, Forest, FrameData, LodSettings, SceneSpec, blend_levels, hysteresis, lod_coordinate,
+};
+
+#[test]
+fn level_is_monotone_in_projected_size_with_hysteresis_and_fades_sum_to_one() {
+    let h0 = 1.0;
+    let sizes: Vec<f32> = (0..400).map(|k| 2.0 * 0.985f32.powi(k)).collect();
+    let xs: Vec<f32> = sizes.iter().map(|&h| lod_coordinate(h, h0)).collect();
+    assert!(xs.windows(2).all(|w| w[1] >= w[0]), "smaller trees never get finer levels");
+    assert_eq!(
+        blend_levels(lod_coordinate(1.5 * h0, h0), 6, 0.3).0,
+        0,
+        "taller than h0: full detail"
+    );
+    assert_eq!(blend_levels(lod_coordinate(0.5 * h0, h0), 6, 0.0).0, 1);
+    assert_eq!(blend_levels(lod_coordinate(0.2 * h0, h0), 6, 0.0).0, 2);
+    // A size wavering about a threshold: without hysteresis the level flips every frame,
+    // with it the level holds.
+    let threshold = h0 / 3.0; // level 1 | level 2
+    let wobble: Vec<f32> =
+        (0..20).map(|k| threshold * if k % 2 == 0 { 1.03 } else { 0.97 }).collect();
+    let levels = |hw: f32| {
+        let mut state = f32::NAN;
+        wobble
+            .iter()
+            .map(|&h| {
+                state = hysteresis(state, lod_coordinate(h, h0), hw);
+                blend_levels(state, 6, 0.0).0
+            })
+            .collect::<Vec<u32>>()
+    };
+    let flips = |v: &[u32]| v.windows(2).filter(|w| w[0] != w[1]).count();
+    assert!(flips(&levels(0.0)) >= 10);
+    assert_eq!(flips(&levels(0.1)), 0);
+    // Cross-fade weights: the band's draws keep complementary dither ranges.
+    for &x in &[0.5, 0.75, 0.9, 0.99, 1.2, 2.85, 3.7] {
+        let (a, b, w) = blend_levels(x, 4, 0.3);
+        assert!((0.0..=1.0).contains(&w));
+        if a != b {
+            assert_eq!(b, a + 1);
+            // [0, 1 − w) and [1 − w, 1): lengths sum to one, no overlap.
+            let (ra, rb) = ((0.0, 1.0 - w), (1.0 - w, 1.0));
+            assert!(((ra.1 - ra.0) + (rb.1 - rb.0) - 1.0f32).abs() < 1e-6 && ra.1 <= rb.0);
+        } else {
+            assert_eq!(w, 0.0);
+        }
+    }
+    // Continuity: the weight of the next level rises smoothly across the band.
+    let mut last = 0.0;
+    for k in 0..=100 {
+        let x = 1.7 + 0.3 * k as f32 / 100.0 - 1e-4;
+        let w = blend_levels(x, 4, 0.3).2;
+        assert!(w >= last - 1e-6 && w - last < 0.05, "weight jumps to {w} at {x}");
+        last = w;
+    }
+}
+
+fn far_camera(forest: &Forest) -> Camera {
+    let mut c = forest.default_camera();
+    // Far enough that every tree is a few pixels tall: all impostors.
+    for i in 0..3 {
+        c.eye[i] = c.target[i] + (c.eye[i] - c.target[i]) * 40.0;
+    }
+    c.far = 1e5;
+    c
+}
+
+#[test]
+fn joints_not_drawn_are_neither_uploaded_nor_stepped() {
+    let spec = SceneSpec::builtin("small").expect("small");
+    let mut forest = Forest::new(&spec).expect("forest");
+    let cam = far_camera(&forest);
+    let mut f = FrameData::default();
+    for _ in 0..3 {
+        forest.step(1.0 / 30.0);
+        forest.frame(&cam, 4.0 / 3.0, &mut f);
+    }
+    assert_eq!(f.stats.impostors, f.stats.drawn, "all trees far away");
+    assert!(f.stats.drawn > 0);
+    // Uploaded: the trunk joints of each drawn instance, nothing else.
+    let trunks: usize = f
+        .buckets
+        .iter()
+        .map(|b| forest.species[b.species as usize].order.trunk * 12 * b.count as usize)
+        .sum();
+    assert_eq!(f.palettes.len(), trunks, "only the trunks the impostors sway with");
+    // Stepped: the trunk joints of every simulated instance.
+    let stepped: usize = forest.species.iter().map(|s| s.order.trunk * s.simulated()).sum();
+    assert_eq!(f.stats.joints, stepped, "joint updates of the last step");
+    let all: usize =
+        forest.species.iter().map(|s| s.model.tree.skeleton.len() * s.simulated()).sum();
+    assert!(f.stats.joints * 20 < all);
+    // The animation LOD off: every joint stepped again.
+    forest.set_lod(LodSettings { animation: false, ..forest.lod() });
+    forest.step(1.0 / 30.0);
+    forest.frame(&cam, 4.0 / 3.0, &mut f);
+    assert_eq!(f.stats.joints, all);
+    // The geometry LOD off: full detail, every joint of every drawn tree uploaded.
+    forest.set_lod(LodSettings { geometry: false, ..forest.lod() });
+    forest.frame(&cam, 4.0 / 3.0, &mut f);
+    assert_eq!(f.stats.impostors, 0);
+    assert!(f.buckets.iter().all(|b| b.lod == 0));
+    let level0: usize = f
+        .buckets
+        .iter()
+        .map(|b| forest.species[b.species as usize].joints_drawn(0) * b.count as usize)
+        .sum();
+    assert_eq!(f.palettes.len(), 12 * level0);
+}
+
+#[test]
+fn moving_closer_switches_levels_through_a_cross_fade_and_the_crown_blends_in() {
+    let spec = SceneSpec::builtin("small").expect("small");
+    let mut forest = Forest::new(&spec).expect("forest");
+    let near = forest.default_camera();
+    let far = far_camera(&forest);
+    let mut f = FrameData::default();
+    let mut fading = 0;
+    let mut levels_seen = std::collections::BTreeSet::new();
+    for k in 0..=120 {
+        // Fly in from far to near over 4 s.
+        let t = k as f32 / 120.0;
+        let mut c = far;
+        for i in 0..3 {
+            c.eye[i] = far.eye[i] + (near.eye[i] - far.eye[i]) * t.powf(0.3);
+        }
+        forest.step(1.0 / 30.0);
+        forest.frame(&c, 4.0 / 3.0, &mut f);
+        fading += f.stats.fading;
+        levels_seen.extend(f.buckets.iter().map(|b| b.lod));
+        assert!(f.palettes.iter().all(|v| v.is_finite()));
+        // Every instance's palette reads stay inside what was uploaded.
+        for b in &f.buckets {
+            let joints = forest.species[b.species as usize].joints_drawn(b.lod);
+            for i in &f.instances[b.first as usize..(b.first + b.count) as usize] {
+                let last = i.palette as usize + (12 * joints - 1) * i.palette_stride as usize;
+                assert!(last < f.palettes.len());
+            }
+        }
+    }
+    assert!(levels_seen.len() >= 4, "levels drawn on the way: {levels_seen:?}");
+    assert!(fading > 0, "no tree ever cross-faded");
+}
+
+#[test]
+fn frames_are_deterministic_for_any_thread_count() {
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
+        pool.install(|| {
+            let spec = SceneSpec::builtin("small").expect("small");
+            let mut forest = Forest::new(&spec).expect("forest");
+            let cam = forest.default_camera();
+            let mut f = FrameData::default();
+            for _ in 0..20 {
+                forest.step(1.0 / 25.0);
+                forest.frame(&cam, 1.5, &mut f);
+            }
+            (f.palettes.iter().map(|v| v.to_bits()).collect::<Vec<_>>(), f.instances.clone())
+        })
+    };
+    let (a, ia) = run(1);
+    let (b, ib) = run(2);
+    assert_eq!(ia, ib);
+    assert!(a == b, "palettes differ between 1 and 2 threads");
+}

@@ -1,0 +1,82 @@
+//! Animation LOD by prefix: joints beyond a group's active prefix cost nothing in the step,
+//! yet the simulated trunk still feels the crown's drag (lumped static load), and joints
+//! switched back on blend in from rest instead of jumping.
+
+use sylva_sway::{LANES, SwayBatch, SwayParams, SwaySpecies, transform};
+use sylva_tree::{Species, lod_order};
+
+fn aspen() -> (sylva_tree::TreeModel, sylva_tree::LodOrder) {
+    let sp = Species::preset("quaking_aspen").expect("preset");
+    let model = sp.model(5, 6).expect("model");
+    let order = lod_order(&model);
+    (model.reordered(&order.order).expect("reorder"), order)
+}
+
+/// Mean trunk-top displacement along the wind over the last 10 s of 30 s of steady wind.
+fn trunk_bend(batch: &mut SwayBatch, top: usize, tip: [f32; 3]) -> f32 {
+    let dt = 1.0 / 30.0;
+    let mut sum = 0.0;
+    let steps = (30.0 / dt) as usize;
+    for s in 0..steps {
+        batch.step(dt, &[[9.0, 0.0, 0.0]; LANES]);
+        if s >= steps * 2 / 3 {
+            sum += transform(&batch.palette(0, top), tip)[0] - tip[0];
+        }
+    }
+    sum / (steps - steps * 2 / 3) as f32
+}
+
+#[test]
+fn held_joints_cost_nothing_and_are_left_untouched() {
+    let (model, order) = aspen();
+    let sk = &model.tree.skeleton;
+    let sp = SwaySpecies::new(sk, SwayParams::default()).expect("species");
+    let n = sp.len();
+    let mut b = SwayBatch::new(sp, 2 * LANES);
+    b.set_prefixes(&[order.trunk, order.prefix[3]]);
+    b.step(0.05, &[[6.0, 0.0, 0.0]; 2 * LANES]);
+    assert_eq!(b.joint_updates(), 2 * LANES * n);
+    b.set_active(1, order.trunk);
+    assert_eq!(b.active(1), order.trunk);
+    let before: Vec<_> = (order.trunk..n).map(|j| b.palette(LANES, j)).collect();
+    b.step(0.05, &[[6.0, 0.0, 0.0]; 2 * LANES]);
+    // One full group and one trunk-only group: the count of joint updates says so.
+    assert_eq!(b.joint_updates(), LANES * n + LANES * order.trunk);
+    let after: Vec<_> = (order.trunk..n).map(|j| b.palette(LANES, j)).collect();
+    assert_eq!(before, after, "held joints were touched");
+    // The trunk itself moved on.
+    assert!(order.trunk < n / 20, "trunk {} of {n} joints", order.trunk);
+}
+
+#[test]
+fn a_trunk_only_tree_bends_like_the_full_tree_in_steady_wind() {
+    let (model, order) = aspen();
+    let sk = &model.tree.skeleton;
+    let top = order.trunk - 1;
+    let tip = sk.joints()[top].tip();
+    let make = || SwayBatch::new(SwaySpecies::new(sk, SwayParams::default()).expect("s"), 1);
+    let mut full = make();
+    let mut trunk = make();
+    trunk.set_prefixes(&[order.trunk]);
+    trunk.set_active(0, order.trunk);
+    // The bare trunk (the same joints, crown cut off) shows what the crown's drag adds.
+    let bare_sk = sylva_tree::Skeleton::new(sk.joints()[..order.trunk].to_vec()).expect("trunk");
+    let mut bare = SwayBatch::new(SwaySpecies::new(&bare_sk, SwayParams::default()).expect("s"), 1);
+    let f = trunk_bend(&mut full, top, tip);
+    let t = trunk_bend(&mut trunk, top, tip);
+    let b = trunk_bend(&mut bare, top, tip);
+    eprintln!(
+        "trunk-top bend: full tree {f:.3} m, trunk with held crown {t:.3} m, bare trunk {b:.3} m"
+    );
+    assert!(f > 0.05, "full tree bends {f:.3} m");
+    assert!((t / f - 1.0).abs() < 0.35, "trunk-only bends {t:.3} m, full tree {f:.3} m");
+    assert!(b < 0.5 * f, "the crown's drag should dominate: bare trunk {b:.3} m");
+    // Switching the crown back on blends it in from rest: no joint's displayed rotation
+    // jumps (its weight starts at zero).
+    trunk.set_active(0, sk.len());
+    trunk.step(1.0 / 30.0, &[[9.0, 0.0, 0.0]]);
+    let blend = SwayParams::default().blend_time;
+    for j in order.trunk..sk.len() {
+        assert!(trunk.weight(0, j) <= (1.0 / 30.0) / blend + 1e-6, "joint {j} jumped in");
+    }
+}
