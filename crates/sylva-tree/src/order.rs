@@ -106,7 +106,7 @@ impl TreeModel {
             .collect();
         let skeleton = Skeleton::new(joints)?;
         let mut out = self.clone();
-        out.tree = Tree { skeleton, stats: self.tree.stats.clone() };
+        out.tree = Tree { skeleton, stats: self.tree.stats };
         for lod in &mut out.lods {
             for jv in &mut lod.branches.joints {
                 for j in jv.iter_mut() {
