@@ -42,7 +42,9 @@ use sylva_wind::{Grid, Preset, SynthParams, WindField, WindParams};
 use thiserror::Error;
 
 use crate::camera::Camera;
-use crate::scene::{Placement, SceneSpec, Terrain, default_camera, layout};
+use crate::scene::{
+    Placement, SceneSpec, Terrain, camera_on_path, default_camera, default_camera_path, layout,
+};
 
 /// A forest that could not be built.
 #[derive(Debug, Error)]
@@ -58,7 +60,23 @@ pub enum ForestError {
     /// The wind field could not be made.
     #[error("wind: {0}")]
     Wind(String),
+    /// The simulation state would not fit the documented memory cap.
+    #[error(
+        "the simulation would need {} MB of animation state, over the {} MB cap: lower \
+         `sim_joint_budget`, keep the wind-field LOD on (instance groups), or use fewer trees",
+        bytes / 1_000_000, limit / 1_000_000
+    )]
+    TooLarge {
+        /// Bytes needed.
+        bytes: usize,
+        /// The cap.
+        limit: usize,
+    },
 }
+
+/// Cap on the animation state of a forest (angles, rates, blend weights, loads and palettes
+/// of every simulated joint), bytes: 6 GB.
+pub const MAX_STATE_BYTES: usize = 6_000_000_000;
 
 /// One tree drawn this frame, as the vertex shaders read it (44 bytes; sylva-render maps
 /// each field to a vertex attribute by its offset).
@@ -333,6 +351,7 @@ impl Forest {
         let total = trees.len().max(1);
         let side = spec.side();
         let mut lane_base = 0;
+        let mut state_bytes = 0usize;
         for (si, m) in models.into_iter().enumerate() {
             let original = m?;
             // Joints in LOD order: each level's joints a prefix, the trunk first.
@@ -348,7 +367,16 @@ impl Forest {
                 (morton(trees[t].0.position[0], trees[t].0.position[1], side), t)
             });
             let share = spec.sim_joint_budget as f64 * members.len() as f64 / total as f64;
-            let n_groups = ((share / joints as f64) as usize).clamp(1, members.len().max(1));
+            let n_groups = if spec.lod.wind {
+                ((share / joints as f64) as usize).clamp(1, members.len().max(1))
+            } else {
+                members.len().max(1)
+            };
+            // Animation state and palettes take 92 bytes per joint and instance.
+            state_bytes += n_groups.div_ceil(LANES) * LANES * joints * 92;
+            if state_bytes > MAX_STATE_BYTES {
+                return Err(ForestError::TooLarge { bytes: state_bytes, limit: MAX_STATE_BYTES });
+            }
             let height = model.tree.stats.height;
             let mut groups = Vec::with_capacity(n_groups);
             for g in 0..n_groups {
@@ -406,7 +434,13 @@ impl Forest {
             gain: 1.0,
             turn: 0.0,
             last_sim_ms: 0.0,
-            lod: LodSettings::default(),
+            lod: LodSettings {
+                geometry: spec.lod.geometry,
+                animation: spec.lod.animation,
+                fraction: spec.lod.fraction,
+                far_level: spec.lod.far_level,
+                ..LodSettings::default()
+            },
             lane_groups: lane_base,
             simulate: (0..lane_base).map(|_| AtomicU32::new(u32::MAX)).collect(),
         })
@@ -415,6 +449,17 @@ impl Forest {
     /// The scene's default viewpoint.
     pub fn default_camera(&self) -> Camera {
         default_camera(&self.spec, self.radius)
+    }
+
+    /// The camera at time `t` on the scene's camera path, or on the default fly-in
+    /// ([`crate::scene::default_camera_path`]) when the scene has none.
+    pub fn camera_at(&self, t: f32) -> Camera {
+        let base = self.default_camera();
+        if self.spec.camera_path.is_empty() {
+            camera_on_path(&default_camera_path(&self.spec, self.radius), t, &base)
+        } else {
+            camera_on_path(&self.spec.camera_path, t, &base)
+        }
     }
 
     /// Geometry-LOD threshold: the image-height fraction `h₀` above which a tree is drawn at

@@ -14,4 +14,7 @@ pub use driver::{
     Bucket, Forest, ForestError, FrameData, FrameStats, Instance, LodSettings, SpeciesRuntime,
     blend_levels, hysteresis, lod_coordinate,
 };
-pub use scene::{Lighting, Placement, SCENES, SceneError, SceneSpec, Terrain, layout};
+pub use scene::{
+    CameraKey, Lighting, LodSpec, Placement, SCENES, SceneError, SceneSpec, Terrain,
+    camera_on_path, default_camera_path, layout,
+};

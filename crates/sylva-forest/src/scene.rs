@@ -110,6 +110,51 @@ pub struct SceneSpec {
     /// Sun, sky and fog (a `[lighting]` table; every key optional).
     #[serde(default)]
     pub lighting: Lighting,
+    /// The three LODs on or off and the geometry-LOD thresholds (a `[lod]` table).
+    #[serde(default)]
+    pub lod: LodSpec,
+    /// A keyframed camera path (`[[camera_path]]` entries, times increasing): `sylva render`
+    /// follows it and `sylva bench table3` runs along it. Without one, `render` stands at
+    /// the viewpoint and the benchmark flies in from it ([`default_camera_path`]).
+    #[serde(default)]
+    pub camera_path: Vec<CameraKey>,
+}
+
+/// The LOD switches of a scene (paper §4.3; Table 3 switches each off in turn).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct LodSpec {
+    /// Geometry LOD: mesh levels by projected size, impostors far away, cross-faded.
+    /// Off: every tree at full detail. Default on.
+    pub geometry: bool,
+    /// Animation LOD: each group simulates only the joints its drawn levels use. Default on.
+    pub animation: bool,
+    /// Wind-field LOD: neighbouring trees share one simulation driven by the wind at their
+    /// centre (instance groups, within `sim_joint_budget`). Off: every tree simulated on its
+    /// own, each with its own wind sample and yaw. Default on.
+    pub wind: bool,
+    /// Image-height fraction from which a tree is drawn at full detail. Default 1.
+    pub fraction: f32,
+    /// First level drawn as an impostor (1 … 6). Default 4.
+    pub far_level: u32,
+}
+
+impl Default for LodSpec {
+    fn default() -> LodSpec {
+        LodSpec { geometry: true, animation: true, wind: true, fraction: 1.0, far_level: 4 }
+    }
+}
+
+/// One key of a camera path.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraKey {
+    /// Time, s.
+    pub t: f32,
+    /// Eye, world m.
+    pub eye: [f32; 3],
+    /// Point looked at, world m.
+    pub target: [f32; 3],
 }
 
 /// Sun, sky and fog of a scene: what the renderer lights and fogs with. Colours are linear
@@ -281,6 +326,26 @@ impl SceneSpec {
         }
         if !(0.0..=1.0).contains(&l.fog_density) {
             return Err(bad("lighting.fog_density", l.fog_density.to_string(), "0 … 1 per m"));
+        }
+        if !(self.lod.fraction > 0.0 && self.lod.fraction.is_finite() && self.lod.fraction <= 100.0)
+        {
+            return Err(bad("lod.fraction", self.lod.fraction.to_string(), "0 … 100"));
+        }
+        if !(1..=6).contains(&self.lod.far_level) {
+            return Err(bad("lod.far_level", self.lod.far_level.to_string(), "1 … 6"));
+        }
+        for (k, key) in self.camera_path.iter().enumerate() {
+            let finite = key.eye.iter().chain(&key.target).all(|v| v.is_finite());
+            if !finite || key.eye == key.target || !key.t.is_finite() {
+                return Err(bad(
+                    "camera_path.eye",
+                    format!("{:?}", key.eye),
+                    "finite, not the target",
+                ));
+            }
+            if k > 0 && key.t <= self.camera_path[k - 1].t {
+                return Err(bad("camera_path.t", key.t.to_string(), "increasing from key to key"));
+            }
         }
         if let Some(c) = &self.camera {
             if !(1.0..=150.0).contains(&c.fov_deg) {
@@ -462,6 +527,51 @@ pub fn layout(spec: &SceneSpec, terrain: &Terrain) -> Vec<Placement> {
             }
         })
         .collect()
+}
+
+/// Where the camera is at time `t` on `path` (Catmull–Rom through the keys' eyes and
+/// targets, uniform in time; held at the ends), with the lens of `base`.
+pub fn camera_on_path(path: &[CameraKey], t: f32, base: &Camera) -> Camera {
+    let Some(first) = path.first() else { return *base };
+    let last = path[path.len() - 1];
+    if path.len() == 1 || t <= first.t || t >= last.t {
+        let k = if t >= last.t { last } else { *first };
+        return Camera { eye: k.eye, target: k.target, ..*base };
+    }
+    let i = path.windows(2).position(|w| t < w[1].t).unwrap_or(path.len() - 2);
+    let (k1, k2) = (path[i], path[i + 1]);
+    let k0 = if i > 0 { path[i - 1] } else { k1 };
+    let k3 = path.get(i + 2).copied().unwrap_or(k2);
+    let u = (t - k1.t) / (k2.t - k1.t);
+    let spline = |a: [f32; 3], b: [f32; 3], c: [f32; 3], d: [f32; 3]| -> [f32; 3] {
+        std::array::from_fn(|j| {
+            let (p0, p1, p2, p3) = (a[j], b[j], c[j], d[j]);
+            0.5 * (2.0 * p1
+                + (p2 - p0) * u
+                + (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3) * u * u
+                + (3.0 * p1 - p0 - 3.0 * p2 + p3) * u * u * u)
+        })
+    };
+    Camera {
+        eye: spline(k0.eye, k1.eye, k2.eye, k3.eye),
+        target: spline(k0.target, k1.target, k2.target, k3.target),
+        ..*base
+    }
+}
+
+/// The path a scene without one is benchmarked along: 12 s flying in from the default
+/// viewpoint towards the forest centre, descending, so trees cross LOD levels on the way.
+pub fn default_camera_path(spec: &SceneSpec, radius: f32) -> Vec<CameraKey> {
+    let c = default_camera(spec, radius);
+    let at = |f: f32, t: f32| CameraKey {
+        t,
+        eye: std::array::from_fn(|i| {
+            let e = c.target[i] + (c.eye[i] - c.target[i]) * f;
+            if i == 2 { e.max(c.target[2] + 8.0) } else { e }
+        }),
+        target: c.target,
+    };
+    vec![at(1.0, 0.0), at(0.8, 4.0), at(0.62, 8.0), at(0.5, 12.0)]
 }
 
 /// The default viewpoint of a scene whose trees lie within `radius` of the origin.

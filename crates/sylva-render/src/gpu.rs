@@ -42,6 +42,20 @@ impl Gpu {
         instance: wgpu::Instance,
         surface: Option<&wgpu::Surface<'_>>,
     ) -> Result<Gpu, RenderError> {
+        Gpu::open(instance, surface, None)
+    }
+
+    /// An offscreen adapter whose device allows storage bindings of at most `max_binding`
+    /// bytes (to exercise what a smaller GPU would impose).
+    pub fn headless_limited(max_binding: u64) -> Result<Gpu, RenderError> {
+        Gpu::open(Gpu::instance(), None, Some(max_binding))
+    }
+
+    fn open(
+        instance: wgpu::Instance,
+        surface: Option<&wgpu::Surface<'_>>,
+        max_binding: Option<u64>,
+    ) -> Result<Gpu, RenderError> {
         let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
             power_preference: wgpu::PowerPreference::HighPerformance,
             force_fallback_adapter: false,
@@ -49,7 +63,11 @@ impl Gpu {
             apply_limit_buckets: false,
         }))
         .map_err(|e| RenderError::NoAdapter(e.to_string()))?;
-        let limits = adapter.limits();
+        let mut limits = adapter.limits();
+        if let Some(m) = max_binding {
+            let m = m.min(limits.max_storage_buffer_binding_size);
+            limits.max_storage_buffer_binding_size = m;
+        }
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("sylva"),
             required_features: wgpu::Features::empty(),

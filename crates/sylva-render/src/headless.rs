@@ -25,7 +25,17 @@ const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 impl Headless {
     /// Open an adapter and prepare to draw `forest` at `width × height`.
     pub fn new(forest: &Forest, width: u32, height: u32) -> Result<Headless, RenderError> {
-        let gpu = Gpu::headless()?;
+        Headless::with_gpu(Gpu::headless()?, forest, width, height)
+    }
+
+    /// Prepare to draw `forest` at `width × height` on `gpu` (e.g. one opened with
+    /// [`Gpu::headless_limited`]).
+    pub fn with_gpu(
+        gpu: Gpu,
+        forest: &Forest,
+        width: u32,
+        height: u32,
+    ) -> Result<Headless, RenderError> {
         let max = gpu.device.limits().max_texture_dimension_2d;
         if width == 0 || height == 0 || width > max || height > max {
             return Err(RenderError::Size(width, height, max));

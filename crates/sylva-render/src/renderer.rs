@@ -39,8 +39,16 @@ const GROUND_MARGIN: f32 = 600.0;
 #[derive(Debug)]
 struct SpeciesGpu {
     lods: Vec<(Option<Mesh>, Option<Mesh>)>,
+    /// Per level (the impostor last): joints its draw reads palettes of (highest + 1).
+    joints_read: Vec<usize>,
     textures: wgpu::BindGroup,
     far: FarSpeciesGpu,
+}
+
+impl SpeciesGpu {
+    fn reads(&self, lod: u32) -> usize {
+        self.joints_read.get(lod as usize).or(self.joints_read.last()).copied().unwrap_or(1)
+    }
 }
 
 /// Draws a forest's frames into a colour target of a given format and size.
@@ -60,7 +68,16 @@ pub struct Renderer {
     sampler: wgpu::Sampler,
     palettes: wgpu::Buffer,
     instances: wgpu::Buffer,
-    globals_group: wgpu::BindGroup,
+    /// One bind group per palette window (one when all palettes fit one binding).
+    windows: Vec<wgpu::BindGroup>,
+    /// Offset (floats) of each palette window.
+    window_offsets: Vec<u64>,
+    /// Window of each instance of the frame.
+    window_of: Vec<u32>,
+    /// Instances as uploaded: palette indices relative to their window.
+    staged: Vec<Instance>,
+    /// Draws: (bucket, window, first instance, count).
+    draws: Vec<(usize, usize, u32, u32)>,
     species: Vec<SpeciesGpu>,
     msaa: Option<wgpu::TextureView>,
     depth: wgpu::TextureView,
@@ -136,7 +153,7 @@ impl Renderer {
         });
         let palettes = palette_buffer(dev, 48 * 1024);
         let instances = instance_buffer(dev, 1024);
-        let globals_group = globals_group(dev, &globals_layout, &globals, &palettes, &sampler);
+        let windows = vec![globals_group(dev, &globals_layout, &globals, &palettes, &sampler)];
         let bake = BakeContext {
             branch: &branch.bake,
             leaf: &leaf.bake,
@@ -174,7 +191,17 @@ impl Renderer {
             let baked = lods.get(BAKE_LEVEL.min(lods.len().saturating_sub(1)));
             let meshes = baked.map(|(b, l)| (b.as_ref(), l.as_ref())).unwrap_or((None, None));
             let far = far.bake(gpu, &bake, m, &textures, meshes)?;
-            species.push(SpeciesGpu { lods, textures, far });
+            let mut joints_read: Vec<usize> = m
+                .lods
+                .iter()
+                .map(|l| {
+                    let b = l.branches.joints.iter().flatten().copied().max().unwrap_or(0);
+                    let c = l.clusters.iter().map(|c| c.joint).max().unwrap_or(0);
+                    b.max(c) as usize + 1
+                })
+                .collect();
+            joints_read.push(far.params.joint as usize + 1);
+            species.push(SpeciesGpu { lods, joints_read, textures, far });
         }
         let (msaa, depth) = targets(dev, format, samples, width, height);
         Ok(Renderer {
@@ -192,7 +219,11 @@ impl Renderer {
             sampler,
             palettes,
             instances,
-            globals_group,
+            windows,
+            window_offsets: vec![0],
+            window_of: Vec::new(),
+            staged: Vec::new(),
+            draws: Vec::new(),
             species,
             msaa,
             depth,
@@ -208,6 +239,12 @@ impl Renderer {
     /// The colour format it draws.
     pub fn format(&self) -> wgpu::TextureFormat {
         self.format
+    }
+
+    /// Palette windows the last frame was bound through (1 when its palettes fit one
+    /// storage binding).
+    pub fn palette_windows(&self) -> usize {
+        self.windows.len()
     }
 
     /// Sun, sky and fog in use.
@@ -249,28 +286,7 @@ impl Renderer {
         let aspect = self.width as f32 / self.height as f32;
         let g = Globals::for_camera(camera, aspect, frame.time as f32, &self.lighting);
         gpu.queue.write_buffer(&self.globals, 0, bytemuck::bytes_of(&g));
-        // Grow the per-frame buffers to the next power of two.
-        let pal_bytes = (frame.palettes.len().max(12) * 4) as u64;
-        if pal_bytes > self.palettes.size() {
-            self.palettes = palette_buffer(dev, pal_bytes.next_power_of_two());
-            self.globals_group = globals_group(
-                dev,
-                &self.globals_layout,
-                &self.globals,
-                &self.palettes,
-                &self.sampler,
-            );
-        }
-        let inst_bytes = (frame.instances.len().max(1) * std::mem::size_of::<Instance>()) as u64;
-        if inst_bytes > self.instances.size() {
-            self.instances = instance_buffer(dev, inst_bytes.next_power_of_two());
-        }
-        if !frame.palettes.is_empty() {
-            gpu.queue.write_buffer(&self.palettes, 0, bytemuck::cast_slice(&frame.palettes));
-        }
-        if !frame.instances.is_empty() {
-            gpu.queue.write_buffer(&self.instances, 0, bytemuck::cast_slice(&frame.instances));
-        }
+        self.upload(gpu, frame);
         let mut enc =
             dev.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
         {
@@ -301,31 +317,145 @@ impl Renderer {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            pass.set_bind_group(0, &self.globals_group, &[]);
+            pass.set_bind_group(0, &self.windows[0], &[]);
             self.sky.draw(&mut pass);
             self.ground.draw(&mut pass);
             pass.set_vertex_buffer(1, self.instances.slice(..));
             for (pipeline, leaves) in [(&self.branch.draw, false), (&self.leaf.draw, true)] {
                 pass.set_pipeline(pipeline);
-                for b in &frame.buckets {
+                for &(bucket, window, first, count) in &self.draws {
+                    let b = &frame.buckets[bucket];
                     let Some(sp) = self.species.get(b.species as usize) else { continue };
                     let Some((branch, leaf)) = sp.lods.get(b.lod as usize) else { continue };
                     let Some(mesh) = (if leaves { leaf } else { branch }) else { continue };
+                    pass.set_bind_group(0, &self.windows[window], &[]);
                     pass.set_bind_group(1, &sp.textures, &[]);
-                    mesh.draw(&mut pass, b.first..b.first + b.count);
+                    mesh.draw(&mut pass, first..first + count);
                 }
             }
             // Impostors: buckets one past the species' last mesh level.
             pass.set_vertex_buffer(0, self.instances.slice(..));
             self.far.begin(&mut pass);
-            for b in &frame.buckets {
+            for &(bucket, window, first, count) in &self.draws {
+                let b = &frame.buckets[bucket];
                 let Some(sp) = self.species.get(b.species as usize) else { continue };
                 if b.lod as usize == sp.lods.len() {
-                    self.far.draw(&mut pass, &sp.far, b.first..b.first + b.count);
+                    pass.set_bind_group(0, &self.windows[window], &[]);
+                    self.far.draw(&mut pass, &sp.far, first..first + count);
                 }
             }
         }
         gpu.queue.submit([enc.finish()]);
+    }
+}
+
+impl Renderer {
+    /// Copy `frame`'s palettes and instances to the GPU. Palettes beyond what one storage
+    /// binding may hold (`max_storage_buffer_binding_size`) are bound through windows:
+    /// instances in order of their first palette value, a window opens (aligned down to
+    /// the device's offset alignment) at the first instance whose palette reads do not fit
+    /// the current one; each instance's palette index is made relative to its window, and
+    /// each bucket is drawn once per window it uses. One lane group's palettes must fit one
+    /// binding (16 willows at full detail take 61 MB; devices bind at least 128 MB).
+    fn upload(&mut self, gpu: &Gpu, frame: &FrameData) {
+        let dev = &gpu.device;
+        let limits = dev.limits();
+        let max_binding = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size);
+        let pal_bytes = (frame.palettes.len().max(12) * 4) as u64;
+        // Grow the per-frame buffers to the next power of two (within the device's limit).
+        let grown = pal_bytes > self.palettes.size();
+        if grown {
+            let size = pal_bytes.next_power_of_two().min(limits.max_buffer_size);
+            self.palettes = palette_buffer(dev, size);
+        }
+        let floats = (self.palettes.size() / 4) as usize;
+        let fits = self.palettes.size() <= max_binding;
+        // Window of each instance (floats offset of each window).
+        self.window_of.clear();
+        self.window_of.resize(frame.instances.len(), 0);
+        let mut offsets = vec![0u64];
+        if !fits {
+            let align = ((limits.min_storage_buffer_offset_alignment as u64).max(4) / 4) as usize;
+            let span = (max_binding / 4) as usize;
+            let mut order: Vec<(usize, usize, usize)> = Vec::with_capacity(frame.instances.len());
+            for b in &frame.buckets {
+                let reads = self.species.get(b.species as usize).map_or(1, |s| s.reads(b.lod));
+                for k in b.first as usize..(b.first + b.count) as usize {
+                    let i = &frame.instances[k];
+                    let start = i.palette as usize;
+                    let end = start + (12 * reads).saturating_sub(1) * i.palette_stride as usize;
+                    order.push((start, end, k));
+                }
+            }
+            order.sort_unstable();
+            offsets.clear();
+            for (start, end, k) in order {
+                let open = offsets.last().map(|&o| end < o as usize + span).unwrap_or(false);
+                if !open {
+                    offsets.push((start / align * align) as u64);
+                }
+                self.window_of[k] = (offsets.len() - 1) as u32;
+            }
+            if offsets.is_empty() {
+                offsets.push(0);
+            }
+        }
+        if grown || offsets != self.window_offsets {
+            self.windows.clear();
+            for &o in &offsets {
+                let offset = 4 * o;
+                let size = (self.palettes.size() - offset).min(max_binding);
+                self.windows.push(crate::shared::globals_window(
+                    dev,
+                    &self.globals_layout,
+                    &self.globals,
+                    &self.palettes,
+                    offset,
+                    size,
+                    &self.sampler,
+                ));
+            }
+            self.window_offsets = offsets;
+        }
+        self.staged.clear();
+        self.draws.clear();
+        for (bi, b) in frame.buckets.iter().enumerate() {
+            let range = b.first as usize..(b.first + b.count) as usize;
+            let mut w = 0;
+            loop {
+                let first = self.staged.len() as u32;
+                let mut next = u32::MAX;
+                for k in range.clone() {
+                    let wk = self.window_of[k];
+                    let inst = &frame.instances[k];
+                    if wk == w && (inst.palette as usize) < floats {
+                        let base = self.window_offsets[w as usize] as u32;
+                        self.staged.push(Instance { palette: inst.palette - base, ..*inst });
+                    } else if wk > w {
+                        next = next.min(wk);
+                    }
+                }
+                let count = self.staged.len() as u32 - first;
+                if count > 0 {
+                    self.draws.push((bi, w as usize, first, count));
+                }
+                if next == u32::MAX {
+                    break;
+                }
+                w = next;
+            }
+        }
+        let inst_bytes = (self.staged.len().max(1) * std::mem::size_of::<Instance>()) as u64;
+        if inst_bytes > self.instances.size() {
+            self.instances = instance_buffer(dev, inst_bytes.next_power_of_two());
+        }
+        let n = frame.palettes.len().min(floats);
+        if n > 0 {
+            gpu.queue.write_buffer(&self.palettes, 0, bytemuck::cast_slice(&frame.palettes[..n]));
+        }
+        if !self.staged.is_empty() {
+            gpu.queue.write_buffer(&self.instances, 0, bytemuck::cast_slice(&self.staged));
+        }
     }
 }
 

@@ -184,12 +184,28 @@ pub fn globals_group(
     palettes: &wgpu::Buffer,
     sampler: &wgpu::Sampler,
 ) -> wgpu::BindGroup {
+    globals_window(dev, layout, globals, palettes, 0, palettes.size(), sampler)
+}
+
+/// The bind group of [`globals_layout`] with the palettes bound from byte `offset`,
+/// `size` bytes (a window within the device's storage-binding limit).
+pub fn globals_window(
+    dev: &wgpu::Device,
+    layout: &wgpu::BindGroupLayout,
+    globals: &wgpu::Buffer,
+    palettes: &wgpu::Buffer,
+    offset: u64,
+    size: u64,
+    sampler: &wgpu::Sampler,
+) -> wgpu::BindGroup {
+    let window =
+        wgpu::BufferBinding { buffer: palettes, offset, size: wgpu::BufferSize::new(size) };
     dev.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("globals"),
         layout,
         entries: &[
             wgpu::BindGroupEntry { binding: 0, resource: globals.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 1, resource: palettes.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::Buffer(window) },
             wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::Sampler(sampler) },
         ],
     })

@@ -139,3 +139,56 @@ fn sky_ground_bark_and_leaves_appear_where_expected() {
     let var: f64 = img.iter().map(|&v| (v as f64 - mean).powi(2)).sum::<f64>() / img.len() as f64;
     assert!(var.sqrt() > 20.0, "image nearly uniform (σ = {:.1})", var.sqrt());
 }
+
+#[test]
+fn palettes_beyond_one_storage_binding_are_drawn_through_windows() {
+    // Every tree simulated on its own at full detail, on a device whose storage bindings
+    // hold less than the frame's palettes: they must be bound in windows, and the image must
+    // be the one an unlimited device draws.
+    let mut spec = SceneSpec::builtin("small").expect("small scene");
+    spec.lod.wind = false;
+    spec.lod.geometry = false;
+    let mut forest = Forest::new(&spec).expect("forest");
+    let camera = forest.default_camera();
+    let mut frame = FrameData::default();
+    for _ in 0..10 {
+        forest.step(1.0 / 30.0);
+    }
+    forest.frame(&camera, W as f32 / H as f32, &mut frame);
+    // A binding that holds the largest lane group's palettes, but not all of them.
+    let largest = frame
+        .buckets
+        .iter()
+        .flat_map(|b| {
+            let joints = forest.species[b.species as usize].joints_drawn(b.lod);
+            let r = &frame.instances[b.first as usize..(b.first + b.count) as usize];
+            r.iter().map(move |i| joints * 48 * i.palette_stride as usize)
+        })
+        .max()
+        .unwrap_or(0);
+    let limit = (largest as u64).next_multiple_of(256) + 256;
+    let total = 4 * frame.palettes.len() as u64;
+    assert!(total > limit, "{total} bytes fit one {limit}-byte binding");
+    let gpu = sylva_render::Gpu::headless_limited(limit).expect("adapter");
+    assert!(gpu.device.limits().max_storage_buffer_binding_size <= limit);
+    let mut small = Headless::with_gpu(gpu, &forest, W, H).expect("renderer");
+    let mut full = Headless::new(&forest, W, H).expect("renderer");
+    let a = small.render(&frame, &camera).expect("render");
+    let b = full.render(&frame, &camera).expect("render");
+    assert!(small.renderer().palette_windows() > 1, "no windows used");
+    assert_eq!(full.renderer().palette_windows(), 1);
+    if mean_abs_diff(&a, &b) >= 0.5 {
+        let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/golden");
+        write_png(&dir.join("windows-actual.png"), &a);
+        write_png(&dir.join("windows-diff.png"), &b);
+        panic!(
+            "windowed draw differs by {} (windows-actual.png vs windows-diff.png)",
+            mean_abs_diff(&a, &b)
+        );
+    }
+    let leaves = a
+        .chunks(4)
+        .filter(|p| p[1] as i32 > p[0] as i32 + 10 && p[1] as i32 > p[2] as i32 + 25)
+        .count();
+    assert!(leaves > 500, "trees drawn: {leaves} leaf pixels");
+}
