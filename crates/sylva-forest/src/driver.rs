@@ -113,7 +113,7 @@ pub struct LodSettings {
     /// `h₀`: image-height fraction from which a tree is drawn at full detail (0.01 … 100;
     /// larger is coarser). Default [`DEFAULT_LOD_FRACTION`].
     pub fraction: f32,
-    /// First level drawn as an impostor (1 … the chain's length). Default 4.
+    /// First level drawn as an impostor (1 … the chain's length). Default 3.
     pub far_level: u32,
     /// Cross-fade band, in levels (0 … 1): over the last `band` of each level the tree
     /// blends into the next. Default 0.3.
@@ -134,7 +134,7 @@ impl Default for LodSettings {
         LodSettings {
             geometry: true,
             fraction: DEFAULT_LOD_FRACTION,
-            far_level: 4,
+            far_level: 3,
             band: 0.3,
             hysteresis: 0.1,
             animation: true,

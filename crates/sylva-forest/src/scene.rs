@@ -135,13 +135,13 @@ pub struct LodSpec {
     pub wind: bool,
     /// Image-height fraction from which a tree is drawn at full detail. Default 1.
     pub fraction: f32,
-    /// First level drawn as an impostor (1 … 6). Default 4.
+    /// First level drawn as an impostor (1 … 6). Default 3.
     pub far_level: u32,
 }
 
 impl Default for LodSpec {
     fn default() -> LodSpec {
-        LodSpec { geometry: true, animation: true, wind: true, fraction: 1.0, far_level: 4 }
+        LodSpec { geometry: true, animation: true, wind: true, fraction: 1.0, far_level: 3 }
     }
 }
 

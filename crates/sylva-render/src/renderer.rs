@@ -8,7 +8,7 @@ use sylva_tree::mesh::TreeModel;
 use crate::gpu::{Gpu, RenderError};
 use crate::layout::Globals;
 use crate::passes::branch::{self, BranchPass};
-use crate::passes::far::{BAKE_LEVEL, BAKE_TARGETS, BakeContext, FarPass, FarSpeciesGpu};
+use crate::passes::far::{BAKE_TARGETS, BakeContext, FarPass, FarSpeciesGpu, bake_level};
 use crate::passes::ground::GroundPass;
 use crate::passes::leaf::{self, LeafPass};
 use crate::passes::sky::SkyPass;
@@ -168,7 +168,13 @@ impl Renderer {
                 upload_mips(gpu, &mips, img.width, img.height, format, label)
             };
             let bark = texture(&m.bark, "bark");
-            let leaves = texture(&m.leaves.image, "leaf atlas");
+            // Leaves: opacity-weighted colour and coverage-preserving alpha in the mips, so
+            // far crowns keep their leaves instead of fading out under the alpha test.
+            let img = &m.leaves.image;
+            let (mips, _) =
+                crate::passes::far::impostor_mips(&img.rgba, &img.rgba, img.width, img.height);
+            let srgb = wgpu::TextureFormat::Rgba8UnormSrgb;
+            let leaves = upload_mips(gpu, &mips, img.width, img.height, srgb, "leaf atlas");
             let textures = dev.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("species textures"),
                 layout: &species_layout,
@@ -188,7 +194,7 @@ impl Renderer {
                 .iter()
                 .map(|l| (branch::mesh(gpu, l), leaf::mesh(gpu, l, m.leaves.cells)))
                 .collect();
-            let baked = lods.get(BAKE_LEVEL.min(lods.len().saturating_sub(1)));
+            let baked = lods.get(bake_level(m));
             let meshes = baked.map(|(b, l)| (b.as_ref(), l.as_ref())).unwrap_or((None, None));
             let far = far.bake(gpu, &bake, m, &textures, meshes)?;
             let mut joints_read: Vec<usize> = m

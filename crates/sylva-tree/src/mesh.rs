@@ -379,7 +379,6 @@ fn merge_clusters(clusters: &[LeafCluster], m: usize, coverage: &[f32]) -> Vec<L
                     .fold([0.0; 3], |acc, c| add(acc, scale(f(c), c.leaf_area / area.max(1e-20))))
             };
             let center = w(&|c| c.center);
-            let hang = w(&|c| c.hang);
             // Hang on the joint of the member nearest the merged centre.
             let lead = run
                 .iter()
@@ -389,6 +388,10 @@ fn merge_clusters(clusters: &[LeafCluster], m: usize, coverage: &[f32]) -> Vec<L
                     dot(da, da).total_cmp(&dot(db, db))
                 })
                 .unwrap_or(&run[0]);
+            // Keep the lead's offset from its branch: it points out of the crown, and the
+            // renderer shades and swings the cluster by it. (Averaged offsets of clusters
+            // around a branch cancel: merged cards would face random ways and render dark.)
+            let hang = sub(center, sub(lead.center, lead.hang));
             LeafCluster {
                 hang,
                 center,

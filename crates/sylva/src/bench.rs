@@ -23,6 +23,10 @@ pub enum BenchCommand {
     /// Rendering a scene headless: simulation and rendering ms per frame (medians) and
     /// triangles per frame, on whatever adapter the machine has.
     Render(RenderBench),
+    /// The paper's Table 3: scenes A–D with all LODs and each LOD off in turn, along the
+    /// camera path; FPS, ms split, triangles, draws, joints, uploads, image error; writes
+    /// Markdown, CSV and a PNG chart.
+    Table3(crate::table3::Table3Bench),
 }
 
 #[derive(Debug, Args)]
@@ -49,6 +53,8 @@ pub struct RenderBench {
     /// Geometry-LOD threshold h₀ (see `sylva render --help`).
     #[arg(long, default_value_t = sylva_forest::driver::DEFAULT_LOD_FRACTION)]
     lod_fraction: f32,
+    #[command(flatten)]
+    lod: crate::render::LodArgs,
 }
 
 /// Sapling (Blender's WP95 add-on), reference figures measured on this machine kind:
@@ -144,6 +150,8 @@ fn render_bench(a: RenderBench) -> anyhow::Result<()> {
         wind: None,
         lod_fraction: a.lod_fraction,
         no_gif: true,
+        camera_path: false,
+        lod: a.lod,
     };
     println!("machine: {}", machine());
     let r = crate::render::render(&args)?;
@@ -246,6 +254,7 @@ pub fn run(cmd: BenchCommand) -> anyhow::Result<()> {
         BenchCommand::Sway(a) => sway(a),
         BenchCommand::Tree(a) => tree(a),
         BenchCommand::Render(a) => render_bench(a),
+        BenchCommand::Table3(a) => crate::table3::run(a),
     }
 }
 
@@ -261,7 +270,7 @@ fn time_generate(grid: &Grid, method: Method, runs: usize) -> anyhow::Result<f64
     Ok(median(&mut t))
 }
 
-fn machine() -> String {
+pub fn machine() -> String {
     let cpu = std::fs::read_to_string("/proc/cpuinfo")
         .ok()
         .and_then(|s| {

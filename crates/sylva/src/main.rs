@@ -6,6 +6,7 @@
 
 mod bench;
 mod render;
+mod table3;
 mod tree;
 mod view;
 mod wind;
@@ -74,6 +75,8 @@ fn demo(a: DemoArgs) -> anyhow::Result<()> {
         wind: None,
         lod_fraction: 3.0,
         no_gif: false,
+        camera_path: false,
+        lod: render::LodArgs::default(),
     };
     println!(
         "sylva demo: no display, rendering scene A (1000 trees in strong wind), 5 s at 10 fps, 800×600"

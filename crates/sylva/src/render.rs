@@ -35,6 +35,45 @@ pub struct RenderArgs {
     /// Skip the animated GIF.
     #[arg(long)]
     pub no_gif: bool,
+    /// Follow the scene's camera path (its default fly-in when it has none). Scenes with a
+    /// path follow it anyway.
+    #[arg(long)]
+    pub camera_path: bool,
+    #[command(flatten)]
+    pub lod: LodArgs,
+}
+
+/// The LOD switches of `render`, `view` and `bench` (each overrides the scene's `[lod]`).
+#[derive(Debug, Clone, Default, clap::Args)]
+pub struct LodArgs {
+    /// Geometry LOD off: every tree at full detail (no coarser meshes, no impostors).
+    #[arg(long)]
+    pub no_geometry_lod: bool,
+    /// Animation LOD off: every joint of every simulated tree stepped every frame.
+    #[arg(long)]
+    pub no_animation_lod: bool,
+    /// Wind-field LOD off: every tree simulated on its own (no instance groups).
+    #[arg(long)]
+    pub no_wind_lod: bool,
+    /// First LOD level drawn as an impostor (1 … 6; the scene's, default 3).
+    #[arg(long)]
+    pub far_level: Option<u32>,
+}
+
+impl LodArgs {
+    /// Apply to `spec` (validated: `far_level` in 1 … 6).
+    pub fn apply(&self, spec: &mut SceneSpec) -> anyhow::Result<()> {
+        if let Some(f) = self.far_level {
+            if !(1..=6).contains(&f) {
+                bail!("--far-level {f}: must be 1 … 6");
+            }
+            spec.lod.far_level = f;
+        }
+        spec.lod.geometry &= !self.no_geometry_lod;
+        spec.lod.animation &= !self.no_animation_lod;
+        spec.lod.wind &= !self.no_wind_lod;
+        Ok(())
+    }
 }
 
 pub fn parse_size(s: &str) -> anyhow::Result<(u32, u32)> {
@@ -119,6 +158,7 @@ pub fn render(a: &RenderArgs) -> anyhow::Result<RenderReport> {
     if !(a.seconds > 0.0 && a.seconds <= 3600.0) {
         bail!("--seconds {}: must be in (0, 3600]", a.seconds);
     }
+    a.lod.apply(&mut spec)?;
     let (w, h) = parse_size(&a.size)?;
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     let t0 = Instant::now();
@@ -137,7 +177,8 @@ pub fn render(a: &RenderArgs) -> anyhow::Result<RenderReport> {
     let mut gpu = Headless::new(&forest, w, h)?;
     let adapter = gpu.gpu.describe();
     println!("adapter {adapter}, {}× MSAA, {w}×{h}", gpu.renderer().samples());
-    let camera = forest.default_camera();
+    let follow = a.camera_path || !spec.camera_path.is_empty();
+    let fixed = forest.default_camera();
     let frames = (a.seconds * a.fps).round().max(1.0) as usize;
     let dt = (1.0 / a.fps) as f32;
     let gif_path = a.out.join("forest.gif");
@@ -156,10 +197,12 @@ pub fn render(a: &RenderArgs) -> anyhow::Result<RenderReport> {
     let (mut sim, mut draw, mut tris) = (Vec::new(), Vec::new(), 0.0);
     let mut step = Vec::new();
     let bar = indicatif::ProgressBar::new(frames as u64);
+    let aspect = w as f32 / h as f32;
     for i in 0..frames {
+        let camera = if follow { forest.camera_at((i + 1) as f32 * dt) } else { fixed };
         let t = Instant::now();
         forest.step(dt);
-        forest.frame(&camera, w as f32 / h as f32, &mut frame);
+        forest.frame(&camera, aspect, &mut frame);
         sim.push(t.elapsed().as_secs_f64() * 1e3);
         step.push(frame.stats.sim_ms);
         let t = Instant::now();

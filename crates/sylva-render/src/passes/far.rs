@@ -1,5 +1,5 @@
 //! Far trees as impostors (`far.wgsl`): each species is rendered once, at start-up, from
-//! [`VIEWS`] directions around it (level [`BAKE_LEVEL`] of its LOD chain, rest pose,
+//! [`VIEWS`] directions around it (its finest LOD level within [`BAKE_TRIANGLES`], rest pose,
 //! orthographic, horizontal) into an atlas of albedo and tree-space normals; a far tree is
 //! then one camera-facing quad (two triangles) showing the nearest view, lit per pixel like
 //! the near trees and swayed by its trunk-top joint.
@@ -22,8 +22,18 @@ use crate::shared::{
 pub const VIEWS: u32 = 8;
 /// Side of one view in the atlas, texels.
 pub const VIEW_SIZE: u32 = 256;
-/// The LOD level the impostors are rendered from.
-pub const BAKE_LEVEL: usize = 1;
+/// Impostors are rendered from the finest LOD level with at most this many triangles
+/// (full detail for every preset but the willow, whose level 0 has 851 000).
+pub const BAKE_TRIANGLES: usize = 300_000;
+
+/// The level of `model` its impostor is rendered from (see [`BAKE_TRIANGLES`]).
+pub fn bake_level(model: &TreeModel) -> usize {
+    model
+        .lods
+        .iter()
+        .position(|l| l.triangles() <= BAKE_TRIANGLES)
+        .unwrap_or(model.lods.len().saturating_sub(1))
+}
 /// Formats of the bake targets: albedo (sRGB) and normals (linear).
 pub const BAKE_TARGETS: [wgpu::TextureFormat; 2] =
     [wgpu::TextureFormat::Rgba8UnormSrgb, wgpu::TextureFormat::Rgba8Unorm];
@@ -103,7 +113,7 @@ impl FarPass {
 
     /// Bake `model`'s impostor: render its views, read them back, build the mip chains and
     /// upload them. `textures` is the species' bark and leaf bind group; `meshes` its
-    /// branch and leaf meshes at [`BAKE_LEVEL`].
+    /// branch and leaf meshes at [`bake_level`].
     pub fn bake(
         &self,
         gpu: &Gpu,
@@ -113,7 +123,7 @@ impl FarPass {
         meshes: (Option<&Mesh>, Option<&Mesh>),
     ) -> Result<FarSpeciesGpu, RenderError> {
         let dev = &gpu.device;
-        let level = &model.lods[BAKE_LEVEL.min(model.lods.len() - 1)];
+        let level = &model.lods[bake_level(model)];
         // Bounds: horizontal radius about the trunk axis and height range, billboards
         // counted with their half diagonal.
         let (mut radius, mut z0, mut z1) = (0.1f32, f32::INFINITY, f32::NEG_INFINITY);

@@ -1,0 +1,425 @@
+//! `sylva bench table3`: the paper's Table 3 (§5.2) on this machine. For each scene, the
+//! forest runs along its camera path (the default fly-in for A–D) with all three LODs,
+//! then with each LOD off in turn; per configuration: frames per second, ms per frame split
+//! into simulation (wind sample + sway step), frame building (culling, levels, buckets,
+//! palette copy) and rendering (upload, draw, read back), triangles, draw calls, joint
+//! updates, bytes uploaded, simulated trees, and the image error (mean FLIP through the
+//! `nv-flip` crate, SSIM through `image-compare`) of the last frame against the
+//! full-detail frame at the same time and camera. Warm-up frames are excluded from the medians.
+//!
+//! The full-detail reference keeps the scene's instance groups (the wind-field LOD): with
+//! it off every tree turns to its own yaw, so images would differ by layout, not by LOD.
+//! A configuration whose frames exceed `--max-triangles` is timed on the CPU only and its
+//! last frame rendered once (when under `--max-image-triangles`) for the image error.
+
+use std::fmt::Write as _;
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::Context;
+use clap::Args;
+use sylva_forest::{Forest, FrameData, SceneSpec};
+use sylva_render::Headless;
+
+use crate::render::{median, parse_size, write_png};
+
+#[derive(Debug, Args)]
+pub struct Table3Bench {
+    /// Scenes, comma-separated (built-in names or scene files).
+    #[arg(long, default_value = "A,B,C,D")]
+    scenes: String,
+    /// Image size.
+    #[arg(long, default_value = "1024x768")]
+    size: String,
+    /// Frames timed per configuration (after the warm-up), spread along the camera path.
+    #[arg(long, default_value_t = 6)]
+    frames: usize,
+    /// Warm-up frames, not timed.
+    #[arg(long, default_value_t = 2)]
+    warmup: usize,
+    /// Configurations drawing more triangles per frame are timed on the CPU side only.
+    #[arg(long, default_value_t = 12e6)]
+    max_triangles: f64,
+    /// Their last frame is still rendered for the image error below this many triangles.
+    #[arg(long, default_value_t = 80e6)]
+    max_image_triangles: f64,
+    /// First LOD level drawn as an impostor (1 … 6; default: the scene's).
+    #[arg(long)]
+    far_level: Option<u32>,
+    /// Geometry-LOD threshold h₀ (default: the scene's).
+    #[arg(long)]
+    lod_fraction: Option<f32>,
+    /// Output folder: table3.md, table3.csv, table3.png and each configuration's last frame.
+    #[arg(long, default_value = "out/table3")]
+    out: PathBuf,
+}
+
+/// The paper's Table 3 (FPS; GeForce 6600 GT, Athlon XP 3000+, 1024×768): rows in
+/// [`CONFIGS`] order, columns A–D.
+const PAPER: [[f64; 4]; 4] =
+    [[20.0, 14.5, 8.3, 2.2], [15.3, 9.5, 3.9, 1.0], [14.9, 11.6, 7.4, 2.1], [7.8, 3.4, 1.1, 0.2]];
+
+/// (row label, geometry, animation, wind-field LOD).
+const CONFIGS: [(&str, bool, bool, bool); 4] = [
+    ("with all LODs", true, true, true),
+    ("without geometry LOD", false, true, true),
+    ("without animation LOD", true, false, true),
+    ("without wind-field LOD", true, true, false),
+];
+
+/// What one configuration measured.
+#[derive(Debug, Clone, Default)]
+struct Cell {
+    note: String,
+    sim_ms: f64,
+    frame_ms: f64,
+    render_ms: Option<f64>,
+    triangles: f64,
+    draws: f64,
+    joints: f64,
+    upload_mb: f64,
+    simulated: usize,
+    impostors: f64,
+    ssim: Option<f64>,
+    flip: Option<f64>,
+    image: Option<Vec<u8>>,
+    /// The frame before the last, when asked for (the reference's motion floor).
+    previous: Option<Vec<u8>>,
+}
+
+impl Cell {
+    fn fps(&self) -> Option<f64> {
+        self.render_ms.map(|r| 1000.0 / (self.sim_ms + self.frame_ms + r))
+    }
+}
+
+fn run_config(
+    spec: &SceneSpec,
+    gpu: &mut Option<Headless>,
+    a: &Table3Bench,
+    (w, h): (u32, u32),
+    lods: (bool, bool, bool),
+    keep_previous: bool,
+) -> anyhow::Result<Cell> {
+    let mut spec = spec.clone();
+    (spec.lod.geometry, spec.lod.animation, spec.lod.wind) = lods;
+    if let Some(f) = a.far_level {
+        anyhow::ensure!((1..=6).contains(&f), "--far-level {f}: must be 1 … 6");
+        spec.lod.far_level = f;
+    }
+    if let Some(h0) = a.lod_fraction {
+        anyhow::ensure!(h0 > 0.0 && h0 <= 100.0, "--lod-fraction {h0}: must be in (0, 100]");
+        spec.lod.fraction = h0;
+    }
+    let mut forest = match Forest::new(&spec) {
+        Ok(f) => f,
+        Err(e) => return Ok(Cell { note: format!("not run: {e}"), ..Cell::default() }),
+    };
+    if gpu.is_none() {
+        *gpu = Some(Headless::new(&forest, w, h)?);
+    }
+    let gpu = gpu.as_mut().context("renderer")?;
+    let total = a.warmup + a.frames.max(1);
+    // The path's length: its last key (the default fly-in: 12 s).
+    let duration = if spec.camera_path.is_empty() {
+        sylva_forest::default_camera_path(&spec, forest.radius).last().map_or(12.0, |k| k.t)
+    } else {
+        spec.camera_path.last().map_or(0.0, |k| k.t)
+    };
+    let dt = 0.1f32;
+    let mut frame = FrameData::default();
+    let (mut sim, mut build, mut draw) = (Vec::new(), Vec::new(), Vec::new());
+    let mut cell = Cell::default();
+    let mut render_all = None;
+    for i in 0..total {
+        let camera = forest.camera_at(duration * i as f32 / (total - 1).max(1) as f32);
+        let t = Instant::now();
+        forest.step(dt);
+        let t_sim = t.elapsed().as_secs_f64() * 1e3;
+        let t = Instant::now();
+        forest.frame(&camera, w as f32 / h as f32, &mut frame);
+        let t_frame = t.elapsed().as_secs_f64() * 1e3;
+        let tris = frame.stats.triangles as f64;
+        let render_this = *render_all.get_or_insert(tris <= a.max_triangles);
+        let last = i + 1 == total;
+        let wanted = last || (keep_previous && i + 2 == total);
+        let image = if render_this || (wanted && tris <= a.max_image_triangles) {
+            let t = Instant::now();
+            let img = gpu.render(&frame, &camera)?;
+            let t_draw = t.elapsed().as_secs_f64() * 1e3;
+            if (i >= a.warmup && render_this) || (last && !render_this) {
+                draw.push(t_draw);
+            }
+            Some(img)
+        } else {
+            None
+        };
+        if i >= a.warmup {
+            sim.push(t_sim);
+            build.push(t_frame);
+            cell.triangles += tris;
+            cell.draws += frame.stats.draw_calls as f64;
+            cell.joints += frame.stats.joints as f64;
+            cell.upload_mb += frame.stats.uploaded_bytes as f64 / 1e6;
+            cell.impostors += frame.stats.impostors as f64;
+        }
+        if last {
+            cell.image = image;
+        } else if keep_previous && i + 2 == total {
+            cell.previous = image;
+        }
+    }
+    let k = a.frames.max(1) as f64;
+    for v in [&mut cell.triangles, &mut cell.draws, &mut cell.joints, &mut cell.upload_mb] {
+        *v /= k;
+    }
+    cell.impostors /= k;
+    cell.sim_ms = median(&mut sim);
+    cell.frame_ms = median(&mut build);
+    cell.render_ms = (!draw.is_empty()).then(|| median(&mut draw));
+    cell.simulated = frame.stats.simulated;
+    if render_all == Some(false) {
+        cell.note = match &cell.image {
+            Some(_) => "over --max-triangles: rendered once (last frame)".into(),
+            None => "over --max-image-triangles: not rendered".into(),
+        };
+    }
+    Ok(cell)
+}
+
+/// Mean FLIP error (NVIDIA's perceptual difference, 0 same … 1; through the `nv-flip`
+/// crate) of `test` against `reference` at the default 67 pixels per degree.
+fn flip(test: &[u8], reference: &[u8], w: u32, h: u32) -> f64 {
+    let rgb = |v: &[u8]| -> Vec<u8> { v.chunks(4).flat_map(|p| [p[0], p[1], p[2]]).collect() };
+    let r = nv_flip::FlipImageRgb8::with_data(w, h, &rgb(reference));
+    let t = nv_flip::FlipImageRgb8::with_data(w, h, &rgb(test));
+    let map = nv_flip::flip(r, t, nv_flip::DEFAULT_PIXELS_PER_DEGREE);
+    nv_flip::FlipPool::from_image(&map).mean() as f64
+}
+
+fn ssim(a: &[u8], b: &[u8], w: u32, h: u32) -> anyhow::Result<f64> {
+    use image_compare::prelude::RgbImage;
+    let rgb = |v: &[u8]| -> Vec<u8> { v.chunks(4).flat_map(|p| [p[0], p[1], p[2]]).collect() };
+    let ia = RgbImage::from_raw(w, h, rgb(a)).context("image size")?;
+    let ib = RgbImage::from_raw(w, h, rgb(b)).context("image size")?;
+    let s =
+        image_compare::rgb_similarity_structure(&image_compare::Algorithm::MSSIMSimple, &ia, &ib)?;
+    Ok(s.score)
+}
+
+pub fn run(a: Table3Bench) -> anyhow::Result<()> {
+    let (w, h) = parse_size(&a.size)?;
+    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    let machine = crate::bench::machine();
+    println!("machine: {machine}");
+    let names: Vec<String> = a.scenes.split(',').map(|s| s.trim().to_string()).collect();
+    let mut results: Vec<(String, usize, Vec<Cell>)> = Vec::new();
+    let mut floors: Vec<(String, Option<f64>)> = Vec::new();
+    let mut adapter = String::new();
+    for name in &names {
+        let spec = SceneSpec::load(name)?;
+        println!("scene {} ({} trees):", spec.name, spec.trees);
+        let mut gpu: Option<Headless> = None;
+        let mut cells = Vec::new();
+        for (label, g, an, wi) in CONFIGS {
+            let cell = run_config(&spec, &mut gpu, &a, (w, h), (g, an, wi), false)?;
+            println!(
+                "  {label:<24} {:>7} fps  sim {:>6.1} ms  frame {:>6.1} ms  render {:>8} ms  {:>7.2} M tris  {:>6.0} draws  {:>9.0} joints  {:>7.2} MB up  {}",
+                cell.fps().map_or("—".into(), |f| format!("{f:.2}")),
+                cell.sim_ms,
+                cell.frame_ms,
+                cell.render_ms.map_or("—".into(), |r| format!("{r:.0}")),
+                cell.triangles / 1e6,
+                cell.draws,
+                cell.joints,
+                cell.upload_mb,
+                cell.note
+            );
+            cells.push(cell);
+        }
+        // Reference: full detail (geometry and animation LODs off), same instance groups.
+        let reference = run_config(&spec, &mut gpu, &a, (w, h), (false, false, true), true)?;
+        if let Some(g) = &gpu {
+            adapter = g.gpu.describe();
+        }
+        let Some(ref_img) = reference.image.as_ref() else {
+            println!("  image error: reference not rendered ({})", reference.note);
+            results.push((spec.name.clone(), spec.trees, cells));
+            continue;
+        };
+        write_png(&a.out.join(format!("{}-full-detail.png", spec.name)), w, h, ref_img)?;
+        // The floor: how much one frame of wind changes the full-detail image.
+        let floor = reference.previous.as_ref().map(|p| flip(p, ref_img, w, h));
+        println!(
+            "  full detail, one frame ({:.1} s) of motion: mean FLIP {}",
+            0.1,
+            floor.map_or("—".into(), |f| format!("{f:.3}"))
+        );
+        floors.push((spec.name.clone(), floor));
+        for (cell, (label, ..)) in cells.iter_mut().zip(CONFIGS) {
+            if let Some(img) = &cell.image {
+                cell.ssim = Some(ssim(img, ref_img, w, h)?);
+                cell.flip = Some(flip(img, ref_img, w, h));
+                let file = format!("{}-{}.png", spec.name, label.replace(' ', "-"));
+                write_png(&a.out.join(file), w, h, img)?;
+            }
+        }
+        println!(
+            "  SSIM against full detail, last frame: {}",
+            cells
+                .iter()
+                .zip(CONFIGS)
+                .map(|(c, (l, ..))| format!(
+                    "{l}: {}",
+                    c.ssim.map_or("—".into(), |s| format!("{s:.3}"))
+                ))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+        results.push((spec.name.clone(), spec.trees, cells));
+    }
+    write_outputs(&a, &machine, &adapter, (w, h), &results, &floors)
+}
+
+fn write_outputs(
+    a: &Table3Bench,
+    machine: &str,
+    adapter: &str,
+    (w, h): (u32, u32),
+    results: &[(String, usize, Vec<Cell>)],
+    floors: &[(String, Option<f64>)],
+) -> anyhow::Result<()> {
+    let mut md = String::new();
+    let _ = writeln!(md, "# Table 3 on this machine\n");
+    let _ = writeln!(
+        md,
+        "`sylva bench table3 --scenes {} --size {}x{} --frames {} --warmup {}`; machine: {machine}; adapter: {adapter}.\n",
+        a.scenes, w, h, a.frames, a.warmup
+    );
+    let _ = writeln!(
+        md,
+        "Frames per second (paper's figure in brackets: GeForce 6600 GT, 1024×768):\n"
+    );
+    let header: Vec<String> = results.iter().map(|(n, t, _)| format!("{n} ({t} trees)")).collect();
+    let _ = writeln!(md, "| | {} |", header.join(" | "));
+    let _ = writeln!(md, "|---|{}", "---|".repeat(results.len()));
+    for (row, (label, ..)) in CONFIGS.iter().enumerate() {
+        let cells: Vec<String> = results
+            .iter()
+            .map(|(name, _, cells)| {
+                let col = ["A", "B", "C", "D"].iter().position(|s| s == name);
+                let paper = col.map_or(String::new(), |c| format!(" ({})", PAPER[row][c]));
+                let fps = cells[row].fps().map_or("—".into(), |f| format!("{f:.2}"));
+                format!("{fps}{paper}")
+            })
+            .collect();
+        let _ = writeln!(md, "| {label} | {} |", cells.join(" | "));
+    }
+    let _ =
+        writeln!(md, "\nPer configuration (medians over the timed frames; means for counts):\n");
+    let _ = writeln!(
+        md,
+        "| scene | configuration | sim ms | frame ms | render ms | M triangles | draws | joint updates | MB uploaded | simulated trees | impostors | FLIP vs full detail | SSIM vs full detail | note |"
+    );
+    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    let mut csv = String::from(
+        "scene,trees,configuration,fps,sim_ms,frame_ms,render_ms,triangles,draws,joint_updates,uploaded_mb,simulated,impostors,flip,ssim\n",
+    );
+    for (name, trees, cells) in results {
+        for (c, (label, ..)) in cells.iter().zip(CONFIGS) {
+            let opt = |v: Option<f64>, p: usize| v.map_or("—".into(), |v| format!("{v:.p$}"));
+            let _ = writeln!(
+                md,
+                "| {name} | {label} | {:.1} | {:.1} | {} | {:.2} | {:.0} | {:.0} | {:.2} | {} | {:.0} | {} | {} | {} |",
+                c.sim_ms,
+                c.frame_ms,
+                opt(c.render_ms, 0),
+                c.triangles / 1e6,
+                c.draws,
+                c.joints,
+                c.upload_mb,
+                c.simulated,
+                c.impostors,
+                opt(c.flip, 3),
+                opt(c.ssim, 3),
+                c.note
+            );
+            let _ = writeln!(
+                csv,
+                "{name},{trees},{label},{},{:.3},{:.3},{},{:.0},{:.0},{:.0},{:.3},{},{:.0},{},{}",
+                c.fps().map_or(String::new(), |f| format!("{f:.3}")),
+                c.sim_ms,
+                c.frame_ms,
+                c.render_ms.map_or(String::new(), |r| format!("{r:.1}")),
+                c.triangles,
+                c.draws,
+                c.joints,
+                c.upload_mb,
+                c.simulated,
+                c.impostors,
+                c.flip.map_or(String::new(), |s| format!("{s:.4}")),
+                c.ssim.map_or(String::new(), |s| format!("{s:.4}"))
+            );
+        }
+    }
+    let _ = writeln!(
+        md,
+        "\nImage error floor — mean FLIP between two consecutive full-detail frames (0.1 s of wind): {}",
+        floors
+            .iter()
+            .map(|(n, f)| format!("{n} {}", f.map_or("—".into(), |f| format!("{f:.3}"))))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    std::fs::write(a.out.join("table3.md"), &md)?;
+    std::fs::write(a.out.join("table3.csv"), &csv)?;
+    // Chart: FPS against trees, one line per configuration (ours solid colours).
+    let colours = [[30, 110, 40], [200, 60, 40], [40, 80, 200], [150, 120, 20]];
+    let series = CONFIGS
+        .iter()
+        .enumerate()
+        .map(|(row, (label, ..))| sylva_wind::plot::Series {
+            label: label.to_uppercase(),
+            color: colours[row],
+            points: results
+                .iter()
+                .filter_map(|(_, trees, cells)| cells[row].fps().map(|f| (*trees as f64, f)))
+                .collect(),
+            markers: false,
+        })
+        .collect();
+    let paper = CONFIGS
+        .iter()
+        .enumerate()
+        .map(|(row, (label, ..))| sylva_wind::plot::Series {
+            label: label.to_uppercase(),
+            color: colours[row],
+            points: [1000.0, 3000.0, 10000.0, 50000.0]
+                .iter()
+                .zip(PAPER[row])
+                .map(|(t, f)| (*t, f))
+                .collect(),
+            markers: false,
+        })
+        .collect();
+    let panels = [
+        sylva_wind::plot::Panel {
+            title: "FPS HERE VS TREES".into(),
+            log_x: true,
+            log_y: true,
+            y_range: None,
+            series,
+        },
+        sylva_wind::plot::Panel {
+            title: "FPS IN THE PAPER".into(),
+            log_x: true,
+            log_y: true,
+            y_range: None,
+            series: paper,
+        },
+    ];
+    sylva_wind::plot::write_png(&a.out.join("table3.png"), &panels)?;
+    println!("{md}");
+    println!("wrote {}/table3.md, table3.csv, table3.png", a.out.display());
+    Ok(())
+}
