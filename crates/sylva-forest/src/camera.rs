@@ -85,24 +85,67 @@ impl Camera {
     /// Fraction of the image height that an object of `size` m at `p` covers (0 behind the
     /// eye).
     pub fn screen_fraction(&self, p: [f32; 3], size: f32) -> f32 {
-        let depth = dot(sub(p, self.eye), self.forward());
-        if depth <= 0.0 {
-            return 0.0;
-        }
-        size / (2.0 * depth * (0.5 * self.fov_deg.to_radians()).tan())
+        self.cone(1.0).screen_fraction(p, size)
     }
 
     /// Whether a sphere of `radius` at `c` may be in view (conservative cone test).
     pub fn may_see(&self, c: [f32; 3], radius: f32, aspect: f32) -> bool {
-        let d = sub(c, self.eye);
-        let dist = dot(d, d).sqrt();
-        if dist <= radius {
-            return true;
-        }
+        self.cone(aspect).may_see(c, radius)
+    }
+
+    /// The view cone for an image of `aspect` = width / height, with what per-object tests
+    /// need precomputed.
+    pub fn cone(&self, aspect: f32) -> ViewCone {
         let half_v = 0.5 * self.fov_deg.to_radians();
         let half_diag = (half_v.tan() * (1.0 + aspect * aspect).sqrt()).atan();
-        let angle = (dot(d, self.forward()) / dist).clamp(-1.0, 1.0).acos();
-        angle - (radius / dist).clamp(-1.0, 1.0).asin() <= half_diag && dist - radius < self.far
+        let (sin_h, cos_h) = half_diag.sin_cos();
+        ViewCone {
+            eye: self.eye,
+            forward: self.forward(),
+            cos_h,
+            sin_h,
+            inv_height: 1.0 / (2.0 * half_v.tan()),
+            far: self.far,
+        }
+    }
+}
+
+/// A camera's view cone (the cone around the view direction through the image corners),
+/// for per-object culling and projected sizes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ViewCone {
+    eye: [f32; 3],
+    forward: [f32; 3],
+    cos_h: f32,
+    sin_h: f32,
+    /// 1 / (2 tan(fov / 2)): image heights per unit of size / depth.
+    inv_height: f32,
+    far: f32,
+}
+
+impl ViewCone {
+    /// Whether a sphere of `radius` at `c` may be in view: the angle φ between the view
+    /// direction and the centre, less the sphere's angular radius β = asin(r / d), is at most
+    /// the half-angle h; as cosines (h + β ≤ π), d·f ≥ cos h √(d² − r²) − r sin h.
+    pub fn may_see(&self, c: [f32; 3], radius: f32) -> bool {
+        let d = sub(c, self.eye);
+        let dist2 = dot(d, d);
+        if dist2 <= radius * radius {
+            return true;
+        }
+        let along = dot(d, self.forward);
+        along >= self.cos_h * (dist2 - radius * radius).sqrt() - radius * self.sin_h
+            && dist2.sqrt() - radius < self.far
+    }
+
+    /// Fraction of the image height that an object of `size` m at `p` covers (0 behind the
+    /// eye).
+    pub fn screen_fraction(&self, p: [f32; 3], size: f32) -> f32 {
+        let depth = dot(sub(p, self.eye), self.forward);
+        if depth <= 0.0 {
+            return 0.0;
+        }
+        size * self.inv_height / depth
     }
 }
 
@@ -138,5 +181,38 @@ mod tests {
         let right = apply(&vp, [1.0, 0.0, 2.0]);
         assert!(up[1] / up[3] > 0.0 && right[0] / right[3] > 0.0);
         assert!(c.may_see([0.0, 0.0, 2.0], 1.0, 1.5) && !c.may_see([0.0, -20.0, 2.0], 1.0, 1.5));
+    }
+
+    #[test]
+    fn the_cone_test_agrees_with_the_angles() {
+        // Against the angle form: φ − asin(r/d) ≤ h, sampled around the cone's edge.
+        let c = Camera {
+            eye: [1.0, -3.0, 2.0],
+            target: [4.0, 8.0, 1.0],
+            fov_deg: 55.0,
+            near: 0.5,
+            far: 1e4,
+        };
+        let aspect = 4.0 / 3.0;
+        let cone = c.cone(aspect);
+        let f = c.forward();
+        let h = ((0.5 * c.fov_deg.to_radians()).tan() * (1.0f32 + aspect * aspect).sqrt()).atan();
+        let (mut inside, mut outside) = (0, 0);
+        for k in 0..2000 {
+            let a = k as f32 * 0.37;
+            let p =
+                [1.0 + 30.0 * (a * 1.3).cos(), -3.0 + 30.0 * a.sin(), 2.0 + 9.0 * (a * 0.7).sin()];
+            let r = 0.5 + (k % 7) as f32;
+            let d = sub(p, c.eye);
+            let dist = dot(d, d).sqrt();
+            let phi = (dot(d, f) / dist).clamp(-1.0, 1.0).acos();
+            let margin = phi - (r / dist).min(1.0).asin() - h;
+            if margin.abs() < 1e-3 {
+                continue;
+            }
+            assert_eq!(cone.may_see(p, r), margin < 0.0, "point {p:?}, radius {r}");
+            if margin < 0.0 { inside += 1 } else { outside += 1 }
+        }
+        assert!(inside > 100 && outside > 100);
     }
 }

@@ -202,6 +202,8 @@ pub struct FrameStats {
     pub impostors: usize,
     /// Trees drawn at two levels (cross-fading).
     pub fading: usize,
+    /// Trees whose level changed since the previous frame of this view.
+    pub level_changes: usize,
     /// Bytes of palettes and instances this frame sends to the GPU.
     pub uploaded_bytes: usize,
     /// Instanced draws (per bucket: branches and leaves, or one impostor draw).
@@ -232,6 +234,9 @@ pub struct FrameData {
     pub stats: FrameStats,
     /// (bucket key, tree index) of each draw.
     keys: Vec<(u32, u32)>,
+    /// Counting-sort scratch.
+    counts: Vec<u32>,
+    sorted: Vec<(u32, u32)>,
     /// Per tree: continuous level after hysteresis (NaN: not seen yet).
     lod_state: Vec<f32>,
     /// Per lane group (all species in a row): joints to upload (a prefix; 0: not drawn).
@@ -560,11 +565,12 @@ impl Forest {
         }
         let lod = self.lod;
         let mut stats = FrameStats { trees: self.trees.len(), ..FrameStats::default() };
+        let cone = camera.cone(aspect);
         for (i, (p, g)) in self.trees.iter().enumerate() {
             let sp = &self.species[p.species as usize];
             let h = sp.model.tree.stats.height * p.scale;
             let c = [p.position[0], p.position[1], p.position[2] + 0.5 * h];
-            if !camera.may_see(c, 0.75 * h, aspect) {
+            if !cone.may_see(c, 0.75 * h) {
                 continue;
             }
             let chain = sp.model.lods.len() as u32;
@@ -574,8 +580,12 @@ impl Forest {
                 if lod.geometry && l >= far { sp.order.trunk } else { sp.order.prefix[l as usize] }
             };
             let (a, b, sim) = if lod.geometry {
-                let x = lod_coordinate(camera.screen_fraction(c, h), lod.fraction);
+                let x = lod_coordinate(cone.screen_fraction(c, h), lod.fraction);
                 let x = hysteresis(out.lod_state[i], x, lod.hysteresis);
+                let before = out.lod_state[i];
+                if !before.is_nan() && before.floor() != x.floor() {
+                    stats.level_changes += 1;
+                }
                 out.lod_state[i] = x;
                 let (a, b, _) = blend_levels(x, far, lod.band);
                 (a, b, blend_levels((x - SIM_MARGIN).max(0.0), far, 0.0).0)
@@ -591,7 +601,28 @@ impl Forest {
             stats.fading += (a != b) as usize;
             stats.impostors += (lod.geometry && b >= lod.far_level.min(chain)) as usize;
         }
-        out.keys.sort_unstable();
+        // Into (species, level) order, trees in order within each: a counting sort, the
+        // keys being few (species × levels).
+        out.counts.clear();
+        for &(key, _) in &out.keys {
+            let k = key as usize;
+            if k >= out.counts.len() {
+                out.counts.resize(k + 1, 0);
+            }
+            out.counts[k] += 1;
+        }
+        let mut at = 0;
+        for c in &mut out.counts {
+            (*c, at) = (at, at + *c);
+        }
+        out.sorted.clear();
+        out.sorted.resize(out.keys.len(), (0, 0));
+        for &(key, i) in &out.keys {
+            let slot = &mut out.counts[key as usize];
+            out.sorted[*slot as usize] = (key, i);
+            *slot += 1;
+        }
+        std::mem::swap(&mut out.keys, &mut out.sorted);
         // Palettes of the lane groups that are drawn: the prefix of joints their finest
         // drawn level uses (a contiguous run: the batch lays palettes out joint-major).
         out.palettes.clear();

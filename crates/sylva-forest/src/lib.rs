@@ -9,7 +9,7 @@ pub mod camera;
 pub mod driver;
 pub mod scene;
 
-pub use camera::{Camera, Mat4};
+pub use camera::{Camera, Mat4, ViewCone};
 pub use driver::{
     Bucket, Forest, ForestError, FrameData, FrameStats, Instance, LodSettings, SpeciesRuntime,
     blend_levels, hysteresis, lod_coordinate,

@@ -170,3 +170,42 @@ fn frames_are_deterministic_for_any_thread_count() {
     assert_eq!(ia, ib);
     assert!(a == b, "palettes differ between 1 and 2 threads");
 }
+
+#[test]
+fn switching_one_lod_off_changes_only_its_own_figures() {
+    let run = |lod: (bool, bool, bool)| {
+        let mut spec = SceneSpec::builtin("small").expect("small");
+        (spec.lod.geometry, spec.lod.animation, spec.lod.wind) = lod;
+        // A budget that makes the three aspens share simulations (instance groups).
+        spec.trees = 12;
+        spec.sim_joint_budget = 30_000;
+        let mut forest = Forest::new(&spec).expect("forest");
+        let cam = far_camera(&forest);
+        let mut f = FrameData::default();
+        for _ in 0..3 {
+            forest.step(0.05);
+            forest.frame(&cam, 4.0 / 3.0, &mut f);
+        }
+        f.stats
+    };
+    let all = run((true, true, true));
+    // Animation off: the same drawing, more joints stepped.
+    let anim = run((true, false, true));
+    assert_eq!(
+        (anim.triangles, anim.draw_calls, anim.uploaded_bytes, anim.impostors, anim.simulated),
+        (all.triangles, all.draw_calls, all.uploaded_bytes, all.impostors, all.simulated)
+    );
+    assert!(anim.joints > all.joints);
+    // Wind-field LOD off: every tree its own simulation; the same levels drawn.
+    let wind = run((true, true, false));
+    assert_eq!(
+        (wind.triangles, wind.draw_calls, wind.impostors),
+        (all.triangles, all.draw_calls, all.impostors)
+    );
+    assert!(wind.simulated > all.simulated && wind.simulated == 12);
+    // Geometry off: full detail drawn (and, as the animation LOD follows what is drawn,
+    // every drawn joint stepped).
+    let geo = run((false, true, true));
+    assert!(geo.triangles > 10 * all.triangles && geo.impostors == 0);
+    assert_eq!(geo.simulated, all.simulated);
+}

@@ -115,3 +115,42 @@ fn frames_draw_every_visible_tree_once_with_valid_palettes_and_trees_move() {
     );
     assert!(f.palettes.iter().all(|v| v.is_finite()));
 }
+
+#[test]
+fn table3_scenes_and_camera_paths_are_deterministic() {
+    for (name, trees) in [("A", 1000), ("B", 3000), ("C", 10_000), ("D", 50_000)] {
+        let spec = SceneSpec::builtin(name).expect("built-in");
+        assert_eq!(spec.trees, trees);
+        let t = Terrain::new(&spec);
+        let a = layout(&spec, &t);
+        assert_eq!(a.len(), trees, "scene {name}");
+        assert_eq!(a, layout(&spec, &Terrain::new(&spec)), "scene {name}: same seed, same layout");
+    }
+    // A keyframed path: through its keys, smooth between them, held at the ends.
+    let text = "name = \"p\"\ntrees = 3\nspecies = [{ name = \"quaking_aspen\" }]\n\
+        camera_path = [\n\
+          { t = 0.0, eye = [-60.0, -60.0, 20.0], target = [0.0, 0.0, 5.0] },\n\
+          { t = 4.0, eye = [-30.0, -40.0, 12.0], target = [0.0, 0.0, 5.0] },\n\
+          { t = 8.0, eye = [0.0, -30.0, 8.0], target = [0.0, 0.0, 6.0] },\n\
+        ]\n";
+    let spec = SceneSpec::from_toml("p.toml", text).expect("path scene");
+    let forest = sylva_forest::Forest::new(&spec).expect("forest");
+    assert_eq!(forest.camera_at(4.0).eye, [-30.0, -40.0, 12.0]);
+    assert_eq!(forest.camera_at(-1.0).eye, [-60.0, -60.0, 20.0]);
+    assert_eq!(forest.camera_at(99.0).eye, [0.0, -30.0, 8.0]);
+    let mut last = forest.camera_at(0.0).eye;
+    for k in 1..=800 {
+        let e = forest.camera_at(k as f32 * 0.01).eye;
+        let step = (0..3).map(|i| (e[i] - last[i]).abs()).fold(0.0, f32::max);
+        assert!(step < 0.25, "the camera jumps {step} m at t = {}", k as f32 * 0.01);
+        last = e;
+    }
+    assert_eq!(forest.camera_at(2.5), forest.camera_at(2.5));
+    // Keys out of order are refused, naming the field.
+    let bad = text.replace("t = 4.0", "t = 9.0");
+    let e = SceneSpec::from_toml("p.toml", &bad).expect_err("decreasing times");
+    assert!(e.to_string().contains("camera_path.t"), "{e}");
+    let e = SceneSpec::from_toml("p.toml", &format!("{text}[lod]\nfar_level = 9\n"))
+        .expect_err("far level");
+    assert!(e.to_string().contains("lod.far_level"), "{e}");
+}

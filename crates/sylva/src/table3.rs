@@ -49,6 +49,9 @@ pub struct Table3Bench {
     /// Geometry-LOD threshold h₀ (default: the scene's).
     #[arg(long)]
     lod_fraction: Option<f32>,
+    /// Frames of the popping measurement (scene `small`, calm, along its fly-in; 0: skip).
+    #[arg(long, default_value_t = 40)]
+    popping_frames: usize,
     /// Output folder: table3.md, table3.csv, table3.png and each configuration's last frame.
     #[arg(long, default_value = "out/table3")]
     out: PathBuf,
@@ -278,7 +281,78 @@ pub fn run(a: Table3Bench) -> anyhow::Result<()> {
         );
         results.push((spec.name.clone(), spec.trees, cells));
     }
-    write_outputs(&a, &machine, &adapter, (w, h), &results, &floors)
+    let popping = if a.popping_frames >= 3 { Some(popping(&a)?) } else { None };
+    write_outputs(&a, &machine, &adapter, (w, h), &results, &floors, popping.as_deref())
+}
+
+/// Median and maximum of `v` (NaN when empty).
+fn median_max(v: &mut [f64]) -> (f64, f64) {
+    let max = v.iter().copied().fold(f64::NAN, f64::max);
+    (median(v), max)
+}
+
+/// Popping: the small scene in calm air seen from a fixed camera while the LOD threshold
+/// h₀ sweeps from 0.3 to 3 (so every tree walks down the chain as in a fly-out, with no
+/// camera motion to hide a jump): how much each frame differs from the one before (mean
+/// |Δ| over RGB, 0–255), split into frames where some tree changed level and frames where
+/// none did; with the cross-fade and with instant switches.
+fn popping(a: &Table3Bench) -> anyhow::Result<String> {
+    let (w, h) = (512, 384);
+    let mut spec = SceneSpec::builtin("small")?;
+    spec.wind = "calm".into();
+    let n = a.popping_frames;
+    let mut md = String::new();
+    let _ = writeln!(
+        md,
+        "\nPopping — scene `small` in calm air, fixed camera, {n} frames while h₀ sweeps 0.3 → 3 (trees coarsen as if the camera backed off ×10), {w}×{h}; mean |Δ| (0–255) between consecutive frames:\n"
+    );
+    let _ = writeln!(
+        md,
+        "| level switch | frames without a level change: median / max | frames with one: median / max |"
+    );
+    let _ = writeln!(md, "|---|---|---|");
+    let mut gpu: Option<Headless> = None;
+    for (label, band, hysteresis) in
+        [("cross-faded (default)", 0.3, 0.1), ("instant (band 0)", 0.0, 0.0)]
+    {
+        let mut forest = Forest::new(&spec)?;
+        forest.set_lod(sylva_forest::LodSettings { band, hysteresis, ..forest.lod() });
+        if gpu.is_none() {
+            gpu = Some(Headless::new(&forest, w, h)?);
+        }
+        let gpu = gpu.as_mut().context("renderer")?;
+        let camera = forest.default_camera();
+        let mut frame = FrameData::default();
+        let mut prev: Option<Vec<u8>> = None;
+        let (mut calm, mut switching) = (Vec::new(), Vec::new());
+        for i in 0..n {
+            let h0 = 0.3 * 10f32.powf(i as f32 / (n - 1) as f32);
+            forest.set_lod(sylva_forest::LodSettings { fraction: h0, ..forest.lod() });
+            forest.step(0.1);
+            forest.frame(&camera, w as f32 / h as f32, &mut frame);
+            let img = gpu.render(&frame, &camera)?;
+            if let Some(p) = &prev {
+                let d = p
+                    .iter()
+                    .zip(&img)
+                    .map(|(x, y)| (*x as i32 - *y as i32).unsigned_abs() as f64)
+                    .sum::<f64>()
+                    / p.len() as f64;
+                if frame.stats.level_changes > 0 { switching.push(d) } else { calm.push(d) }
+            }
+            prev = Some(img);
+        }
+        let (cm, cx) = median_max(&mut calm);
+        let (sm, sx) = median_max(&mut switching);
+        let _ = writeln!(
+            md,
+            "| {label} | {cm:.2} / {cx:.2} ({} frames) | {sm:.2} / {sx:.2} ({} frames) |",
+            calm.len(),
+            switching.len()
+        );
+    }
+    println!("{md}");
+    Ok(md)
 }
 
 fn write_outputs(
@@ -288,6 +362,7 @@ fn write_outputs(
     (w, h): (u32, u32),
     results: &[(String, usize, Vec<Cell>)],
     floors: &[(String, Option<f64>)],
+    popping: Option<&str>,
 ) -> anyhow::Result<()> {
     let mut md = String::new();
     let _ = writeln!(md, "# Table 3 on this machine\n");
@@ -371,6 +446,41 @@ fn write_outputs(
             .collect::<Vec<_>>()
             .join(", ")
     );
+    // Speed-up of each LOD: with all LODs against that one off, in frames per second and in
+    // CPU time (simulation + frame building), beside the paper's.
+    let _ = writeln!(
+        md,
+        "\nSpeed-up of each LOD (all LODs ÷ that LOD off): FPS here · CPU ms here · FPS in the paper:\n"
+    );
+    let _ = writeln!(md, "| LOD | {} |", header.join(" | "));
+    let _ = writeln!(md, "|---|{}", "---|".repeat(results.len()));
+    for (row, (label, ..)) in CONFIGS.iter().enumerate().skip(1) {
+        let cells: Vec<String> = results
+            .iter()
+            .map(|(name, _, cells)| {
+                let (on, off) = (&cells[0], &cells[row]);
+                let fps = match (on.fps(), off.fps()) {
+                    (Some(x), Some(y)) => format!("×{:.2}", x / y),
+                    _ => "—".into(),
+                };
+                let cpu_off = off.sim_ms + off.frame_ms;
+                let cpu = if cpu_off > 0.0 {
+                    format!("×{:.2}", cpu_off / (on.sim_ms + on.frame_ms))
+                } else {
+                    "—".into()
+                };
+                let col = ["A", "B", "C", "D"].iter().position(|s| s == name);
+                let paper =
+                    col.map_or("—".into(), |c| format!("×{:.2}", PAPER[0][c] / PAPER[row][c]));
+                format!("{fps} · {cpu} · {paper}")
+            })
+            .collect();
+        let _ =
+            writeln!(md, "| {} | {} |", label.trim_start_matches("without "), cells.join(" | "));
+    }
+    if let Some(p) = popping {
+        md.push_str(p);
+    }
     std::fs::write(a.out.join("table3.md"), &md)?;
     std::fs::write(a.out.join("table3.csv"), &csv)?;
     // Chart: FPS against trees, one line per configuration (ours solid colours).

@@ -8,7 +8,6 @@ use std::time::Instant;
 
 use anyhow::Context;
 use clap::Args;
-use sylva_forest::driver::DEFAULT_LOD_FRACTION;
 use sylva_forest::{Camera, Forest, FrameData, SceneSpec};
 use sylva_render::{Gpu, Renderer, wgpu};
 use winit::application::ApplicationHandler;
@@ -19,13 +18,15 @@ use winit::window::{Window, WindowId};
 
 #[derive(Debug, Args)]
 pub struct ViewArgs {
-    /// Scene: a built-in name (small, A) or a scene file (.toml).
+    /// Scene: a built-in name (small, A, B, C, D) or a scene file (.toml).
     #[arg(long, default_value = "A")]
     pub scene: String,
-    /// Geometry-LOD threshold h₀ (see `sylva render --help`). Default: 1 on a GPU, 3 on a
-    /// software rasteriser such as lavapipe.
+    /// Geometry-LOD threshold h₀ (see `sylva render --help`). Default: the scene's on a
+    /// GPU, 3 on a software rasteriser such as lavapipe.
     #[arg(long)]
     pub lod_fraction: Option<f32>,
+    #[command(flatten)]
+    pub lod: crate::render::LodArgs,
 }
 
 /// Whether a window can be opened here (a display server is named in the environment).
@@ -119,7 +120,8 @@ impl App {
         }
         surface.configure(&gpu.device, &config);
         let software = gpu.adapter.get_info().device_type == wgpu::DeviceType::Cpu;
-        let h0 = self.lod_fraction.unwrap_or(if software { 3.0 } else { DEFAULT_LOD_FRACTION });
+        let scene_h0 = self.forest.lod().fraction;
+        let h0 = self.lod_fraction.unwrap_or(if software { 3.0 } else { scene_h0 });
         self.forest.set_lod_fraction(h0);
         let renderer =
             Renderer::for_forest(&gpu, &self.forest, config.format, config.width, config.height)?;
@@ -262,7 +264,8 @@ impl ApplicationHandler for App {
 }
 
 pub fn view(a: &ViewArgs) -> anyhow::Result<()> {
-    let spec = SceneSpec::load(&a.scene)?;
+    let mut spec = SceneSpec::load(&a.scene)?;
+    a.lod.apply(&mut spec)?;
     if let Some(h0) = a.lod_fraction
         && !(h0 > 0.0 && h0.is_finite())
     {
