@@ -510,6 +510,13 @@ impl Forest {
         (self.gain, self.turn.to_degrees())
     }
 
+    /// The wind grid: points per side and their spacing, m.
+    pub fn wind_grid(&self) -> (usize, f64) {
+        let xs = &self.wind.grid.xs;
+        let spacing = if xs.len() > 1 { xs[1] - xs[0] } else { 0.0 };
+        (xs.len(), spacing)
+    }
+
     /// Number of trees.
     pub fn trees(&self) -> usize {
         self.trees.len()
@@ -724,14 +731,25 @@ fn sample_wind(field: &WindField, gain: f32, turn: f32, p: [f64; 3], t: f64) -> 
     ]
 }
 
+/// Wind grid points per side: enough to resolve twice the tree spacing across the forest,
+/// within 32 … [`MAX_WIND_POINTS`].
+pub fn wind_points(spec: &SceneSpec, radius: f32) -> usize {
+    let half = (radius as f64 + 30.0) * std::f64::consts::SQRT_2;
+    ((2.0 * half / (2.0 * spec.spacing as f64)).ceil() as usize + 1).clamp(32, MAX_WIND_POINTS)
+}
+
+/// Cap on wind grid points per side (96² points × 2 heights × 3 components × 512 frames of
+/// f32: 113 MB).
+pub const MAX_WIND_POINTS: usize = 96;
+
 /// The scene's wind field: its preset and direction over a grid covering the forest
-/// (about 32 × 32 points, two heights), looping every 51.2 s.
+/// ([`wind_points`] a side, two heights), looping every 51.2 s.
 fn wind_field(spec: &SceneSpec, radius: f32) -> Result<WindField, ForestError> {
     let preset = Preset::from_name(&spec.wind)
         .ok_or_else(|| ForestError::Wind(format!("no preset `{}`", spec.wind)))?;
     let params = WindParams { direction_deg: spec.wind_direction_deg as f64, ..preset.params() };
     let half = (radius as f64 + 30.0) * std::f64::consts::SQRT_2;
-    let n = 32usize;
+    let n = wind_points(spec, radius);
     let spacing = 2.0 * half / (n - 1) as f64;
     let mut grid = Grid::regular(n, n, spacing, &[8.0, 22.0], 512, 0.1);
     grid.xs = (0..n).map(|i| -half + spacing * i as f64).collect();

@@ -167,8 +167,9 @@ pub fn render(a: &RenderArgs) -> anyhow::Result<RenderReport> {
         bail!("--lod-fraction {}: must be > 0", a.lod_fraction);
     }
     forest.set_lod_fraction(a.lod_fraction);
+    let (wind_n, wind_dx) = forest.wind_grid();
     println!(
-        "scene {}: {} trees, {} species, built in {:.2} s",
+        "scene {}: {} trees, {} species, wind grid {wind_n}×{wind_n} at {wind_dx:.1} m, built in {:.2} s",
         spec.name,
         forest.trees(),
         forest.species.len(),
