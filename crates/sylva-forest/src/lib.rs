@@ -4,6 +4,7 @@
 //! GPU-free: the renderer reads [`FrameData`] (plain `Pod` arrays) and the tree models; it
 //! never calls back into the simulation.
 #![warn(missing_docs)]
+#![forbid(unsafe_code)]
 
 pub mod camera;
 pub mod driver;

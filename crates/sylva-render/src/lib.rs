@@ -6,6 +6,7 @@
 //! the simulation. Each pass (`passes/`) keeps its pipeline and its `.wgsl` side by side;
 //! `common.wgsl` is prepended to each; [`layout`] holds every type the shaders read.
 #![warn(missing_docs)]
+#![forbid(unsafe_code)]
 
 mod gpu;
 mod headless;

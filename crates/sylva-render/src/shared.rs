@@ -232,7 +232,7 @@ pub fn instance_buffer(dev: &wgpu::Device, size: u64) -> wgpu::Buffer {
 }
 
 /// How a pass's pipeline is built.
-#[derive(Debug)]
+#[derive(Debug, Clone, Copy)]
 pub struct PipelineSpec<'a> {
     /// Shader file (see [`SHADERS`]).
     pub shader: &'a str,
@@ -302,6 +302,29 @@ pub fn pipeline(dev: &wgpu::Device, spec: &PipelineSpec<'_>) -> wgpu::RenderPipe
         multiview_mask: None,
         cache: None,
     })
+}
+
+/// A tree pass's two pipelines from one `spec`: the frame's (`fs_main`, as `spec` says)
+/// and the impostor bake's (`fs_bake`, no MSAA, into `bake_targets`).
+pub fn draw_and_bake(
+    dev: &wgpu::Device,
+    spec: &PipelineSpec<'_>,
+    bake_targets: &[wgpu::TextureFormat],
+) -> (wgpu::RenderPipeline, wgpu::RenderPipeline) {
+    let bake = PipelineSpec { fragment: "fs_bake", samples: 1, targets: bake_targets, ..*spec };
+    (pipeline(dev, spec), pipeline(dev, &bake))
+}
+
+/// A depth attachment cleared to the far plane and discarded after the pass.
+pub fn depth_cleared(view: &wgpu::TextureView) -> wgpu::RenderPassDepthStencilAttachment<'_> {
+    wgpu::RenderPassDepthStencilAttachment {
+        view,
+        depth_ops: Some(wgpu::Operations {
+            load: wgpu::LoadOp::Clear(1.0),
+            store: wgpu::StoreOp::Discard,
+        }),
+        stencil_ops: None,
+    }
 }
 
 /// A pipeline layout of `groups`.

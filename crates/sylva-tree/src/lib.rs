@@ -8,6 +8,7 @@
 //! geometry LOD chain) and the procedural [`texture`]s; [`gltf`] writes it all as `.glb`.
 //! See `ARCHITECTURE.md`.
 #![warn(missing_docs)]
+#![forbid(unsafe_code)]
 
 pub mod generate;
 pub mod gltf;

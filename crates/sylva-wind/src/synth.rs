@@ -14,7 +14,7 @@
 //!   √(S0_a S0_b)) and its Cholesky factor per line, in f64. O(N n³): a reference for small
 //!   grids.
 //! * [`Method::Separable`] — exact and fast. With one speed in the coherence denominator,
-//!   the coherence matrix on a rectilinear grid is R_z ⊗ R_y ⊗ R_x with R[a,b] = e^{−a|p_a − p_b|}
+//!   the coherence matrix on a rectilinear grid is R_z ⊗ R_y ⊗ R_x with R\[a,b\] = e^{−a|p_a − p_b|}
 //!   per axis, whose Cholesky factor is L_z ⊗ L_y ⊗ L_x, each an AR(1) recursion
 //!   y_0 = e_0, y_i = ρ_i y_{i−1} + √(1−ρ_i²) e_i with ρ_i = e^{−a·gap_i} (√(1−ρ²) evaluated as
 //!   √(−expm1(−2a·gap)) for accuracy at low frequency). Height-dependent spectra stay exact since

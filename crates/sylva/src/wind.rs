@@ -63,7 +63,7 @@ pub enum MethodArg {
 pub enum FormatArg {
     /// Sylva's compact int16 format with header and checksum.
     Swf,
-    /// NumPy float32 array (frames, 3, [nz,] ny, nx) plus a JSON sidecar.
+    /// NumPy float32 array (frames, 3, ny, nx), or (frames, 3, nz, ny, nx) with several heights, plus a JSON sidecar.
     Npy,
     /// TurbSim binary full-field (one y–z plane over time).
     Bts,

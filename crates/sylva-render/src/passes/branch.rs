@@ -6,7 +6,7 @@ use sylva_tree::mesh::TreeLod;
 
 use crate::gpu::Gpu;
 use crate::layout::{BRANCH_ATTRIBUTES, BranchVertex, instance_layout, vertex_layout};
-use crate::shared::{Mesh, PipelineSpec, pipeline};
+use crate::shared::{Mesh, PipelineSpec, draw_and_bake};
 
 /// The branch pass: a pipeline for the frame and one for the impostor bake.
 #[derive(Debug)]
@@ -28,7 +28,7 @@ impl BranchPass {
     ) -> BranchPass {
         let buffers =
             [Some(vertex_layout::<BranchVertex>(&BRANCH_ATTRIBUTES)), Some(instance_layout())];
-        let mut spec = PipelineSpec {
+        let spec = PipelineSpec {
             shader: "branch.wgsl",
             fragment: "fs_main",
             layout,
@@ -38,11 +38,8 @@ impl BranchPass {
             samples,
             targets: &[format],
         };
-        let draw = pipeline(dev, &spec);
-        spec.fragment = "fs_bake";
-        spec.samples = 1;
-        spec.targets = bake_targets;
-        BranchPass { draw, bake: pipeline(dev, &spec) }
+        let (draw, bake) = draw_and_bake(dev, &spec, bake_targets);
+        BranchPass { draw, bake }
     }
 }
 

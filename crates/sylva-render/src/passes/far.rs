@@ -224,14 +224,7 @@ impl FarPass {
             let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("impostor bake"),
                 color_attachments: &[clear(&av), clear(&nv)],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &dv,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Discard,
-                    }),
-                    stencil_ops: None,
-                }),
+                depth_stencil_attachment: Some(crate::shared::depth_cleared(&dv)),
                 timestamp_writes: None,
                 occlusion_query_set: None,
                 multiview_mask: None,

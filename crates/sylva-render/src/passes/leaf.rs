@@ -7,7 +7,7 @@ use sylva_tree::mesh::TreeLod;
 
 use crate::gpu::Gpu;
 use crate::layout::{LEAF_ATTRIBUTES, LeafVertex, instance_layout, vertex_layout};
-use crate::shared::{Mesh, PipelineSpec, pipeline};
+use crate::shared::{Mesh, PipelineSpec, draw_and_bake};
 
 /// The leaf pass: a pipeline for the frame and one for the impostor bake.
 #[derive(Debug)]
@@ -29,7 +29,7 @@ impl LeafPass {
     ) -> LeafPass {
         let buffers =
             [Some(vertex_layout::<LeafVertex>(&LEAF_ATTRIBUTES)), Some(instance_layout())];
-        let mut spec = PipelineSpec {
+        let spec = PipelineSpec {
             shader: "leaf.wgsl",
             fragment: "fs_main",
             layout,
@@ -39,11 +39,8 @@ impl LeafPass {
             samples,
             targets: &[format],
         };
-        let draw = pipeline(dev, &spec);
-        spec.fragment = "fs_bake";
-        spec.samples = 1;
-        spec.targets = bake_targets;
-        LeafPass { draw, bake: pipeline(dev, &spec) }
+        let (draw, bake) = draw_and_bake(dev, &spec, bake_targets);
+        LeafPass { draw, bake }
     }
 }
 
