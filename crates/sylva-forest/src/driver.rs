@@ -8,6 +8,10 @@
 //! as fit, and each run is one simulated instance, driven by the wind at the run's centre.
 //! Trees that share a simulation share its yaw, so the wind bends them all downwind.
 //!
+//! **Wind-field LOD.** Besides the instance groups, the field is kept as a mip pyramid;
+//! simulations whose trees are all impostors (or out of view) read level
+//! [`FAR_WIND_LEVEL`] (4 × 4 grid points averaged), the others the full field.
+//!
 //! **Geometry LOD** ([`LodSettings`]). A tree's continuous level is
 //! `x = 1 + log₃(h₀ / h)` (≥ 0; level ⌊x⌋), where `h` is the fraction of the image height its
 //! crown covers and `h₀` the fraction from which it is drawn at full detail. A backlash of half-width
@@ -38,7 +42,7 @@ use sylva_sway::{LANES, LeafParams, LeafSway, SwayBatch, SwayParams, SwaySpecies
 
 use sylva_tree::mesh::{LOD_LEVELS, TreeModel};
 use sylva_tree::{LodOrder, Species, lod_order};
-use sylva_wind::{Grid, Preset, SynthParams, WindField, WindParams};
+use sylva_wind::{FieldView, Grid, OwnedPyramid, Preset, SynthParams, WindField, WindParams};
 use thiserror::Error;
 
 use crate::camera::Camera;
@@ -125,6 +129,9 @@ pub struct LodSettings {
     pub animation: bool,
 }
 
+/// Pyramid level the wind of far groups is read from: averages of 4 × 4 grid points.
+pub const FAR_WIND_LEVEL: usize = 2;
+
 /// How much finer (in levels) than it is drawn a tree is simulated, so the simulation
 /// leads the camera by a frame.
 pub const SIM_MARGIN: f32 = 0.5;
@@ -204,6 +211,8 @@ pub struct FrameStats {
     pub fading: usize,
     /// Trees whose level changed since the previous frame of this view.
     pub level_changes: usize,
+    /// Simulated instances that read the wind pyramid's coarse level in the last step.
+    pub coarse_wind: usize,
     /// Bytes of palettes and instances this frame sends to the GPU.
     pub uploaded_bytes: usize,
     /// Instanced draws (per bucket: branches and leaves, or one impostor draw).
@@ -262,6 +271,8 @@ pub struct SpeciesRuntime {
     lane_base: usize,
     /// The skeleton's LOD order: joints each level uses, joints of the trunk.
     pub order: LodOrder,
+    /// Simulated instances that read the coarse wind in the last step.
+    coarse_wind: usize,
 }
 
 impl SpeciesRuntime {
@@ -298,7 +309,8 @@ pub struct Forest {
     pub species: Vec<SpeciesRuntime>,
     /// Trees: placement and the (species-local) group each one follows.
     trees: Vec<(Placement, u32)>,
-    wind: WindField,
+    /// The wind field and its mip pyramid (the wind-field LOD).
+    wind: OwnedPyramid,
     leaf_params: LeafParams,
     /// Radius of the forest (trunks), m.
     pub radius: f32,
@@ -423,10 +435,11 @@ impl Forest {
                 groups,
                 lane_base,
                 order,
+                coarse_wind: 0,
             });
             lane_base += n_groups.div_ceil(LANES);
         }
-        let wind = wind_field(spec, radius)?;
+        let wind = OwnedPyramid::new(wind_field(spec, radius)?);
         Ok(Forest {
             spec: spec.clone(),
             terrain,
@@ -512,7 +525,7 @@ impl Forest {
 
     /// The wind grid: points per side and their spacing, m.
     pub fn wind_grid(&self) -> (usize, f64) {
-        let xs = &self.wind.grid.xs;
+        let xs = &self.wind.field().grid.xs;
         let spacing = if xs.len() > 1 { xs[1] - xs[0] } else { 0.0 };
         (xs.len(), spacing)
     }
@@ -523,7 +536,7 @@ impl Forest {
     }
 
     fn wind_at(&self, p: [f64; 3], t: f64) -> [f32; 3] {
-        sample_wind(&self.wind, self.gain, self.turn, p, t)
+        sample_wind(self.wind.level(0), self.gain, self.turn, p, t)
     }
 
     /// Advance the simulation by `dt` seconds (> 0; others are ignored).
@@ -535,17 +548,26 @@ impl Forest {
         self.time += dt as f64;
         let t = self.time;
         let leaf = self.leaf_params;
-        let (field, gain, turn) = (&self.wind, self.gain, self.turn);
+        let (pyramid, gain, turn) = (&self.wind, self.gain, self.turn);
         let (simulate, animation) = (&self.simulate, self.lod.animation);
+        let coarse_levels = self.spec.lod.wind;
         // Species in parallel; each samples the shared, read-only field for its groups.
         self.species.par_iter_mut().for_each(|s| {
             let all = s.batch.species().len();
+            let trunk = s.order.trunk;
+            s.coarse_wind = 0;
             for k in 0..s.groups.len().div_ceil(LANES) {
                 let want = simulate[s.lane_base + k].load(Ordering::Relaxed) as usize;
                 s.batch.set_active(k, if animation { want } else { all });
             }
-            for (g, out) in s.groups.iter_mut().zip(&mut s.winds) {
-                let w = sample_wind(field, gain, turn, g.sample, t);
+            for (i, (g, out)) in s.groups.iter_mut().zip(&mut s.winds).enumerate() {
+                // Wind-field LOD: groups whose trees are all impostors (or out of view) read
+                // the pyramid's coarse level.
+                let want = simulate[s.lane_base + i / LANES].load(Ordering::Relaxed) as usize;
+                let far = coarse_levels && want <= trunk;
+                s.coarse_wind += far as usize;
+                let level = if far { FAR_WIND_LEVEL } else { 0 };
+                let w = sample_wind(pyramid.level(level), gain, turn, g.sample, t);
                 let (sn, cs) = g.yaw.sin_cos();
                 *out = [cs * w[0] + sn * w[1], -sn * w[0] + cs * w[1], w[2]];
                 let speed = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
@@ -655,6 +677,7 @@ impl Forest {
                 }
             }
             stats.simulated += s.groups.len();
+            stats.coarse_wind += s.coarse_wind;
             stats.joints += s.batch.joint_updates();
         }
         for (a, &v) in self.simulate.iter().zip(&out.simulate) {
@@ -720,9 +743,10 @@ impl Forest {
     }
 }
 
-/// Wind at world point `p` and time `t`, scaled by `gain` and turned by `turn` rad.
-fn sample_wind(field: &WindField, gain: f32, turn: f32, p: [f64; 3], t: f64) -> [f32; 3] {
-    let w = field.view().sample(p, t);
+/// Wind at world point `p` and time `t` on `view`, scaled by `gain` and turned by `turn`
+/// rad.
+fn sample_wind(view: FieldView<'_>, gain: f32, turn: f32, p: [f64; 3], t: f64) -> [f32; 3] {
+    let w = view.sample(p, t);
     let (s, c) = turn.sin_cos();
     [
         gain * (c * w[0] as f32 - s * w[1] as f32),

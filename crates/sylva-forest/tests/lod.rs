@@ -91,6 +91,8 @@ fn joints_not_drawn_are_neither_uploaded_nor_stepped() {
     // Stepped: the trunk joints of every simulated instance.
     let stepped: usize = forest.species.iter().map(|s| s.order.trunk * s.simulated()).sum();
     assert_eq!(f.stats.joints, stepped, "joint updates of the last step");
+    // Wind-field LOD: every simulation drives impostors only, so all read the coarse wind.
+    assert_eq!(f.stats.coarse_wind, f.stats.simulated);
     let all: usize =
         forest.species.iter().map(|s| s.model.tree.skeleton.len() * s.simulated()).sum();
     assert!(f.stats.joints * 20 < all);
@@ -203,6 +205,10 @@ fn switching_one_lod_off_changes_only_its_own_figures() {
         (all.triangles, all.draw_calls, all.impostors)
     );
     assert!(wind.simulated > all.simulated && wind.simulated == 12);
+    assert!(
+        all.coarse_wind > 0 && wind.coarse_wind == 0,
+        "only the wind-field LOD reads coarse wind"
+    );
     // Geometry off: full detail drawn (and, as the animation LOD follows what is drawn,
     // every drawn joint stepped).
     let geo = run((false, true, true));

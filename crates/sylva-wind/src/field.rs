@@ -246,38 +246,7 @@ impl<'a> MipPyramid<'a> {
     /// Build every level down to a single point across (each halves nx and ny, rounding up:
     /// an odd last point is averaged alone).
     pub fn new(field: &'a WindField) -> MipPyramid<'a> {
-        let g = &field.grid;
-        let mut coarse: Vec<Level> = Vec::new();
-        let (mut xs, mut ys) = (g.xs.clone(), g.ys.clone());
-        while xs.len() > 1 || ys.len() > 1 {
-            let src: &[f32] = coarse.last().map_or(&field.data, |l| &l.data);
-            let half = |a: &[f64]| -> Vec<f64> {
-                a.chunks(2).map(|c| c.iter().sum::<f64>() / c.len() as f64).collect()
-            };
-            let (nxs, nys) = (half(&xs), half(&ys));
-            let (nx, ny, nz) = (xs.len(), ys.len(), g.nz());
-            let (mx, my) = (nxs.len(), nys.len());
-            let mut data = vec![0.0f32; g.frames * 3 * nz * my * mx];
-            for (plane_out, plane_in) in data.chunks_mut(my * mx).zip(src.chunks(ny * nx)) {
-                for j in 0..my {
-                    for i in 0..mx {
-                        let mut sum = 0.0f64;
-                        let mut cnt = 0.0;
-                        for y in 2 * j..(2 * j + 2).min(ny) {
-                            for x in 2 * i..(2 * i + 2).min(nx) {
-                                sum += plane_in[y * nx + x] as f64;
-                                cnt += 1.0;
-                            }
-                        }
-                        plane_out[j * mx + i] = (sum / cnt) as f32;
-                    }
-                }
-            }
-            coarse.push(Level { xs: nxs.clone(), ys: nys.clone(), data });
-            xs = nxs;
-            ys = nys;
-        }
-        MipPyramid { base: field, coarse }
+        MipPyramid { base: field, coarse: coarsen(field) }
     }
 
     /// Number of levels, the full-resolution field included.
@@ -292,6 +261,76 @@ impl<'a> MipPyramid<'a> {
         }
         let lv = &self.coarse[(l - 1).min(self.coarse.len() - 1)];
         FieldView { xs: &lv.xs, ys: &lv.ys, data: &lv.data, ..self.base.view() }
+    }
+}
+
+/// The coarse levels of `field`'s pyramid: each halves nx and ny (rounding up: an odd
+/// last point is averaged alone), down to a single point across.
+fn coarsen(field: &WindField) -> Vec<Level> {
+    let g = &field.grid;
+    let mut coarse: Vec<Level> = Vec::new();
+    let (mut xs, mut ys) = (g.xs.clone(), g.ys.clone());
+    while xs.len() > 1 || ys.len() > 1 {
+        let src: &[f32] = coarse.last().map_or(&field.data, |l| &l.data);
+        let half = |a: &[f64]| -> Vec<f64> {
+            a.chunks(2).map(|c| c.iter().sum::<f64>() / c.len() as f64).collect()
+        };
+        let (nxs, nys) = (half(&xs), half(&ys));
+        let (nx, ny, nz) = (xs.len(), ys.len(), g.nz());
+        let (mx, my) = (nxs.len(), nys.len());
+        let mut data = vec![0.0f32; g.frames * 3 * nz * my * mx];
+        for (plane_out, plane_in) in data.chunks_mut(my * mx).zip(src.chunks(ny * nx)) {
+            for j in 0..my {
+                for i in 0..mx {
+                    let mut sum = 0.0f64;
+                    let mut cnt = 0.0;
+                    for y in 2 * j..(2 * j + 2).min(ny) {
+                        for x in 2 * i..(2 * i + 2).min(nx) {
+                            sum += plane_in[y * nx + x] as f64;
+                            cnt += 1.0;
+                        }
+                    }
+                    plane_out[j * mx + i] = (sum / cnt) as f32;
+                }
+            }
+        }
+        coarse.push(Level { xs: nxs.clone(), ys: nys.clone(), data });
+        xs = nxs;
+        ys = nys;
+    }
+    coarse
+}
+
+/// A [`MipPyramid`] that owns its field (for holders that keep both, such as a forest).
+#[derive(Debug, Clone)]
+pub struct OwnedPyramid {
+    field: WindField,
+    coarse: Vec<Level>,
+}
+
+impl OwnedPyramid {
+    /// Build every level of `field`'s pyramid (see [`MipPyramid::new`]).
+    pub fn new(field: WindField) -> OwnedPyramid {
+        let coarse = coarsen(&field);
+        OwnedPyramid { field, coarse }
+    }
+
+    /// The full-resolution field.
+    pub fn field(&self) -> &WindField {
+        &self.field
+    }
+
+    /// Number of levels, the full-resolution field included.
+    pub fn levels(&self) -> usize {
+        self.coarse.len() + 1
+    }
+
+    /// A sampling view of level `l` (0: the field; clamped to the coarsest level).
+    pub fn level(&self, l: usize) -> FieldView<'_> {
+        match l.checked_sub(1).and_then(|k| self.coarse.get(k).or(self.coarse.last())) {
+            Some(lv) => FieldView { xs: &lv.xs, ys: &lv.ys, data: &lv.data, ..self.field.view() },
+            None => self.field.view(),
+        }
     }
 }
 
@@ -366,6 +405,21 @@ mod tests {
         // Quadratic in speed.
         let g = drag([6.0, 8.0, 0.0]);
         assert!((g[0] / f[0] - 4.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn an_owned_pyramid_samples_as_the_borrowed_one() {
+        let f = small(9);
+        let owned = OwnedPyramid::new(f.clone());
+        let pyr = MipPyramid::new(&f);
+        assert_eq!(owned.levels(), pyr.levels());
+        for l in 0..=pyr.levels() {
+            for k in 0..20 {
+                let p = [1.0 + 0.9 * k as f64, 2.0 + 0.6 * k as f64, 20.0];
+                let t = 0.137 * k as f64;
+                assert_eq!(owned.level(l).sample(p, t), pyr.level(l).sample(p, t), "level {l}");
+            }
+        }
     }
 
     #[test]

@@ -29,7 +29,7 @@ pub mod stats;
 pub mod synth;
 
 pub use error::{ParamError, WindError};
-pub use field::{Captured, FieldView, MipPyramid, WindField, drag};
+pub use field::{Captured, FieldView, MipPyramid, OwnedPyramid, WindField, drag};
 pub use grid::Grid;
 pub use params::{
     AIR_DENSITY, CoherenceSpeed, Component, KARMAN, Preset, Profile, SpectrumModel, WindParams,
