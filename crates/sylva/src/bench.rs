@@ -50,9 +50,9 @@ pub struct RenderBench {
     /// Frames timed (after one warm-up frame).
     #[arg(long, default_value_t = 10)]
     frames: usize,
-    /// Geometry-LOD threshold h₀ (see `sylva render --help`).
-    #[arg(long, default_value_t = sylva_forest::driver::DEFAULT_LOD_FRACTION)]
-    lod_fraction: f32,
+    /// Geometry-LOD threshold h₀ (see `sylva render --help`; default: the scene's).
+    #[arg(long)]
+    lod_fraction: Option<f32>,
     #[command(flatten)]
     lod: crate::render::LodArgs,
 }

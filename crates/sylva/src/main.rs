@@ -74,7 +74,7 @@ fn demo(a: DemoArgs) -> anyhow::Result<()> {
         size: "800x600".into(),
         out: a.out,
         wind: None,
-        lod_fraction: 3.0,
+        lod_fraction: Some(3.0),
         no_gif: false,
         camera_path: false,
         lod: render::LodArgs::default(),

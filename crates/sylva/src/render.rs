@@ -30,8 +30,9 @@ pub struct RenderArgs {
     pub wind: Option<String>,
     /// Geometry-LOD threshold h₀: full detail only for trees taller than this fraction of
     /// the image; one level coarser per factor 3 smaller. Larger is coarser and faster.
-    #[arg(long, default_value_t = sylva_forest::driver::DEFAULT_LOD_FRACTION)]
-    pub lod_fraction: f32,
+    /// Default: the scene's (`[lod] fraction`, 1 unless set).
+    #[arg(long)]
+    pub lod_fraction: Option<f32>,
     /// Skip the animated GIF.
     #[arg(long)]
     pub no_gif: bool,
@@ -159,14 +160,16 @@ pub fn render(a: &RenderArgs) -> anyhow::Result<RenderReport> {
         bail!("--seconds {}: must be in (0, 3600]", a.seconds);
     }
     a.lod.apply(&mut spec)?;
+    if let Some(h0) = a.lod_fraction {
+        if !(h0 > 0.0 && h0 <= 100.0) {
+            bail!("--lod-fraction {h0}: must be in (0, 100]");
+        }
+        spec.lod.fraction = h0;
+    }
     let (w, h) = parse_size(&a.size)?;
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     let t0 = Instant::now();
     let mut forest = Forest::new(&spec)?;
-    if !(a.lod_fraction > 0.0 && a.lod_fraction.is_finite()) {
-        bail!("--lod-fraction {}: must be > 0", a.lod_fraction);
-    }
-    forest.set_lod_fraction(a.lod_fraction);
     let (wind_n, wind_dx) = forest.wind_grid();
     println!(
         "scene {}: {} trees, {} species, wind grid {wind_n}×{wind_n} at {wind_dx:.1} m, built in {:.2} s",

@@ -140,3 +140,19 @@ fn render_renders_frames_deterministically_and_says_what_to_install_without_a_dr
         assert!(!text.contains("panicked"), "{text}");
     }
 }
+
+#[test]
+fn lod_flags_are_checked_before_any_work() {
+    for (args, needle) in [
+        (vec!["--far-level", "9"], "--far-level"),
+        (vec!["--lod-fraction", "0"], "--lod-fraction"),
+        (vec!["--lod-fraction", "NaN"], "--lod-fraction"),
+    ] {
+        let mut all = vec!["render", "--scene", "small", "--seconds", "0.1", "--no-gif"];
+        all.extend(args.iter());
+        let (ok, text) = sylva(&all);
+        assert!(!ok, "{args:?} must fail");
+        assert!(text.contains(needle), "{args:?}: error does not name {needle}: {text}");
+        assert!(!text.contains("panicked"), "{text}");
+    }
+}
