@@ -8,11 +8,17 @@
 //! along the parent above BaseSize, their length from the crown ShapeRatio (level 1) or the
 //! parent's remaining length, down angles (negative nDownAngleV varying along the parent),
 //! rotations (negative nRotate alternating sides); radii from Ratio/RatioPower with nTaper
-//! and the trunk Flare; AttractionUp bending stems of level ≥ 2 towards the sky; leaves on
+//! and the trunk Flare; AttractionUp bending stems of level ≥ 2 towards the sky (> 0) or
+//! down (< 0: the willow's hanging branchlets); leaves on
 //! the last level, counted by Leaves·ShapeRatio(4, ·)·LeafQuality and enlarged by
 //! 1/√LeafQuality; the pruning envelope (stems of level ≥ 1 that leave it are regrown
 //! shorter, see [`inside_envelope`]). Taper follows WP95 for every nTaper in [0, 3], periodic
 //! bulges included (see `radius_at`).
+//!
+//! Two bounds beyond WP95, so every seed gives a tree a forester would accept: the tree
+//! scale varies below `Scale` by at most half of it ([`bounded_scale`]), and no stem of
+//! level ≥ 1 reaches below [`GROUND_CLEARANCE`] (a segment that would is raised towards the
+//! horizontal just enough).
 //!
 //! Masses: wood [`WOOD_DENSITY`], leaves [`LEAF_MASS_PER_AREA`]. Same species and seed give
 //! the same tree, bit for bit.
@@ -135,7 +141,7 @@ impl Species {
     pub fn generate(&self, seed: u64) -> Result<Tree, SkeletonError> {
         let mut rng = Rng(seed ^ 0x5175_a000_0000_0000);
         let sp = self;
-        let tree_scale = sp.scale + sp.scale_v * rng.sym();
+        let tree_scale = bounded_scale(sp.scale, sp.scale_v, rng.sym());
         let l0 = &sp.level[0];
         let trunk_length = (l0.length + l0.length_v * rng.sym()).max(0.01) * tree_scale.max(0.1);
         let trunk_radius =
@@ -184,7 +190,34 @@ impl Species {
     }
 }
 
+/// Height above the ground below which no stem of level ≥ 1 may reach, m.
+pub const GROUND_CLEARANCE: f32 = 0.3;
+/// Below `Scale` the sampled tree scale varies by at most this fraction of `Scale`.
+pub const MAX_SHRINK: f32 = 0.5;
+
+/// WP95's tree scale `Scale + ScaleV·r` for r ∈ [−1, 1), with the downward variation
+/// limited to [`MAX_SHRINK`]·Scale: WP95's black oak (Scale = ScaleV = 10 m) would otherwise
+/// give trees of any height down to nothing (a 2.4 m bush at seed 1). Upward variation is
+/// WP95's.
+pub fn bounded_scale(scale: f32, scale_v: f32, r: f32) -> f32 {
+    if r >= 0.0 { scale + scale_v * r } else { scale + scale_v.min(MAX_SHRINK * scale) * r }
+}
+
 impl Gen<'_> {
+    /// `dir` for a segment of length `len` from `pos`, raised just enough that its end stays
+    /// [`GROUND_CLEARANCE`] above the ground (limbs and hanging branchlets rest on it
+    /// rather than passing through); unchanged when it already does.
+    fn above_ground(&self, pos: V3, dir: V3, len: f32) -> V3 {
+        let min_z = ((GROUND_CLEARANCE - pos[2]) / len.max(1e-6)).clamp(-1.0, 1.0);
+        if dir[2] >= min_z {
+            return dir;
+        }
+        let h = (dir[0] * dir[0] + dir[1] * dir[1]).sqrt();
+        let flat = if h > 1e-6 { [dir[0] / h, dir[1] / h] } else { [1.0, 0.0] };
+        let k = (1.0 - min_z * min_z).max(0.0).sqrt();
+        [flat[0] * k, flat[1] * k, min_z]
+    }
+
     /// Radius at relative position z ∈ [0, 1] along a stem of base radius `r0` and length
     /// `length`, by WP95's taper: nTaper in [0, 1) a cone narrowing to (1 − nTaper) r0,
     /// [1, 2) a cone ending in a rounded tip, [2, 3] periodic bulges of depth nTaper − 2
@@ -283,14 +316,20 @@ impl Gen<'_> {
                 }
             }
             if s.level >= 2 && self.sp.attraction_up != 0.0 {
-                // WP95: bend towards (or away from) the vertical in proportion to the
-                // segment's declination.
+                // WP95: bend towards (AttractionUp > 0) or away from (< 0) the vertical in
+                // proportion to the segment's declination. A positive angle about
+                // dir × z turns `dir` towards +z; the turn stops at the vertical (up or
+                // down) instead of passing it.
                 let decl = dir[2].clamp(-1.0, 1.0).acos();
                 let horiz = norm(cross(dir, [0.0, 0.0, 1.0]));
                 if dot(horiz, horiz) > 0.5 {
-                    let up = self.sp.attraction_up * decl / res as f32;
-                    dir = norm(rotate(dir, horiz, -up.clamp(-0.5, 0.5)));
+                    let up = (self.sp.attraction_up * decl / res as f32).clamp(-0.5, 0.5);
+                    let up = up.clamp(-(PI - decl), decl);
+                    dir = norm(rotate(dir, horiz, up));
                 }
+            }
+            if s.level >= 1 {
+                dir = self.above_ground(pos, dir, seg_len);
             }
             let z0 = seg as f32 / res as f32;
             let r = self.radius_at(s.level, s.radius, s.length, z0 + 0.5 / res as f32);
@@ -672,5 +711,104 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// Stem level of every joint: a joint that starts a stem (not a continuation or a
+    /// split clone) is one level below its parent's.
+    fn levels(sk: &Skeleton) -> Vec<u32> {
+        let js = sk.joints();
+        let mut lv = vec![0u32; js.len()];
+        for (i, j) in js.iter().enumerate() {
+            if j.parent != NO_PARENT {
+                lv[i] = lv[j.parent as usize] + u32::from(!j.continues);
+            }
+        }
+        lv
+    }
+
+    /// For each level-2 stem: (start height, end height) of the stem.
+    fn level2_rise(sp: &Species, seed: u64) -> Vec<(f32, f32)> {
+        let t = sp.generate(seed).expect("valid");
+        let js = t.skeleton.joints();
+        let lv = levels(&t.skeleton);
+        let mut out = Vec::new();
+        for (i, j) in js.iter().enumerate() {
+            if lv[i] != 2 || j.continues {
+                continue;
+            }
+            // Walk the stem to its last segment.
+            let mut last = i;
+            while let Some(n) = (last + 1..js.len())
+                .find(|&k| js[k].parent as usize == last && js[k].continues && lv[k] == 2)
+            {
+                last = n;
+            }
+            out.push((j.origin[2], js[last].tip()[2]));
+        }
+        out
+    }
+
+    #[test]
+    fn attraction_up_below_zero_hangs_level_2_stems_and_above_zero_raises_them() {
+        // WP95: AttractionUp < 0 bends stems of level ≥ 2 down (the weeping willow's −3
+        // makes its branchlets hang), > 0 up towards the light. The same tree with the sign
+        // flipped must turn the other way.
+        let willow = Species::preset("weeping_willow").expect("preset");
+        assert!(willow.attraction_up < 0.0);
+        let mut up = willow.clone();
+        up.attraction_up = -willow.attraction_up;
+        let hanging = level2_rise(&willow, 3);
+        let rising = level2_rise(&up, 3);
+        assert!(hanging.len() > 20 && rising.len() > 20);
+        let down = hanging.iter().filter(|(a, b)| b < a).count() as f32 / hanging.len() as f32;
+        let upward = rising.iter().filter(|(a, b)| b > a).count() as f32 / rising.len() as f32;
+        assert!(down > 0.8, "only {down:.2} of the willow's level-2 stems end below their start");
+        assert!(upward > 0.8, "only {upward:.2} of the level-2 stems end above their start");
+    }
+
+    #[test]
+    fn attraction_up_above_zero_bends_a_stem_towards_the_vertical() {
+        // Same tree, AttractionUp 0 vs 2: the level-2 stems end higher on average.
+        let mut flat = Species::preset("black_tupelo").expect("preset");
+        flat.attraction_up = 0.0;
+        let mut up = flat.clone();
+        up.attraction_up = 2.0;
+        let rise = |sp: &Species| {
+            let r = level2_rise(sp, 5);
+            r.iter().map(|(a, b)| b - a).sum::<f32>() / r.len() as f32
+        };
+        let (r0, r2) = (rise(&flat), rise(&up));
+        assert!(r2 > r0 + 0.05, "AttractionUp 2 should raise level-2 stems: {r2} vs {r0}");
+    }
+
+    #[test]
+    fn every_seed_gives_a_tree_of_its_species_scale_with_limbs_above_ground() {
+        // The oak (Scale = ScaleV = 10 m) stays at least half its Scale tall, and no stem
+        // of any preset reaches below the ground clearance.
+        for (name, _) in PRESETS {
+            let sp = Species::preset(name).expect("preset");
+            for seed in 0..12 {
+                let t = sp.generate(seed).expect("valid");
+                let lv = levels(&t.skeleton);
+                let lowest = t
+                    .skeleton
+                    .joints()
+                    .iter()
+                    .zip(&lv)
+                    .filter(|(_, l)| **l >= 1)
+                    .map(|(j, _)| j.tip()[2])
+                    .fold(f32::INFINITY, f32::min);
+                assert!(lowest >= GROUND_CLEARANCE - 1e-3, "{name} seed {seed}: a limb at {lowest} m");
+                let min_len = sp.level[0].length - sp.level[0].length_v;
+                assert!(
+                    t.stats.trunk_length >= 0.999 * min_len * MAX_SHRINK * sp.scale,
+                    "{name} seed {seed}: trunk {} m",
+                    t.stats.trunk_length
+                );
+            }
+        }
+        assert_eq!(bounded_scale(10.0, 10.0, -1.0), 5.0);
+        assert_eq!(bounded_scale(10.0, 10.0, 0.5), 15.0);
+        assert_eq!(bounded_scale(25.0, 5.0, -1.0), 20.0);
     }
 }
