@@ -77,7 +77,26 @@ struct TreeOut {
     @location(1) normal: vec3<f32>,
     @location(2) uv: vec2<f32>,
     @location(3) @interpolate(flat) fade: vec2<f32>,
+    // Leaves: 1 at the crown's surface … 0 at its centre (1 for bark).
+    @location(4) exposure: f32,
+    // Leaves: this tree's colour variation (1 for bark).
+    @location(5) @interpolate(flat) tint: vec3<f32>,
 };
+
+// Ambient occlusion inside a crown: foliage at its centre gets 40 % of the light at its
+// surface.
+fn foliage_occlusion(exposure: f32) -> f32 {
+    return mix(0.4, 1.0, clamp(exposure, 0.0, 1.0));
+}
+
+// Colour variation between trees, from the trunk position: brightness ± 10 %, a shift
+// between yellower and bluer greens.
+fn tree_tint(base: vec4<f32>) -> vec3<f32> {
+    let h = fract(sin(dot(base.xy, vec2<f32>(12.9898, 78.233))) * 43758.5453);
+    let g = fract(h * 7.31);
+    let b = 0.9 + 0.2 * h;
+    return b * vec3<f32>(1.0 + 0.12 * (g - 0.5), 1.0, 1.0 - 0.2 * (g - 0.5));
+}
 
 // Cross-fade between two levels of a tree: a screen-space dither value in [0, 1) per pixel
 // (interleaved gradient noise, Jimenez 2014); a draw keeps the pixels whose value lies in

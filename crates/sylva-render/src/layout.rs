@@ -120,16 +120,18 @@ pub struct BranchVertex {
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
 pub struct LeafVertex {
-    /// Billboard centre (rest pose, tree space), m.
+    /// Card centre (rest pose, tree space), m.
     pub center: [f32; 3],
     /// Hanging point, m.
     pub hang: [f32; 3],
     /// Corner, ±0.5 each.
     pub corner: [f32; 2],
-    /// Side, m.
-    pub size: f32,
-    /// Roll in the billboard's plane, rad.
-    pub roll: f32,
+    /// The card's right edge direction times its side (rest pose, tree space), m.
+    pub right: [f32; 3],
+    /// The card's up direction (out of the branch) times its side, m.
+    pub up: [f32; 3],
+    /// 1 at the crown's surface … 0 at its centre.
+    pub exposure: f32,
     /// Flutter phase offset, rad.
     pub phase: f32,
     /// Joint it hangs on.
@@ -200,12 +202,13 @@ pub const BRANCH_ATTRIBUTES: [wgpu::VertexAttribute; 5] = [
 ];
 
 /// `LeafIn`.
-pub const LEAF_ATTRIBUTES: [wgpu::VertexAttribute; 9] = [
+pub const LEAF_ATTRIBUTES: [wgpu::VertexAttribute; 10] = [
     attr!(LeafVertex, center, Float32x3, 0),
     attr!(LeafVertex, hang, Float32x3, 1),
     attr!(LeafVertex, corner, Float32x2, 2),
-    attr!(LeafVertex, size, Float32, 3),
-    attr!(LeafVertex, roll, Float32, 4),
+    attr!(LeafVertex, right, Float32x3, 3),
+    attr!(LeafVertex, up, Float32x3, 4),
+    attr!(LeafVertex, exposure, Float32, 15),
     attr!(LeafVertex, phase, Float32, 11),
     attr!(LeafVertex, joint, Uint32, 12),
     attr!(LeafVertex, uv_origin, Float32x2, 13),

@@ -171,8 +171,10 @@ impl Renderer {
             // Leaves: opacity-weighted colour and coverage-preserving alpha in the mips, so
             // far crowns keep their leaves instead of fading out under the alpha test.
             let img = &m.leaves.image;
-            let (mips, _) =
-                crate::passes::far::impostor_mips(&img.rgba, &img.rgba, img.width, img.height);
+            let cells = (m.leaves.cells, m.leaves.cells);
+            let (mips, _) = crate::passes::far::impostor_mips(
+                &img.rgba, &img.rgba, img.width, img.height, cells,
+            );
             let srgb = wgpu::TextureFormat::Rgba8UnormSrgb;
             let leaves = upload_mips(gpu, &mips, img.width, img.height, srgb, "leaf atlas");
             let textures = dev.create_bind_group(&wgpu::BindGroupDescriptor {

@@ -798,7 +798,10 @@ mod tests {
                     .filter(|(_, l)| **l >= 1)
                     .map(|(j, _)| j.tip()[2])
                     .fold(f32::INFINITY, f32::min);
-                assert!(lowest >= GROUND_CLEARANCE - 1e-3, "{name} seed {seed}: a limb at {lowest} m");
+                assert!(
+                    lowest >= GROUND_CLEARANCE - 1e-3,
+                    "{name} seed {seed}: a limb at {lowest} m"
+                );
                 let min_len = sp.level[0].length - sp.level[0].length_v;
                 assert!(
                     t.stats.trunk_length >= 0.999 * min_len * MAX_SHRINK * sp.scale,

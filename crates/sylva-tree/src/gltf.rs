@@ -192,19 +192,9 @@ fn json_str(s: &str) -> String {
     o
 }
 
-/// The leaf quad of a cluster: four corners, its normal, facing away from the trunk.
+/// The leaf quad of a cluster: four corners and its normal (out of the crown).
 fn leaf_quad(c: &LeafCluster) -> ([V3; 4], V3) {
-    let out = sub(c.center, c.hang);
-    let mut n = [out[0], out[1], 0.0];
-    if dot(n, n) < 1e-12 {
-        n = [c.roll.cos(), c.roll.sin(), 0.0];
-    }
-    let n = norm(n);
-    let side = norm(cross([0.0, 0.0, 1.0], n));
-    let (s, co) = c.roll.sin_cos();
-    // Roll the quad in its plane.
-    let u = norm([side[0] * co, side[1] * co, s]);
-    let v = cross(n, u);
+    let (u, v) = c.axes();
     let h = 0.5 * c.size;
     let corner = |a: f32, b: f32| {
         [
@@ -213,7 +203,7 @@ fn leaf_quad(c: &LeafCluster) -> ([V3; 4], V3) {
             c.center[2] + h * (a * u[2] + b * v[2]),
         ]
     };
-    ([corner(-1.0, -1.0), corner(1.0, -1.0), corner(1.0, 1.0), corner(-1.0, 1.0)], n)
+    ([corner(-1.0, -1.0), corner(1.0, -1.0), corner(1.0, 1.0), corner(-1.0, 1.0)], c.normal)
 }
 
 impl TreeModel {

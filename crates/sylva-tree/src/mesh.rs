@@ -11,12 +11,18 @@
 //! Bark UVs: u around the stem (0 … 1, seam duplicated), v the distance along the stem
 //! divided by the stem's base circumference, so bark texels stay square.
 //!
-//! **Leaf clusters.** A joint carrying leaf area A gets `n = max(1, round(A / (8·a_leaf)))`
-//! clusters (a_leaf the area of one leaf), spread along its segment on a golden-angle
-//! spiral. Each cluster is one square billboard that shows several leaves (a cell of the
-//! leaf atlas, see [`crate::texture`]); its side `s` is chosen so that
-//! `coverage · s² = A / n`, with `coverage` the opaque fraction of its atlas cell — the
-//! billboards show exactly the tree's one-sided leaf area.
+//! **Leaf clusters.** A leaf cluster is one square card showing a cell of the leaf atlas
+//! (see [`crate::texture`]): a twig with its leaves drawn at their true size, so the card's
+//! side is the atlas span (four leaf lengths; eight for a needle spray) and it shows
+//! `coverage · span²` of leaf area. Walking the joints in order, each joint's leaf area is
+//! owed to cards; a card is hung when at least half its area is owed (so the tree's total
+//! leaf area is kept within half a card), spread along the joint's segment on a golden-angle
+//! spiral. A tree that would need more than [`MAX_CLUSTERS`] cards gets larger cards
+//! (leaves shown larger than true) rather than more. Cards are oriented in 3D: facing out of
+//! the crown (the gradient of the crown's ellipsoid, half-blended with the direction out of
+//! the branch) and tilted towards the sky by a random amount; the renderer turns them part
+//! way towards the viewer so none is seen edge-on. Each card carries its exposure: 1 at the
+//! crown's surface, 0 at its centre, which darkens the inner foliage (ambient occlusion).
 //!
 //! **LOD chain.** Level k aims at about `3^-k` of level 0's triangles: coarser cylinders
 //! (sides halved per level, at least 3), the thinnest stems dropped first (with everything
@@ -37,8 +43,8 @@ use crate::v3::{V3, add, cross, dot, norm, scale, sub};
 
 /// Ring sides per stem level at LOD 0 (trunk, branches, sub-branches, twigs).
 pub const SIDES: [u32; 4] = [14, 8, 5, 4];
-/// Leaves shown by one leaf-cluster billboard at LOD 0.
-pub const LEAVES_PER_CLUSTER: f32 = 8.0;
+/// Most leaf cards one tree gets at LOD 0; beyond it cards grow instead.
+pub const MAX_CLUSTERS: usize = 150_000;
 /// Triangle ratio between consecutive LOD levels.
 pub const LOD_RATIO: f32 = 3.0;
 /// Number of levels in the default LOD chain.
@@ -87,6 +93,32 @@ pub struct LeafCluster {
     pub phase: f32,
     /// One-sided leaf area this billboard shows, m².
     pub leaf_area: f32,
+    /// Unit normal of the card, tree space: out of the crown, tilted towards the sky.
+    pub normal: [f32; 3],
+    /// 1 at the crown's surface … 0 at its centre (ambient occlusion of inner foliage).
+    pub exposure: f32,
+}
+
+impl LeafCluster {
+    /// Unit axes (right, up) of the card in its plane, tree space: up is the direction out
+    /// of the branch (the atlas twig grows from the cell's lower edge) projected onto the
+    /// card, turned by `roll`.
+    pub fn axes(&self) -> (V3, V3) {
+        let n = self.normal;
+        let off = sub(self.center, self.hang);
+        let mut up = sub(off, scale(n, dot(off, n)));
+        if dot(up, up) < 1e-12 {
+            let z = [0.0, 0.0, 1.0];
+            up = sub(z, scale(n, dot(z, n)));
+            if dot(up, up) < 1e-12 {
+                up = [1.0, 0.0, 0.0];
+            }
+        }
+        let up = norm(up);
+        let right = cross(up, n);
+        let (s, c) = self.roll.sin_cos();
+        (add(scale(right, c), scale(up, s)), add(scale(up, c), scale(right, -s)))
+    }
 }
 
 /// One level of detail of a tree.
@@ -323,53 +355,129 @@ fn branch_triangles(topo: &Topology, lod: usize, kept: &[bool]) -> usize {
         .sum()
 }
 
+/// The crown as an ellipsoid: area-weighted centre of the leaf-bearing segments and
+/// horizontal and vertical radii (those of a uniformly filled ellipsoid with the same
+/// second moments).
+struct Crown {
+    centre: V3,
+    radius_h: f32,
+    radius_v: f32,
+}
+
+impl Crown {
+    fn of(sk: &Skeleton) -> Crown {
+        let leafy = || sk.joints().iter().filter(|j| j.leaf_area > 0.0);
+        let total: f32 = leafy().map(|j| j.leaf_area).sum::<f32>().max(1e-12);
+        let mid = |j: &crate::skeleton::Joint| add(j.origin, scale(j.axis, 0.5 * j.length));
+        let centre = leafy().fold([0.0; 3], |acc, j| add(acc, scale(mid(j), j.leaf_area / total)));
+        let (mut h2, mut v2) = (0.0f32, 0.0f32);
+        for j in leafy() {
+            let d = sub(mid(j), centre);
+            h2 += j.leaf_area / total * (d[0] * d[0] + d[1] * d[1]);
+            v2 += j.leaf_area / total * d[2] * d[2];
+        }
+        Crown {
+            centre,
+            radius_h: (2.5 * h2).sqrt().max(0.05),
+            radius_v: (5.0 * v2).sqrt().max(0.05),
+        }
+    }
+
+    /// Ellipsoidal radius of `p`: 0 at the centre, 1 on the surface.
+    fn rho(&self, p: V3) -> f32 {
+        let d = sub(p, self.centre);
+        ((d[0] * d[0] + d[1] * d[1]) / (self.radius_h * self.radius_h)
+            + d[2] * d[2] / (self.radius_v * self.radius_v))
+            .sqrt()
+    }
+
+    /// Outward normal of the ellipsoid through `p`.
+    fn outward(&self, p: V3) -> V3 {
+        let d = sub(p, self.centre);
+        let g = [
+            d[0] / (self.radius_h * self.radius_h),
+            d[1] / (self.radius_h * self.radius_h),
+            d[2] / (self.radius_v * self.radius_v),
+        ];
+        if dot(g, g) < 1e-12 { [0.0, 0.0, 1.0] } else { norm(g) }
+    }
+}
+
 /// Leaf clusters of the full-detail tree.
-fn leaf_clusters(
-    sk: &Skeleton,
-    species: &Species,
-    coverage: &[f32],
-    seed: u64,
-) -> Vec<LeafCluster> {
-    let leaf_size = species.leaf_scale / species.leaf_quality.max(1e-3).sqrt();
-    let one_leaf = (leaf_size * leaf_size * species.leaf_scale_x * PI / 4.0).max(1e-8);
+fn leaf_clusters(sk: &Skeleton, coverage: &[f32], span: f32, seed: u64) -> Vec<LeafCluster> {
     let golden = PI * (3.0 - 5f32.sqrt());
-    let mut out = Vec::new();
+    let crown = Crown::of(sk);
+    let mean_cov = coverage.iter().sum::<f32>() / coverage.len() as f32;
+    let total: f32 = sk.joints().iter().map(|j| j.leaf_area).sum();
+    // Cards larger than true when the tree would need too many.
+    let span = span.max((total / (MAX_CLUSTERS as f32 * mean_cov)).sqrt());
+    let cell_of =
+        |h: u64| (unit(seed, 4 * h) * coverage.len() as f32) as u32 % coverage.len() as u32;
+    let mut out: Vec<LeafCluster> = Vec::new();
     let mut turn = 0.0f32;
+    let mut owed = 0.0f32;
     for (i, j) in sk.joints().iter().enumerate() {
         if j.leaf_area <= 0.0 {
             continue;
         }
-        let n = ((j.leaf_area / (LEAVES_PER_CLUSTER * one_leaf)).round() as usize).max(1);
-        let area = j.leaf_area / n as f32;
+        owed += j.leaf_area;
+        let first = out.len();
+        loop {
+            let atlas = cell_of(out.len() as u64);
+            let area = coverage[atlas as usize] * span * span;
+            if owed < 0.5 * area {
+                break;
+            }
+            owed -= area;
+            out.push(LeafCluster {
+                joint: i as u32,
+                hang: [0.0; 3],
+                center: [0.0; 3],
+                size: span,
+                roll: 0.0,
+                atlas,
+                phase: 0.0,
+                leaf_area: area,
+                normal: [0.0, 0.0, 1.0],
+                exposure: 1.0,
+            });
+        }
+        let n = out.len() - first;
         let [fx, fy, _] = j.frame();
-        for k in 0..n {
-            let h = out.len() as u64;
-            let atlas = (unit(seed, 4 * h) * coverage.len() as f32) as u32 % coverage.len() as u32;
-            let size = (area / coverage[atlas as usize]).sqrt();
+        for (k, c) in out[first..].iter_mut().enumerate() {
+            let h = (first + k) as u64;
             turn += golden;
             let t = (k as f32 + 0.5) / n as f32;
             let hang = add(j.origin, scale(j.axis, t * j.length));
             // Outward from the branch, drooping a little under the leaves' weight.
             let out_dir = add(scale(fx, turn.cos()), scale(fy, turn.sin()));
             let out_dir = norm(add(out_dir, [0.0, 0.0, -0.3]));
-            let center = add(hang, scale(out_dir, j.radius + 0.5 * size));
-            out.push(LeafCluster {
-                joint: i as u32,
+            let center = add(hang, scale(out_dir, j.radius + 0.45 * c.size));
+            // Facing out of the crown and out of the branch, tilted up by a random amount.
+            let face = norm(add(crown.outward(center), out_dir));
+            let tilt = 0.2 + 0.9 * unit(seed, 4 * h + 3);
+            let normal = norm(add(face, [0.0, 0.0, tilt]));
+            *c = LeafCluster {
                 hang,
                 center,
-                size,
-                roll: TAU * unit(seed, 4 * h + 1),
-                atlas,
+                roll: 0.8 * (unit(seed, 4 * h + 1) - 0.5),
                 phase: TAU * unit(seed, 4 * h + 2),
-                leaf_area: area,
-            });
+                normal,
+                exposure: (crown.rho(center)).clamp(0.0, 1.0),
+                ..*c
+            };
         }
     }
     out
 }
 
 /// Merge runs of `m` consecutive clusters (already re-hung and in joint order).
-fn merge_clusters(clusters: &[LeafCluster], m: usize, coverage: &[f32]) -> Vec<LeafCluster> {
+fn merge_clusters(
+    clusters: &[LeafCluster],
+    m: usize,
+    coverage: &[f32],
+    span: f32,
+) -> Vec<LeafCluster> {
     clusters
         .chunks(m.max(1))
         .map(|run| {
@@ -379,6 +487,8 @@ fn merge_clusters(clusters: &[LeafCluster], m: usize, coverage: &[f32]) -> Vec<L
                     .fold([0.0; 3], |acc, c| add(acc, scale(f(c), c.leaf_area / area.max(1e-20))))
             };
             let center = w(&|c| c.center);
+            let exposure =
+                run.iter().map(|c| c.exposure * c.leaf_area).sum::<f32>() / area.max(1e-20);
             // Hang on the joint of the member nearest the merged centre.
             let lead = run
                 .iter()
@@ -395,25 +505,26 @@ fn merge_clusters(clusters: &[LeafCluster], m: usize, coverage: &[f32]) -> Vec<L
             LeafCluster {
                 hang,
                 center,
-                size: (area / coverage[lead.atlas as usize]).sqrt(),
+                size: (area / coverage[lead.atlas as usize]).sqrt().max(span),
                 leaf_area: area,
+                exposure,
                 ..*lead
             }
         })
         .collect()
 }
 
-/// The chain of `levels` LODs of `tree`. `coverage[k]` is the opaque fraction of leaf-atlas
-/// cell k ([`crate::texture::LeafAtlas::coverage`]); `seed` drives cluster placement.
+/// The chain of `levels` LODs of `tree`, its leaf cards showing cells of `atlas` (their
+/// coverage and span); `seed` drives cluster placement.
 pub fn lod_chain(
     tree: &Tree,
     species: &Species,
-    coverage: &[f32],
+    atlas: &LeafAtlas,
     seed: u64,
     levels: usize,
 ) -> Vec<TreeLod> {
     let all: Vec<usize> = (0..levels.max(1)).collect();
-    lod_levels(tree, species, coverage, seed, &all)
+    lod_levels(tree, species, atlas, seed, &all)
 }
 
 /// The given LOD `levels` of `tree` only. Each is built from the skeleton directly, so
@@ -421,10 +532,12 @@ pub fn lod_chain(
 pub fn lod_levels(
     tree: &Tree,
     species: &Species,
-    coverage: &[f32],
+    atlas: &LeafAtlas,
     seed: u64,
     levels: &[usize],
 ) -> Vec<TreeLod> {
+    let coverage = &atlas.coverage;
+    let span = atlas.span.max(1e-4);
     let sk = &tree.skeleton;
     let topo = topology(sk);
     let n = sk.len();
@@ -433,7 +546,7 @@ pub fn lod_levels(
     } else {
         coverage.iter().map(|c| c.clamp(0.05, 1.0)).collect()
     };
-    let base_clusters = leaf_clusters(sk, species, &coverage, seed);
+    let base_clusters = leaf_clusters(sk, &coverage, span, seed);
     let all = vec![true; n];
     let base_branch_tris = branch_triangles(&topo, 0, &all);
     // Stem start radii, sorted, for the bisection on the drop threshold.
@@ -478,7 +591,7 @@ pub fn lod_levels(
             .collect();
         rehung.sort_by_key(|c| c.joint);
         let m = LOD_RATIO.powi(lod as i32).round() as usize;
-        let clusters = if lod == 0 { rehung } else { merge_clusters(&rehung, m, &coverage) };
+        let clusters = if lod == 0 { rehung } else { merge_clusters(&rehung, m, &coverage, span) };
         out.push(TreeLod { level: lod, min_radius: r_min, branches, clusters });
     }
     out
@@ -508,7 +621,7 @@ impl Species {
     pub fn model(&self, seed: u64, levels: usize) -> Result<TreeModel, SkeletonError> {
         let tree = self.generate(seed)?;
         let leaves = leaf_atlas(self, seed, ATLAS_SIZE);
-        let lods = lod_chain(&tree, self, &leaves.coverage, seed, levels);
-        Ok(TreeModel { tree, lods, bark: bark(seed, BARK_SIZE), leaves })
+        let lods = lod_chain(&tree, self, &leaves, seed, levels);
+        Ok(TreeModel { tree, lods, bark: bark(self, seed, BARK_SIZE), leaves })
     }
 }

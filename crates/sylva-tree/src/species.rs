@@ -105,6 +105,12 @@ pub struct Species {
     pub prune_power_high: f32,
     /// LeafQuality: fraction of leaves kept (they grow to keep the area).
     pub leaf_quality: f32,
+    /// BarkShade (Sylva): bark colour, 0 dark brown … 1 pale (aspen).
+    pub bark_shade: f32,
+    /// BarkRoughness (Sylva): 0 smooth … 1 deeply furrowed.
+    pub bark_roughness: f32,
+    /// LeafShade (Sylva): foliage colour, 0 dark blue-green … 1 light yellow-green.
+    pub leaf_shade: f32,
     /// Per-level parameters, levels 0–3.
     pub level: [LevelParams; 4],
 }
@@ -204,13 +210,21 @@ pub const PARAMS: &[ParamDoc] = &[
     g(
         "Leaves",
         "per stem",
-        -1000.0,
-        1000.0,
+        -20000.0,
+        20000.0,
         false,
         20.0,
         "leaves on each last-level stem (negative: fan at the tip)",
     ),
-    g("LeafShape", "", 0.0, 8.0, true, 0.0, "leaf outline (WP95 list; 0 ellipse)"),
+    g(
+        "LeafShape",
+        "",
+        0.0,
+        8.0,
+        true,
+        0.0,
+        "leaf outline: 0 elliptic, 1 lanceolate, 2 ovate, 3 rounded with a pointed tip, 4 lobed, 5 palmate, 6 needle, 7 round, 8 heart",
+    ),
     g("LeafScale", "m", 0.001, 5.0, false, 0.15, "leaf length"),
     g("LeafScaleX", "", 0.01, 5.0, false, 0.7, "leaf width / length"),
     g(
@@ -235,6 +249,17 @@ pub const PARAMS: &[ParamDoc] = &[
         false,
         1.0,
         "fraction of leaves generated (the rest enlarge to keep the area)",
+    ),
+    g("BarkShade", "", 0.0, 1.0, false, 0.3, "bark colour: 0 dark brown … 1 pale (Sylva)"),
+    g("BarkRoughness", "", 0.0, 1.0, false, 0.6, "bark: 0 smooth … 1 deep furrows (Sylva)"),
+    g(
+        "LeafShade",
+        "",
+        0.0,
+        1.0,
+        false,
+        0.5,
+        "foliage: 0 dark blue-green … 1 light yellow-green (Sylva)",
     ),
     l(
         "Length",
@@ -435,6 +460,9 @@ impl Species {
             prune_power_low: 0.0,
             prune_power_high: 0.0,
             leaf_quality: 0.0,
+            bark_shade: 0.0,
+            bark_roughness: 0.0,
+            leaf_shade: 0.0,
             level: [lv; 4],
         };
         for p in PARAMS {
@@ -497,6 +525,9 @@ impl Species {
             "PrunePowerLow" => F(&mut self.prune_power_low),
             "PrunePowerHigh" => F(&mut self.prune_power_high),
             "LeafQuality" => F(&mut self.leaf_quality),
+            "BarkShade" => F(&mut self.bark_shade),
+            "BarkRoughness" => F(&mut self.bark_roughness),
+            "LeafShade" => F(&mut self.leaf_shade),
             _ => return None,
         })
     }

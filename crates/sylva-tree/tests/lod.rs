@@ -168,3 +168,47 @@ fn trunk_cross_section_carries_the_lobes() {
     let p = &round.lods[0].branches.positions[..sides];
     assert!(p.iter().all(|p| ((p[0] * p[0] + p[1] * p[1]).sqrt() / r0 - 1.0).abs() < 1e-4));
 }
+
+#[test]
+fn leaves_are_drawn_at_their_species_size() {
+    // Every preset's leaf cards show leaves of its LeafScale: a card at full detail spans
+    // the atlas cell's span, and each leaf in a cell is LeafScale long (± 20 %) on it, its
+    // outline reaching from near its base to near its tip.
+    for (name, _) in PRESETS {
+        let sp = Species::preset(name).expect("preset");
+        let m = sp.model(2, 1).expect("tree");
+        let atlas = &m.leaves;
+        for c in &m.lods[0].clusters {
+            assert!(
+                (c.size / atlas.span - 1.0).abs() < 1e-4,
+                "{name}: card {} m vs span {}",
+                c.size,
+                atlas.span
+            );
+        }
+        for cell in 0..atlas.cells * atlas.cells {
+            let (_, leaves) = sylva_tree::texture::cluster_layout(&sp, 2, cell);
+            assert_eq!(leaves.len() as u32, atlas.leaves[cell as usize]);
+            for l in &leaves {
+                let metres = l.length * atlas.span;
+                assert!(
+                    (metres / sp.leaf_scale - 1.0).abs() <= 0.2,
+                    "{name}: a leaf {metres:.3} m long, LeafScale {}",
+                    sp.leaf_scale
+                );
+            }
+        }
+        // The outline along the midrib covers most of the blade's length.
+        let w = sp.leaf_scale_x;
+        let inside: Vec<f32> = (0..200)
+            .map(|k| (k as f32 + 0.5) / 200.0)
+            .filter(|&t| sylva_tree::texture::blade_contains(sp.leaf_shape, t, 0.0, w))
+            .collect();
+        let extent = inside.last().copied().unwrap_or(0.0) - inside.first().copied().unwrap_or(1.0);
+        assert!(
+            extent > 0.75,
+            "{name}: outline {LeafShape} spans {extent:.2} of the blade",
+            LeafShape = sp.leaf_shape
+        );
+    }
+}

@@ -82,16 +82,16 @@ fn tree(a: TreeBench) -> anyhow::Result<()> {
         for _ in 0..runs {
             let t = Instant::now();
             let tree = sp.generate(a.seed)?;
-            let l = lod_chain(&tree, &sp, &atlas.coverage, a.seed, 1);
+            let l = lod_chain(&tree, &sp, &atlas, a.seed, 1);
             lod0.push(t.elapsed().as_secs_f64());
             std::hint::black_box(&l);
             let t = Instant::now();
             let tree = sp.generate(a.seed)?;
-            let l = lod_chain(&tree, &sp, &atlas.coverage, a.seed, LOD_LEVELS);
+            let l = lod_chain(&tree, &sp, &atlas, a.seed, LOD_LEVELS);
             chain.push(t.elapsed().as_secs_f64());
             let t = Instant::now();
             std::hint::black_box((
-                bark(a.seed, sylva_tree::mesh::BARK_SIZE),
+                bark(&sp, a.seed, sylva_tree::mesh::BARK_SIZE),
                 leaf_atlas(&sp, a.seed, sylva_tree::mesh::ATLAS_SIZE),
             ));
             tex.push(t.elapsed().as_secs_f64());
@@ -122,7 +122,7 @@ fn tree(a: TreeBench) -> anyhow::Result<()> {
             for _ in 0..runs {
                 let t = Instant::now();
                 let tree = sp.generate(a.seed)?;
-                std::hint::black_box(lod_levels(&tree, &sp, &atlas.coverage, a.seed, &[k]));
+                std::hint::black_box(lod_levels(&tree, &sp, &atlas, a.seed, &[k]));
                 times.push(t.elapsed().as_secs_f64());
             }
             let tk = median(&mut times);

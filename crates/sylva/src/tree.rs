@@ -22,6 +22,9 @@ pub enum TreeCommand {
     /// Generate a tree and write it as glTF 2.0 (.glb): skinned branches, alpha-masked
     /// leaf clusters, textures embedded.
     Generate(GenerateArgs),
+    /// Write a species' procedural textures as PNG: bark.png and leaves.png (the
+    /// leaf-cluster atlas, drawn to scale: one cell spans the size its card is shown at).
+    Textures(TexturesArgs),
     /// Print a species file (a preset's, to start your own from).
     Show {
         /// Preset name or species file.
@@ -37,6 +40,19 @@ pub struct StatsArgs {
     /// Seed of the random variations.
     #[arg(long, default_value_t = 1)]
     seed: u64,
+}
+
+#[derive(Debug, Args)]
+pub struct TexturesArgs {
+    /// Preset name (see `sylva tree list`) or a species file (.toml).
+    #[arg(long)]
+    species: String,
+    /// Seed of the random variations.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Output folder.
+    #[arg(long, default_value = "out/textures")]
+    out: PathBuf,
 }
 
 #[derive(Debug, Args)]
@@ -160,6 +176,25 @@ pub fn run_tree(cmd: TreeCommand) -> anyhow::Result<()> {
                 model.tree.skeleton.len(),
                 tris,
                 if a.lod.is_none() { ", all LODs" } else { "" }
+            );
+        }
+        TreeCommand::Textures(a) => {
+            let sp = Species::load(&a.species)?;
+            std::fs::create_dir_all(&a.out)
+                .with_context(|| format!("creating {}", a.out.display()))?;
+            let bark = sylva_tree::texture::bark(&sp, a.seed, sylva_tree::mesh::BARK_SIZE);
+            let atlas = sylva_tree::texture::leaf_atlas(&sp, a.seed, sylva_tree::mesh::ATLAS_SIZE);
+            for (name, img) in [("bark.png", &bark), ("leaves.png", &atlas.image)] {
+                let path = a.out.join(name);
+                crate::render::write_png(&path, img.width, img.height, &img.rgba)?;
+                println!("wrote {}", path.display());
+            }
+            println!(
+                "leaf cells: {} a side, each {:.3} m across; leaves per cell {:?}; coverage {:?}",
+                atlas.cells,
+                atlas.span,
+                atlas.leaves,
+                atlas.coverage.iter().map(|c| (c * 100.0).round() / 100.0).collect::<Vec<_>>()
             );
         }
         TreeCommand::Show { species } => print!("{}", Species::load(&species)?.to_toml()),

@@ -29,6 +29,8 @@ fn vs_main(v: BranchIn, inst: InstanceIn) -> TreeOut {
     out.normal = rotate_z(n, inst.base.w);
     out.uv = v.uv;
     out.fade = inst.fade;
+    out.exposure = 1.0;
+    out.tint = vec3<f32>(1.0);
     return out;
 }
 

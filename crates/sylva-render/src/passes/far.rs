@@ -245,7 +245,7 @@ impl FarPass {
         }
         let albedo = read_back(gpu, enc, &[&albedo_tex, &normal_tex], w, h)?;
         let (albedo, normal) = (&albedo[0], &albedo[1]);
-        let (albedo_mips, normal_mips) = impostor_mips(albedo, normal, w, h);
+        let (albedo_mips, normal_mips) = impostor_mips(albedo, normal, w, h, (VIEWS, 1));
         let av = upload_mips(gpu, &albedo_mips, w, h, BAKE_TARGETS[0], "impostor albedo");
         let nv = upload_mips(gpu, &normal_mips, w, h, BAKE_TARGETS[1], "impostor normals");
         let sk = &model.tree.skeleton;
@@ -359,12 +359,37 @@ fn read_back(
 /// Mip chains of the baked albedo and normals (`w × h`, RGBA8), down to 4 texels a side.
 /// Colour and normals average weighted by the albedo's alpha (transparent texels take the
 /// opaque mean, so filtering at an edge does not pull in black); each level's alpha is
-/// rescaled so that the share of texels at or above 128 (the alpha test) equals level 0's.
-pub fn impostor_mips(albedo: &[u8], normal: &[u8], w: u32, h: u32) -> (Vec<Vec<u8>>, Vec<Vec<u8>>) {
+/// rescaled so that the share of texels at or above 128 (the alpha test) equals level 0's,
+/// in each of `tiles.0 × tiles.1` equal tiles (an atlas's cells or views) on its own, down
+/// to tiles of one texel.
+pub fn impostor_mips(
+    albedo: &[u8],
+    normal: &[u8],
+    w: u32,
+    h: u32,
+    tiles: (u32, u32),
+) -> (Vec<Vec<u8>>, Vec<Vec<u8>>) {
     let n = (w * h) as usize;
     let opaque = |img: &[u8], i: usize| img[4 * i + 3] >= 128;
     let covered = (0..n).filter(|&i| opaque(albedo, i)).count();
-    let coverage = covered as f64 / n.max(1) as f64;
+    let (tx, ty) = (tiles.0.clamp(1, w.max(1)), tiles.1.clamp(1, h.max(1)));
+    // Level-0 coverage of each tile, row-major.
+    let tile_cover = |img_w: u32, img_h: u32, pass: &dyn Fn(usize) -> bool| -> Vec<f64> {
+        let (sw, sh) = ((img_w / tx).max(1), (img_h / ty).max(1));
+        (0..tx * ty)
+            .map(|t| {
+                let (x0, y0) = ((t % tx) * sw, (t / tx) * sh);
+                let mut k = 0usize;
+                for y in y0..(y0 + sh).min(img_h) {
+                    for x in x0..(x0 + sw).min(img_w) {
+                        k += usize::from(pass((y * img_w + x) as usize));
+                    }
+                }
+                k as f64 / (sw * sh) as f64
+            })
+            .collect()
+    };
+    let coverage = tile_cover(w, h, &|i| opaque(albedo, i));
     // Mean opaque colour and normal fill the transparent texels.
     let mut mean = [[0.0f64; 4]; 2];
     for i in (0..n).filter(|&i| opaque(albedo, i)) {
@@ -422,15 +447,27 @@ pub fn impostor_mips(albedo: &[u8], normal: &[u8], w: u32, h: u32) -> (Vec<Vec<u
                     (texels.iter().map(|&t| pn[4 * t + 3] as f32).sum::<f32>() / 4.0).round() as u8;
             }
         }
-        // Alpha scale keeping the alpha-tested coverage: the raw value at the coverage
-        // quantile maps to 128.
-        let mut sorted = next_raw.clone();
-        sorted.sort_by(|a, b| b.total_cmp(a));
-        let k = ((coverage * sorted.len() as f64).round() as usize).clamp(1, sorted.len());
-        let at_quantile = sorted[k - 1].max(1.0);
-        let scale = 128.0 / at_quantile;
-        for (o, r) in next_raw.iter().enumerate() {
-            na[4 * o + 3] = (r * scale).round().min(255.0) as u8;
+        // Alpha scale keeping each tile's alpha-tested coverage: the raw value at the
+        // tile's coverage quantile maps to 128.
+        let (sw, sh) = ((nw / tx).max(1), (nh / ty).max(1));
+        for t in 0..tx * ty {
+            let (x0, y0) = ((t % tx) * sw, (t / tx) * sh);
+            let texels: Vec<usize> = (y0..(y0 + sh).min(nh))
+                .flat_map(|y| (x0..(x0 + sw).min(nw)).map(move |x| (y * nw + x) as usize))
+                .collect();
+            // Rank by raw alpha (ties broken by a hash of the texel, so equal values do not
+            // all pass or all fail together); the first `k` pass the test.
+            let mut ranked = texels.clone();
+            let tie = |o: usize| (o as u32).wrapping_mul(0x9e37_79b9).rotate_left(13);
+            ranked.sort_by(|&a, &b| next_raw[b].total_cmp(&next_raw[a]).then(tie(a).cmp(&tie(b))));
+            let k =
+                ((coverage[t as usize] * ranked.len() as f64).round() as usize).min(ranked.len());
+            let at_quantile = if k > 0 { next_raw[ranked[k - 1]].max(1.0) } else { 255.0 };
+            let scale = 128.0 / at_quantile;
+            for (rank, &o) in ranked.iter().enumerate() {
+                let a = (next_raw[o] * scale).round();
+                na[4 * o + 3] = if rank < k { a.clamp(128.0, 255.0) } else { a.min(127.0) } as u8;
+            }
         }
         raw = next_raw;
         albedo_out.push(na);
@@ -460,7 +497,7 @@ mod tests {
             }
         }
         let normal = vec![128u8; albedo.len()];
-        let (mips, normals) = impostor_mips(&albedo, &normal, w, h);
+        let (mips, normals) = impostor_mips(&albedo, &normal, w, h, (1, 1));
         assert_eq!(mips.len(), normals.len());
         assert!(mips.len() >= 4);
         let share = |m: &[u8], pred: &dyn Fn(&[u8]) -> bool| {
@@ -480,5 +517,44 @@ mod tests {
         }
         let plain = crate::shared::box_mips(&albedo, w, h);
         assert_eq!(share(&plain[1], &|p| p[3] >= 128), 0.0, "the case a plain box filter loses");
+    }
+
+    #[test]
+    fn every_leaf_cell_keeps_its_coverage_within_ten_percent_at_every_mip_level() {
+        // A crown seen from farther away samples coarser mips of the leaf atlas: what passes
+        // the alpha test must stay the same share of each cluster, or far crowns thin out
+        // (plain box filter) or fatten.
+        for (name, _) in sylva_tree::PRESETS {
+            let sp = sylva_tree::Species::preset(name).expect("preset");
+            let atlas = sylva_tree::texture::leaf_atlas(&sp, 1, sylva_tree::mesh::ATLAS_SIZE);
+            let (w, h) = (atlas.image.width, atlas.image.height);
+            let normal = vec![128u8; atlas.image.rgba.len()];
+            let (mips, _) =
+                impostor_mips(&atlas.image.rgba, &normal, w, h, (atlas.cells, atlas.cells));
+            let cells = atlas.cells;
+            for (l, m) in mips.iter().enumerate() {
+                let (lw, lh) = ((w >> l).max(1), (h >> l).max(1));
+                let side = lw / cells;
+                // Below 8 texels a cell, one texel is more than 10 % of a cluster's leaves.
+                if side < 8 {
+                    break;
+                }
+                for c in 0..cells * cells {
+                    let (cx, cy) = (c % cells, c / cells);
+                    let mut pass = 0usize;
+                    for y in cy * side..(cy + 1) * side {
+                        for x in cx * side..(cx + 1) * side {
+                            pass += usize::from(m[((y * lw + x) * 4 + 3) as usize] >= 128);
+                        }
+                    }
+                    let cov = pass as f32 / (side * side) as f32;
+                    let want = atlas.coverage[c as usize];
+                    assert!(
+                        (cov / want - 1.0).abs() < 0.10,
+                        "{name} cell {c} mip {l} ({lw}x{lh}): coverage {cov:.3} vs {want:.3}"
+                    );
+                }
+            }
+        }
     }
 }

@@ -29,6 +29,7 @@ struct FarOut {
     @location(1) uv: vec2<f32>,
     @location(2) @interpolate(flat) yaw: f32,
     @location(3) @interpolate(flat) fade: vec2<f32>,
+    @location(4) @interpolate(flat) tint: vec3<f32>,
 };
 
 const TAU: f32 = 6.28318530718;
@@ -65,6 +66,7 @@ fn vs_main(@builtin(vertex_index) vi: u32, inst: InstanceIn) -> FarOut {
     out.uv = vec2<f32>((f32(k) + corner.x) / n, 1.0 - corner.y);
     out.yaw = yaw;
     out.fade = inst.fade;
+    out.tint = tree_tint(inst.base);
     return out;
 }
 
@@ -80,6 +82,8 @@ fn fs_main(in: FarOut) -> @location(0) vec4<f32> {
         n = vec3<f32>(0.0, 0.0, 1.0);
     }
     n = rotate_z(normalize(n), in.yaw);
-    let lit = albedo.rgb * (lighting(n) + baked.a * translucency(in.world));
+    // Leaf pixels (normal alpha 1) take the tree's colour variation, as near trees do.
+    let tint = mix(vec3<f32>(1.0), in.tint, baked.a);
+    let lit = albedo.rgb * tint * (lighting(n) + baked.a * translucency(in.world));
     return vec4<f32>(apply_fog(lit, in.world), 1.0);
 }

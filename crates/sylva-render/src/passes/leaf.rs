@@ -44,7 +44,7 @@ impl LeafPass {
     }
 }
 
-/// The billboards of `lod` on the GPU (none without clusters); `cells` atlas cells a side.
+/// The leaf cards of `lod` on the GPU (none without clusters); `cells` atlas cells a side.
 pub fn mesh(gpu: &Gpu, lod: &TreeLod, cells: u32) -> Option<Mesh> {
     if lod.clusters.is_empty() {
         return None;
@@ -57,13 +57,16 @@ pub fn mesh(gpu: &Gpu, lod: &TreeLod, cells: u32) -> Option<Mesh> {
         let first = verts.len() as u32;
         let cell = c.atlas % (cells * cells);
         let uv_origin = [(cell % cells) as f32 * uv_size, (cell / cells) as f32 * uv_size];
+        let (right, up) = c.axes();
+        let side = |v: [f32; 3]| [v[0] * c.size, v[1] * c.size, v[2] * c.size];
         for corner in [[-0.5, -0.5], [0.5, -0.5], [0.5, 0.5], [-0.5, 0.5]] {
             verts.push(LeafVertex {
                 center: c.center,
                 hang: c.hang,
                 corner,
-                size: c.size,
-                roll: c.roll,
+                right: side(right),
+                up: side(up),
+                exposure: c.exposure,
                 phase: c.phase,
                 joint: c.joint,
                 uv_origin,

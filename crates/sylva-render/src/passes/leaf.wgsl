@@ -1,20 +1,27 @@
-// Leaf clusters: camera-facing billboards hung on a joint. Each swings about its hanging
-// point by amplitude * sin(tree phase + cluster phase) (the flutter model of sylva-sway),
-// then follows its joint's palette. Alpha-tested against the leaf atlas. `fs_bake` writes
-// albedo and tree-space normal instead, for the impostor atlas (far.rs).
+// Leaf clusters: cards oriented in 3D (out of the crown, tilted to the sky; sylva-tree's
+// mesh.rs) and turned part way towards the viewer, so none is seen edge-on, keeping the
+// twig's direction. Each swings about its hanging point by amplitude * sin(tree phase +
+// cluster phase) (the flutter model of sylva-sway), then follows its joint's palette.
+// Alpha-tested against the leaf atlas; darker deeper in the crown (exposure). `fs_bake`
+// writes albedo and tree-space normal instead, for the impostor atlas (far.rs).
 
 struct LeafIn {
     @location(0) center: vec3<f32>,
     @location(1) hang: vec3<f32>,
     @location(2) corner: vec2<f32>,
-    @location(3) size: f32,
-    @location(4) roll: f32,
+    // The card's right and up edges, each times its side (tree space).
+    @location(3) right: vec3<f32>,
+    @location(4) up: vec3<f32>,
+    @location(15) exposure: f32,
     @location(11) phase: f32,
     @location(12) joint: u32,
     // Top-left of the atlas cell and its side, in texture coordinates.
     @location(13) uv_origin: vec2<f32>,
     @location(14) uv_size: f32,
 };
+
+// How far a card turns towards the viewer: its normal moves to normalize(n + TURN * view).
+const TURN: f32 = 0.8;
 
 // Rotate v about the unit axis k by angle a (Rodrigues).
 fn rotate_axis(v: vec3<f32>, k: vec3<f32>, a: f32) -> vec3<f32> {
@@ -31,21 +38,34 @@ fn vs_main(v: LeafIn, inst: InstanceIn) -> TreeOut {
     if (dot(axis, axis) < 1e-10) {
         axis = vec3<f32>(1.0, 0.0, 0.0);
     }
-    let swung = v.hang + rotate_axis(offset, normalize(axis), swing);
+    let k = normalize(axis);
+    let swung = v.hang + rotate_axis(offset, k, swing);
     let m = palette(inst.palette, inst.stride, v.joint);
     let c = tree_to_world(palette_apply(m, swung), inst.base, inst.scale);
-    let s = sin(v.roll);
-    let co = cos(v.roll);
-    let r = vec2<f32>(co * v.corner.x - s * v.corner.y, s * v.corner.x + co * v.corner.y);
-    let size = v.size * inst.scale;
-    let world = c + (globals.cam_right * r.x + globals.cam_up * r.y) * size;
+    var r = rotate_z(palette_rotate(m, rotate_axis(v.right, k, swing)), inst.base.w) * inst.scale;
+    var u = rotate_z(palette_rotate(m, rotate_axis(v.up, k, swing)), inst.base.w) * inst.scale;
+    // Turn the card towards the viewer about the axis between its normal and the new one.
+    let n = normalize(cross(r, u));
+    let view = normalize(globals.eye - c);
+    let ns = select(-n, n, dot(n, view) >= 0.0);
+    let nt = normalize(ns + TURN * view);
+    let turn_axis = cross(ns, nt);
+    let s = length(turn_axis);
+    if (s > 1e-5) {
+        let a = atan2(s, dot(ns, nt));
+        r = rotate_axis(r, turn_axis / s, a);
+        u = rotate_axis(u, turn_axis / s, a);
+    }
+    let world = c + r * v.corner.x + u * v.corner.y;
     var out: TreeOut;
     out.clip = globals.view_proj * vec4<f32>(world, 1.0);
     out.world = world;
-    // Shade as a piece of a rounded crown: outward from the branch, tilted up.
-    out.normal = rotate_z(palette_rotate(m, offset), inst.base.w) + vec3<f32>(0.0, 0.0, 0.6 * length(offset));
+    // Shade by the card's own normal (out of the crown), whichever side is seen.
+    out.normal = n;
     out.uv = v.uv_origin + vec2<f32>(v.corner.x + 0.5, 0.5 - v.corner.y) * v.uv_size;
     out.fade = inst.fade;
+    out.exposure = v.exposure;
+    out.tint = tree_tint(inst.base);
     return out;
 }
 
@@ -63,8 +83,8 @@ fn fs_main(in: TreeOut) -> @location(0) vec4<f32> {
     if (t.a < 0.5 || !dither_keeps(in.clip.xy, in.fade)) {
         discard;
     }
-    let light = lighting(leaf_normal(in));
-    let lit = t.rgb * (light + translucency(in.world));
+    let light = lighting(leaf_normal(in)) * foliage_occlusion(in.exposure);
+    let lit = t.rgb * in.tint * (light + translucency(in.world));
     return vec4<f32>(apply_fog(lit, in.world), 1.0);
 }
 
@@ -75,7 +95,8 @@ fn fs_bake(in: TreeOut) -> BakeOut {
         discard;
     }
     var out: BakeOut;
-    out.albedo = vec4<f32>(t.rgb, 1.0);
+    // The crown's inner darkening goes into the albedo the impostor shows.
+    out.albedo = vec4<f32>(t.rgb * foliage_occlusion(in.exposure), 1.0);
     // Alpha 1: leaves (thin: some sun shows through).
     out.normal = vec4<f32>(leaf_normal(in) * 0.5 + 0.5, 1.0);
     return out;
