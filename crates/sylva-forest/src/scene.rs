@@ -176,8 +176,12 @@ pub struct Lighting {
     pub sky_zenith: [f32; 3],
     /// Sky colour at the horizon, also the fog colour. Default (0.62, 0.72, 0.82).
     pub sky_horizon: [f32; 3],
-    /// Fog density, per metre (exponential fog, ≥ 0). Default 0.0011.
-    pub fog_density: f32,
+    /// Aerial perspective (exponential fog towards the sky's colour in each direction),
+    /// per metre, ≥ 0. Default: scaled to the scene ([`Lighting::fog_for_radius`]), so a
+    /// large forest still reads to the horizon.
+    pub fog_density: Option<f32>,
+    /// The sun casts shadows (a shadow map over the near view). Default true.
+    pub shadows: bool,
 }
 
 impl Default for Lighting {
@@ -190,12 +194,24 @@ impl Default for Lighting {
             ambient_ground: [0.22, 0.2, 0.16],
             sky_zenith: [0.18, 0.36, 0.72],
             sky_horizon: [0.62, 0.72, 0.82],
-            fog_density: 0.0011,
+            fog_density: None,
+            shadows: true,
         }
     }
 }
 
 impl Lighting {
+    /// The fog density a scene of `radius` m gets by default: 90 % fog at six forest
+    /// radii, and never nearer than 2 km.
+    pub fn fog_for_radius(radius: f32) -> f32 {
+        10f32.ln() / (6.0 * radius).max(2000.0)
+    }
+
+    /// The fog density in use for a forest of `radius` m: the scene's, else the default.
+    pub fn fog(&self, radius: f32) -> f32 {
+        self.fog_density.unwrap_or_else(|| Lighting::fog_for_radius(radius))
+    }
+
     /// The unit direction towards the sun.
     pub fn sun_unit(&self) -> [f32; 3] {
         let [x, y, z] = self.sun_direction;
@@ -324,8 +340,8 @@ impl SceneSpec {
         if !(0.0..=100.0).contains(&l.sun_intensity) {
             return Err(bad("lighting.sun_intensity", l.sun_intensity.to_string(), "0 … 100"));
         }
-        if !(0.0..=1.0).contains(&l.fog_density) {
-            return Err(bad("lighting.fog_density", l.fog_density.to_string(), "0 … 1 per m"));
+        if let Some(f) = l.fog_density.filter(|f| !(0.0..=1.0).contains(f)) {
+            return Err(bad("lighting.fog_density", f.to_string(), "0 … 1 per m"));
         }
         if !(self.lod.fraction > 0.0 && self.lod.fraction.is_finite() && self.lod.fraction <= 100.0)
         {

@@ -23,9 +23,17 @@ struct Globals {
     pad3: f32,
     sky_zenith: vec3<f32>,
     pad4: f32,
-    // Sky at the horizon; also the fog colour.
+    // Sky at the horizon.
     sky_horizon: vec3<f32>,
+    // Exposure before the filmic tone map.
+    exposure: f32,
+    // World -> the sun's shadow-map clip space (zero: no shadow map).
+    sun_view_proj: mat4x4<f32>,
+    // One shadow-map texel in texture coordinates (0: no shadow map).
+    shadow_texel: f32,
     pad5: f32,
+    pad6: f32,
+    pad7: f32,
 };
 
 @group(0) @binding(0) var<uniform> globals: Globals;
@@ -34,6 +42,60 @@ struct Globals {
 // stride come with the instance (up to 16 instances' palettes are interleaved).
 @group(0) @binding(1) var<storage, read> palettes: array<f32>;
 @group(0) @binding(2) var linear_sampler: sampler;
+// The sun's shadow map (passes/shadow.rs) and its comparison sampler.
+@group(0) @binding(3) var shadow_map: texture_depth_2d;
+@group(0) @binding(4) var shadow_sampler: sampler_comparison;
+
+// True in the shadow pass's pipelines: vertex shaders project with the sun's matrix and
+// turn cards towards the sun.
+override SHADOW: bool = false;
+
+// Clip position of `world` for the pass being drawn (the camera's, or the sun's).
+fn project(world: vec3<f32>) -> vec4<f32> {
+    if (SHADOW) {
+        return globals.sun_view_proj * vec4<f32>(world, 1.0);
+    }
+    return globals.view_proj * vec4<f32>(world, 1.0);
+}
+
+// Unit direction from `world` towards the viewer of the pass (the eye, or the sun).
+fn towards_viewer(world: vec3<f32>) -> vec3<f32> {
+    if (SHADOW) {
+        return globals.sun_dir;
+    }
+    return normalize(globals.eye - world);
+}
+
+// Share of the sun reaching `world` (1 lit, 0 in shadow): percentage-closer filtering of
+// the shadow map (four bilinear comparisons); 1 outside it, fading to 1 over its outer tenth.
+fn sun_visibility(world: vec3<f32>, normal: vec3<f32>) -> f32 {
+    if (globals.shadow_texel <= 0.0) {
+        return 1.0;
+    }
+    // Offset along the normal by about a texel against self-shadowing.
+    let p = globals.sun_view_proj * vec4<f32>(world + normal * 0.06, 1.0);
+    let uv = vec2<f32>(0.5 + 0.5 * p.x, 0.5 - 0.5 * p.y);
+    let edge = max(abs(p.x), abs(p.y));
+    if (edge >= 1.0 || p.z <= 0.0 || p.z >= 1.0) {
+        return 1.0;
+    }
+    // Four bilinear comparisons half a texel apart: a 3 x 3 texel footprint, smoothly
+    // weighted.
+    var lit = 0.0;
+    for (var k = 0; k < 4; k = k + 1) {
+        let o = (vec2<f32>(f32(k & 1), f32(k >> 1u)) - 0.5) * globals.shadow_texel;
+        lit = lit + textureSampleCompareLevel(shadow_map, shadow_sampler, uv + o, p.z);
+    }
+    return mix(lit / 4.0, 1.0, smoothstep(0.9, 1.0, edge));
+}
+
+// Filmic tone map of linear HDR colour (Narkowicz's fit of the ACES curve, 2015), after
+// the exposure; the sRGB target encodes the result.
+fn finish(colour: vec3<f32>) -> vec4<f32> {
+    let x = max(colour * globals.exposure, vec3<f32>(0.0));
+    let mapped = (x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14);
+    return vec4<f32>(clamp(mapped, vec3<f32>(0.0), vec3<f32>(1.0)), 1.0);
+}
 
 struct Palette {
     r0: vec4<f32>,
@@ -120,27 +182,39 @@ fn tree_to_world(p: vec3<f32>, base: vec4<f32>, scale: f32) -> vec3<f32> {
     return base.xyz + rotate_z(p * scale, base.w);
 }
 
-fn sky_colour(dir: vec3<f32>) -> vec3<f32> {
-    let up = clamp(dir.z, -1.0, 1.0);
-    let t = pow(clamp(up, 0.0, 1.0), 0.6);
-    var c = mix(globals.sky_horizon, globals.sky_zenith, t);
-    // Below the horizon the haze continues.
-    c = select(c, globals.sky_horizon * 0.9, up < 0.0);
+// The sky's colour looking along `dir`, without the sun's disc: horizon to zenith, the same
+// colour below the horizon as at it (no seam), brighter towards the sun.
+fn sky_dome(dir: vec3<f32>) -> vec3<f32> {
+    let t = pow(clamp(dir.z, 0.0, 1.0), 0.6);
+    let c = mix(globals.sky_horizon, globals.sky_zenith, t);
     let sun = max(dot(dir, globals.sun_dir), 0.0);
-    return c + vec3<f32>(1.0, 0.9, 0.7) * (pow(sun, 600.0) * 4.0 + pow(sun, 12.0) * 0.15);
+    return c + vec3<f32>(1.0, 0.9, 0.7) * (pow(sun, 12.0) * 0.25);
 }
 
+fn sky_colour(dir: vec3<f32>) -> vec3<f32> {
+    let sun = max(dot(dir, globals.sun_dir), 0.0);
+    return sky_dome(dir) + vec3<f32>(1.0, 0.9, 0.7) * (pow(sun, 600.0) * 6.0);
+}
+
+// Aerial perspective: with distance the colour goes over to the sky's colour in that
+// direction (exponential in distance), so the far ground meets the sky without a line.
 fn apply_fog(colour: vec3<f32>, world: vec3<f32>) -> vec3<f32> {
     let d = distance(world, globals.eye);
     let f = 1.0 - exp(-globals.fog_density * d);
-    return mix(colour, globals.sky_horizon, clamp(f, 0.0, 1.0));
+    let dir = (world - globals.eye) / max(d, 1e-3);
+    return mix(colour, sky_dome(dir), clamp(f, 0.0, 1.0));
 }
 
-// Ambient from the sky plus one directional light.
-fn lighting(n: vec3<f32>) -> vec3<f32> {
+// Ambient from the sky plus one directional light, `sun` the share of it reaching here.
+fn lighting_lit(n: vec3<f32>, sun: f32) -> vec3<f32> {
     let sky = mix(globals.ambient_ground, globals.ambient_sky, 0.5 + 0.5 * n.z);
-    let sun = max(dot(n, globals.sun_dir), 0.0) * globals.sun_intensity;
-    return sky + globals.sun_colour * sun;
+    let direct = max(dot(n, globals.sun_dir), 0.0) * globals.sun_intensity * sun;
+    return sky + globals.sun_colour * direct;
+}
+
+// Ambient from the sky plus the unshadowed sun.
+fn lighting(n: vec3<f32>) -> vec3<f32> {
+    return lighting_lit(n, 1.0);
 }
 
 // Thin leaves pass some light: a little sun shows through from behind.

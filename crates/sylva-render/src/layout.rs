@@ -57,9 +57,22 @@ pub struct Globals {
     pub pad4: f32,
     /// Sky at the horizon and fog colour.
     pub sky_horizon: [f32; 3],
+    /// Exposure multiplying the linear colour before the filmic tone map.
+    pub exposure: f32,
+    /// World → the sun's shadow-map clip space (all zero: no shadow map).
+    pub sun_view_proj: [[f32; 4]; 4],
+    /// Side of one shadow-map texel in its texture coordinates (0: no shadow map).
+    pub shadow_texel: f32,
     /// Padding.
     pub pad5: f32,
+    /// Padding.
+    pub pad6: f32,
+    /// Padding.
+    pub pad7: f32,
 }
+
+/// Exposure before the filmic tone map (common.wgsl `finish`).
+pub const EXPOSURE: f32 = 0.8;
 
 impl Globals {
     /// The globals for `view_proj` (and its inverse), seen from `eye` with billboard axes
@@ -78,7 +91,7 @@ impl Globals {
             eye,
             time,
             cam_right: right,
-            fog_density: light.fog_density,
+            fog_density: light.fog(0.0),
             cam_up: up,
             sun_intensity: light.sun_intensity,
             sun_dir: light.sun_unit(),
@@ -87,6 +100,7 @@ impl Globals {
             ambient_ground: light.ambient_ground,
             sky_zenith: light.sky_zenith,
             sky_horizon: light.sky_horizon,
+            exposure: EXPOSURE,
             ..Zeroable::zeroed()
         }
     }

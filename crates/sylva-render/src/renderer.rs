@@ -1,5 +1,5 @@
-//! The frame: shared targets and per-frame buffers, the passes in order (sky, ground,
-//! branches, leaves, impostors), per-species GPU resources, and the one-way upload of
+//! The frame: shared targets and per-frame buffers, the passes in order (the sun's shadow
+//! map, then sky, ground, branches, leaves, impostors), per-species GPU resources, and the one-way upload of
 //! [`FrameData`].
 
 use sylva_forest::{Camera, Forest, FrameData, Instance, Lighting, Terrain};
@@ -11,10 +11,11 @@ use crate::passes::branch::{self, BranchPass};
 use crate::passes::far::{BAKE_TARGETS, BakeContext, FarPass, FarSpeciesGpu, bake_level};
 use crate::passes::ground::GroundPass;
 use crate::passes::leaf::{self, LeafPass};
+use crate::passes::shadow::{SHADOW_SIZE, ShadowPass};
 use crate::passes::sky::SkyPass;
 use crate::shared::{
-    DEPTH, Mesh, box_mips, globals_group, globals_layout, instance_buffer, palette_buffer,
-    pipeline_layout, texture_entry, upload_mips,
+    DEPTH, GlobalsBinding, Mesh, box_mips, globals_group, globals_layout, instance_buffer,
+    palette_buffer, pipeline_layout, texture_entry, upload_mips,
 };
 
 /// What the renderer draws a scene with: tree models (in the scene's species order, as
@@ -63,6 +64,7 @@ pub struct Renderer {
     branch: BranchPass,
     leaf: LeafPass,
     far: FarPass,
+    shadow: ShadowPass,
     globals: wgpu::Buffer,
     globals_layout: wgpu::BindGroupLayout,
     sampler: wgpu::Sampler,
@@ -70,6 +72,8 @@ pub struct Renderer {
     instances: wgpu::Buffer,
     /// One bind group per palette window (one when all palettes fit one binding).
     windows: Vec<wgpu::BindGroup>,
+    /// The same for the shadow pass (the map's placeholder in its place).
+    shadow_windows: Vec<wgpu::BindGroup>,
     /// Offset (floats) of each palette window.
     window_offsets: Vec<u64>,
     /// Window of each instance of the frame.
@@ -99,7 +103,11 @@ impl Renderer {
             models: &models,
             terrain: &forest.terrain,
             ground_extent: 3.0 * forest.radius + GROUND_MARGIN,
-            lighting: forest.spec.lighting,
+            // The scene's fog, or the default scaled to the forest.
+            lighting: Lighting {
+                fog_density: Some(forest.spec.lighting.fog(forest.radius)),
+                ..forest.spec.lighting
+            },
         };
         Renderer::new(gpu, &assets, format, width, height)
     }
@@ -136,6 +144,7 @@ impl Renderer {
         let branch = BranchPass::new(dev, &tree_layout, format, samples, &BAKE_TARGETS);
         let leaf = LeafPass::new(dev, &tree_layout, format, samples, &BAKE_TARGETS);
         let far = FarPass::new(dev, &globals_layout, format, samples);
+        let shadow = ShadowPass::new(dev, &tree_layout);
         let sampler = dev.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("linear"),
             address_mode_u: wgpu::AddressMode::Repeat,
@@ -153,12 +162,20 @@ impl Renderer {
         });
         let palettes = palette_buffer(dev, 48 * 1024);
         let instances = instance_buffer(dev, 1024);
-        let windows = vec![globals_group(dev, &globals_layout, &globals, &palettes, &sampler)];
+        let lit = GlobalsBinding {
+            globals: &globals,
+            sampler: &sampler,
+            shadow: shadow.map(),
+            shadow_sampler: &shadow.sampler,
+        };
+        let unlit = GlobalsBinding { shadow: shadow.placeholder(), ..lit };
+        let windows = vec![globals_group(dev, &globals_layout, &lit, &palettes)];
+        let shadow_windows = vec![globals_group(dev, &globals_layout, &unlit, &palettes)];
         let bake = BakeContext {
             branch: &branch.bake,
             leaf: &leaf.bake,
             globals_layout: &globals_layout,
-            sampler: &sampler,
+            globals: unlit,
         };
         let mut species = Vec::with_capacity(assets.models.len());
         for m in assets.models {
@@ -176,7 +193,13 @@ impl Renderer {
                 &img.rgba, &img.rgba, img.width, img.height, cells,
             );
             let srgb = wgpu::TextureFormat::Rgba8UnormSrgb;
-            let leaves = upload_mips(gpu, &mips, img.width, img.height, srgb, "leaf atlas");
+            // Mips stop at cells of 4 × 4 texels: a cell of one texel cannot show a card's
+            // partial coverage (it would be all leaf or, as rounded, nothing), so cards
+            // seen smaller than that take the sparse 4 × 4 pattern and overlap into crowns.
+            let cell0 = (img.width / m.leaves.cells.max(1)).max(1);
+            let keep = (cell0.max(4).ilog2() - 1) as usize;
+            let mips = &mips[..mips.len().min(keep)];
+            let leaves = upload_mips(gpu, mips, img.width, img.height, srgb, "leaf atlas");
             let textures = dev.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("species textures"),
                 layout: &species_layout,
@@ -222,12 +245,14 @@ impl Renderer {
             branch,
             leaf,
             far,
+            shadow,
             globals,
             globals_layout,
             sampler,
             palettes,
             instances,
             windows,
+            shadow_windows,
             window_offsets: vec![0],
             window_of: Vec::new(),
             staged: Vec::new(),
@@ -292,11 +317,22 @@ impl Renderer {
     ) {
         let dev = &gpu.device;
         let aspect = self.width as f32 / self.height as f32;
-        let g = Globals::for_camera(camera, aspect, frame.time as f32, &self.lighting);
+        let mut g = Globals::for_camera(camera, aspect, frame.time as f32, &self.lighting);
+        let shadows = self.lighting.shadows;
+        if shadows {
+            g.sun_view_proj = ShadowPass::sun_matrix(camera, aspect, self.lighting.sun_unit());
+            g.shadow_texel = 1.0 / SHADOW_SIZE as f32;
+        }
         gpu.queue.write_buffer(&self.globals, 0, bytemuck::bytes_of(&g));
         self.upload(gpu, frame);
         let mut enc =
             dev.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
+        if shadows {
+            // The sun's shadow map: every tree drawn as a mesh casts.
+            let mut pass = self.shadow.begin(&mut enc);
+            pass.set_vertex_buffer(1, self.instances.slice(..));
+            self.draw_trees(&mut pass, frame, [&self.shadow.branch, &self.shadow.leaf], true);
+        }
         {
             let (view, resolve) = match &self.msaa {
                 Some(m) => (m, Some(target)),
@@ -322,18 +358,7 @@ impl Renderer {
             self.sky.draw(&mut pass);
             self.ground.draw(&mut pass);
             pass.set_vertex_buffer(1, self.instances.slice(..));
-            for (pipeline, leaves) in [(&self.branch.draw, false), (&self.leaf.draw, true)] {
-                pass.set_pipeline(pipeline);
-                for &(bucket, window, first, count) in &self.draws {
-                    let b = &frame.buckets[bucket];
-                    let Some(sp) = self.species.get(b.species as usize) else { continue };
-                    let Some((branch, leaf)) = sp.lods.get(b.lod as usize) else { continue };
-                    let Some(mesh) = (if leaves { leaf } else { branch }) else { continue };
-                    pass.set_bind_group(0, &self.windows[window], &[]);
-                    pass.set_bind_group(1, &sp.textures, &[]);
-                    mesh.draw(&mut pass, first..first + count);
-                }
-            }
+            self.draw_trees(&mut pass, frame, [&self.branch.draw, &self.leaf.draw], false);
             // Impostors: buckets one past the species' last mesh level.
             pass.set_vertex_buffer(0, self.instances.slice(..));
             self.far.begin(&mut pass);
@@ -351,6 +376,30 @@ impl Renderer {
 }
 
 impl Renderer {
+    /// Draw every tree drawn as a mesh (not the impostors) with `pipelines` (branches,
+    /// leaves), bound through the frame's palette windows (`shadow`: the shadow pass's).
+    fn draw_trees(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        frame: &FrameData,
+        pipelines: [&wgpu::RenderPipeline; 2],
+        shadow: bool,
+    ) {
+        let windows = if shadow { &self.shadow_windows } else { &self.windows };
+        for (pipeline, leaves) in [(pipelines[0], false), (pipelines[1], true)] {
+            pass.set_pipeline(pipeline);
+            for &(bucket, window, first, count) in &self.draws {
+                let b = &frame.buckets[bucket];
+                let Some(sp) = self.species.get(b.species as usize) else { continue };
+                let Some((branch, leaf)) = sp.lods.get(b.lod as usize) else { continue };
+                let Some(mesh) = (if leaves { leaf } else { branch }) else { continue };
+                pass.set_bind_group(0, &windows[window], &[]);
+                pass.set_bind_group(1, &sp.textures, &[]);
+                mesh.draw(pass, first..first + count);
+            }
+        }
+    }
+
     /// Copy `frame`'s palettes and instances to the GPU. Palettes beyond what one storage
     /// binding may hold (`max_storage_buffer_binding_size`) are bound through windows:
     /// instances in order of their first palette value, a window opens (aligned down to
@@ -403,18 +452,27 @@ impl Renderer {
         }
         if grown || offsets != self.window_offsets {
             self.windows.clear();
+            self.shadow_windows.clear();
+            let lit = GlobalsBinding {
+                globals: &self.globals,
+                sampler: &self.sampler,
+                shadow: self.shadow.map(),
+                shadow_sampler: &self.shadow.sampler,
+            };
+            let unlit = GlobalsBinding { shadow: self.shadow.placeholder(), ..lit };
             for &o in &offsets {
                 let offset = 4 * o;
                 let size = (self.palettes.size() - offset).min(max_binding);
-                self.windows.push(crate::shared::globals_window(
-                    dev,
-                    &self.globals_layout,
-                    &self.globals,
-                    &self.palettes,
-                    offset,
-                    size,
-                    &self.sampler,
-                ));
+                for (with, to) in [(&lit, &mut self.windows), (&unlit, &mut self.shadow_windows)] {
+                    to.push(crate::shared::globals_window(
+                        dev,
+                        &self.globals_layout,
+                        with,
+                        &self.palettes,
+                        offset,
+                        size,
+                    ));
+                }
             }
             self.window_offsets = offsets;
         }

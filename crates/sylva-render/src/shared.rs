@@ -172,19 +172,48 @@ pub fn globals_layout(dev: &wgpu::Device) -> wgpu::BindGroupLayout {
                 ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
                 count: None,
             },
+            wgpu::BindGroupLayoutEntry {
+                binding: 3,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Depth,
+                    view_dimension: wgpu::TextureViewDimension::D2,
+                    multisampled: false,
+                },
+                count: None,
+            },
+            wgpu::BindGroupLayoutEntry {
+                binding: 4,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison),
+                count: None,
+            },
         ],
     })
+}
+
+/// What group 0 binds besides the palettes: the globals, the linear sampler, and the sun's
+/// shadow map with its comparison sampler.
+#[derive(Debug, Clone, Copy)]
+pub struct GlobalsBinding<'a> {
+    /// The `Globals` uniform buffer.
+    pub globals: &'a wgpu::Buffer,
+    /// Linear, repeating, mipmapped sampler.
+    pub sampler: &'a wgpu::Sampler,
+    /// Shadow map (a placeholder in passes that draw into the real one).
+    pub shadow: &'a wgpu::TextureView,
+    /// Comparison sampler of the shadow map.
+    pub shadow_sampler: &'a wgpu::Sampler,
 }
 
 /// The bind group of [`globals_layout`].
 pub fn globals_group(
     dev: &wgpu::Device,
     layout: &wgpu::BindGroupLayout,
-    globals: &wgpu::Buffer,
+    with: &GlobalsBinding<'_>,
     palettes: &wgpu::Buffer,
-    sampler: &wgpu::Sampler,
 ) -> wgpu::BindGroup {
-    globals_window(dev, layout, globals, palettes, 0, palettes.size(), sampler)
+    globals_window(dev, layout, with, palettes, 0, palettes.size())
 }
 
 /// The bind group of [`globals_layout`] with the palettes bound from byte `offset`,
@@ -192,11 +221,10 @@ pub fn globals_group(
 pub fn globals_window(
     dev: &wgpu::Device,
     layout: &wgpu::BindGroupLayout,
-    globals: &wgpu::Buffer,
+    with: &GlobalsBinding<'_>,
     palettes: &wgpu::Buffer,
     offset: u64,
     size: u64,
-    sampler: &wgpu::Sampler,
 ) -> wgpu::BindGroup {
     let window =
         wgpu::BufferBinding { buffer: palettes, offset, size: wgpu::BufferSize::new(size) };
@@ -204,9 +232,20 @@ pub fn globals_window(
         label: Some("globals"),
         layout,
         entries: &[
-            wgpu::BindGroupEntry { binding: 0, resource: globals.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 0, resource: with.globals.as_entire_binding() },
             wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::Buffer(window) },
-            wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::Sampler(sampler) },
+            wgpu::BindGroupEntry {
+                binding: 2,
+                resource: wgpu::BindingResource::Sampler(with.sampler),
+            },
+            wgpu::BindGroupEntry {
+                binding: 3,
+                resource: wgpu::BindingResource::TextureView(with.shadow),
+            },
+            wgpu::BindGroupEntry {
+                binding: 4,
+                resource: wgpu::BindingResource::Sampler(with.shadow_sampler),
+            },
         ],
     })
 }
@@ -250,6 +289,9 @@ pub struct PipelineSpec<'a> {
     pub samples: u32,
     /// Colour targets.
     pub targets: &'a [wgpu::TextureFormat],
+    /// A shadow-pass pipeline: `SHADOW` overridden to true, depth biased against acne, no
+    /// colour targets (and no fragment stage when `fragment` is empty).
+    pub shadow: bool,
 }
 
 /// Build the render pipeline `spec` describes (entry points `vs_main` and `spec.fragment`).
@@ -262,13 +304,20 @@ pub fn pipeline(dev: &wgpu::Device, spec: &PipelineSpec<'_>) -> wgpu::RenderPipe
             Some(wgpu::ColorTargetState { format, blend: None, write_mask: wgpu::ColorWrites::ALL })
         })
         .collect();
+    let constants: &[(&str, f64)] = if spec.shadow { &[("SHADOW", 1.0)] } else { &[] };
+    let options = wgpu::PipelineCompilationOptions { constants, ..Default::default() };
+    let bias = if spec.shadow {
+        wgpu::DepthBiasState { constant: 2, slope_scale: 2.0, clamp: 0.0 }
+    } else {
+        Default::default()
+    };
     dev.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some(spec.shader),
         layout: Some(spec.layout),
         vertex: wgpu::VertexState {
             module: &module,
             entry_point: Some("vs_main"),
-            compilation_options: Default::default(),
+            compilation_options: options.clone(),
             buffers: spec.buffers,
         },
         primitive: wgpu::PrimitiveState {
@@ -286,17 +335,17 @@ pub fn pipeline(dev: &wgpu::Device, spec: &PipelineSpec<'_>) -> wgpu::RenderPipe
                 wgpu::CompareFunction::Always
             }),
             stencil: Default::default(),
-            bias: Default::default(),
+            bias,
         }),
         multisample: wgpu::MultisampleState {
             count: spec.samples,
             mask: !0,
             alpha_to_coverage_enabled: false,
         },
-        fragment: Some(wgpu::FragmentState {
+        fragment: (!spec.fragment.is_empty()).then(|| wgpu::FragmentState {
             module: &module,
             entry_point: Some(spec.fragment),
-            compilation_options: Default::default(),
+            compilation_options: options.clone(),
             targets: &targets,
         }),
         multiview_mask: None,

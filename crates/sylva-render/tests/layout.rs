@@ -69,7 +69,12 @@ fn globals_match_their_wgsl_twin() {
         sky_zenith,
         pad4,
         sky_horizon,
-        pad5
+        exposure,
+        sun_view_proj,
+        shadow_texel,
+        pad5,
+        pad6,
+        pad7
     );
     check_struct("common.wgsl", "Globals", size_of::<Globals>(), &fields);
 }

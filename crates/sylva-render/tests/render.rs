@@ -191,3 +191,115 @@ fn palettes_beyond_one_storage_binding_are_drawn_through_windows() {
         .count();
     assert!(leaves > 500, "trees drawn: {leaves} leaf pixels");
 }
+
+/// One calm frame of `spec` from `camera` (the scene's default when `None`), with its frame
+/// data.
+fn render_spec(spec: &SceneSpec, camera: Option<Camera>) -> (Vec<u8>, FrameData, Camera) {
+    let mut forest = Forest::new(spec).expect("forest");
+    let camera = camera.unwrap_or_else(|| forest.default_camera());
+    let mut gpu = Headless::new(&forest, W, H).unwrap_or_else(|e| panic!("{e}"));
+    let mut frame = FrameData::default();
+    forest.step(1.0 / 30.0);
+    forest.frame(&camera, W as f32 / H as f32, &mut frame);
+    (gpu.render(&frame, &camera).expect("render"), frame, camera)
+}
+
+/// Pixel of world point `p`, if in the image.
+fn pixel_of(camera: &Camera, p: [f32; 3]) -> Option<(u32, u32)> {
+    let m = camera.view_projection(W as f32 / H as f32);
+    let mut o = [0.0f32; 4];
+    for (r, v) in o.iter_mut().enumerate() {
+        *v = m[0][r] * p[0] + m[1][r] * p[1] + m[2][r] * p[2] + m[3][r];
+    }
+    if o[3] <= 0.0 {
+        return None;
+    }
+    let (x, y) = (o[0] / o[3], o[1] / o[3]);
+    let (px, py) = ((0.5 + 0.5 * x) * W as f32, (0.5 - 0.5 * y) * H as f32);
+    (px >= 2.0 && py >= 2.0 && px < W as f32 - 2.0 && py < H as f32 - 2.0)
+        .then_some((px as u32, py as u32))
+}
+
+/// Mean brightness of the 3 × 3 pixels around (x, y).
+fn brightness(img: &[u8], (x, y): (u32, u32)) -> f64 {
+    let mut s = 0.0;
+    for dy in 0..3 {
+        for dx in 0..3 {
+            let [r, g, b] = px(img, x + dx - 1, y + dy - 1);
+            s += (r + g + b) as f64 / 3.0;
+        }
+    }
+    s / 9.0
+}
+
+#[test]
+fn crowns_cast_shadows_on_the_ground_where_the_sun_puts_them() {
+    // The ground a crown hides from the sun is darker with shadows than without; ground
+    // the same distance towards the sun (nothing between it and the sun) is not.
+    let spec = SceneSpec::builtin("small").expect("small scene");
+    let mut off = spec.clone();
+    off.lighting.shadows = false;
+    let (lit, frame, camera) = render_spec(&spec, None);
+    let (flat, _, _) = render_spec(&off, Some(camera));
+    let sun = spec.lighting.sun_unit();
+    let (mut shaded, mut kept, mut trees) = (0, 0, 0);
+    for inst in &frame.instances {
+        let base = inst.position;
+        // The sun's ray through a point 7 m up the crown meets the ground here.
+        let up = 7.0 * inst.scale;
+        let shadow = [base[0] - sun[0] * up / sun[2], base[1] - sun[1] * up / sun[2], base[2]];
+        let h = (sun[0] * sun[0] + sun[1] * sun[1]).sqrt();
+        let open = [base[0] + sun[0] / h * 6.0, base[1] + sun[1] / h * 6.0, base[2]];
+        let (Some(s), Some(o)) = (pixel_of(&camera, shadow), pixel_of(&camera, open)) else {
+            continue;
+        };
+        trees += 1;
+        if brightness(&lit, s) < 0.85 * brightness(&flat, s) {
+            shaded += 1;
+        }
+        if (brightness(&lit, o) / brightness(&flat, o) - 1.0).abs() < 0.05 {
+            kept += 1;
+        }
+    }
+    assert!(trees >= 3, "only {trees} trees' shadows in view");
+    assert!(2 * shaded > trees, "only {shaded} of {trees} shadow points darker with shadows");
+    assert!(2 * kept > trees, "only {kept} of {trees} sunlit points unchanged by shadows");
+}
+
+#[test]
+fn the_fir_crown_hides_most_of_the_sky_behind_it_at_twenty_metres() {
+    // One Douglas fir seen from 20 m: within the outline of its crown (from the image with
+    // and without it), the share of pixels where sky shows through.
+    let text = r#"
+        name = "fir"
+        seed = 3
+        trees = 1
+        terrain_amplitude = 0.0
+        wind = "calm"
+        species = [ { name = "douglas_fir" } ]
+        camera = { eye = [-20.0, 0.0, 2.0], target = [0.0, 0.0, 12.0], fov_deg = 70.0 }
+    "#;
+    let spec = SceneSpec::from_toml("fir.toml", text).expect("scene");
+    let (img, frame, camera) = render_spec(&spec, None);
+    let base = frame.instances[0].position;
+    // Crown: from 30 % of its height to 85 %, within the half-width at that height of a cone
+    // 0.35 × as wide as the tree is tall (a conservative inner outline).
+    let height = 21.0 * frame.instances[0].scale;
+    let (mut inside, mut sky) = (0, 0);
+    for k in 0..40 {
+        let z = height * (0.3 + 0.55 * k as f32 / 39.0);
+        let half = 0.35 * 0.5 * (height - z) * 0.6;
+        for j in -4..=4 {
+            let p = [base[0], base[1] + half * j as f32 / 4.0, base[2] + z];
+            let Some((x, y)) = pixel_of(&camera, p) else { continue };
+            inside += 1;
+            let [r, _, b] = px(&img, x, y);
+            if b > r + 20 && b > 150 {
+                sky += 1;
+            }
+        }
+    }
+    assert!(inside > 200, "crown not in view ({inside} samples)");
+    let open = sky as f64 / inside as f64;
+    assert!(open < 0.3, "{:.0} % of the fir's crown shows sky", 100.0 * open);
+}

@@ -180,7 +180,7 @@ pub fn blade_contains(shape: u32, along: f32, across: f32, w: f32) -> bool {
         let lobe = (2.5 * a).cos().abs().powf(1.5);
         return r <= 0.22 + 0.33 * lobe;
     }
-    along >= 0.0 && along <= 1.0 && across.abs() <= 0.5 * w * blade_profile(shape, along)
+    (0.0..=1.0).contains(&along) && across.abs() <= 0.5 * w * blade_profile(shape, along)
 }
 
 fn seg_distance(p: [f32; 2], a: [f32; 2], b: [f32; 2]) -> f32 {
@@ -197,9 +197,10 @@ fn rot(d: [f32; 2], a: f32) -> [f32; 2] {
     [d[0] * c - d[1] * s, d[0] * s + d[1] * c]
 }
 
-/// Cell side in leaf lengths: a broadleaf cluster spans four leaves, a needle spray eight.
+/// Cell side in leaf lengths: a broadleaf cluster spans three and a half leaves, a needle
+/// spray seven (tight around the twig, so little of a card is transparent).
 fn span_in_leaves(needle: bool) -> f32 {
-    if needle { 8.0 } else { 4.0 }
+    if needle { 7.0 } else { 3.5 }
 }
 
 /// Whether `species` has needles (LeafShape 6).
@@ -208,7 +209,8 @@ pub fn is_needle(species: &Species) -> bool {
 }
 
 /// The twigs and leaves of atlas cell `cell` of `species`, in cell units. Leaves are
-/// `LeafScale / span` long (± 10 %); their count is what fills about half the cell.
+/// `LeafScale / span` long (± 10 %); a twig carries as many as would cover 90 % of the cell
+/// (overlapping, they cover about half).
 pub fn cluster_layout(species: &Species, seed: u64, cell: u32) -> (Vec<Twig>, Vec<LeafStroke>) {
     let needle = is_needle(species);
     let len = 1.0 / span_in_leaves(needle);
@@ -271,11 +273,11 @@ pub fn cluster_layout(species: &Species, seed: u64, cell: u32) -> (Vec<Twig>, Ve
         let lean = 0.5 * (next() - 0.5);
         let a = [0.5 - 0.25 * lean, 0.98];
         let dir = rot([0.0, -1.0], lean);
-        let twig_len = 0.62;
+        let twig_len = 0.56;
         let b = [a[0] + dir[0] * twig_len, a[1] + dir[1] * twig_len];
         twigs.push((a, b, 0.008));
         let one = len * len * aspect * PI / 4.0;
-        let n = ((0.5 / one).round() as usize).clamp(4, 28);
+        let n = ((0.9 / one).round() as usize).clamp(4, 32);
         let petiole = if species.leaf_shape == 3 { 0.35 } else { 0.15 } * len;
         for i in 0..n {
             let tip = i + 1 == n;

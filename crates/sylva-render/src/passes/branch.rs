@@ -37,6 +37,7 @@ impl BranchPass {
             cull: Some(wgpu::Face::Back),
             samples,
             targets: &[format],
+            shadow: false,
         };
         let (draw, bake) = draw_and_bake(dev, &spec, bake_targets);
         BranchPass { draw, bake }

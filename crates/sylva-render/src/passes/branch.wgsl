@@ -1,5 +1,6 @@
 // Branches: generalized cylinders skinned to the joint palette of their instance
-// (up to four joints per vertex), bark-textured, lit and fogged. `fs_bake` writes albedo and
+// (up to four joints per vertex), bark-textured, lit (with the sun's shadow) and fogged;
+// the shadow pass draws them into the sun's depth map with the same vertex shader. `fs_bake` writes albedo and
 // tree-space normal instead, for the impostor atlas (far.rs).
 
 struct BranchIn {
@@ -24,7 +25,7 @@ fn vs_main(v: BranchIn, inst: InstanceIn) -> TreeOut {
     }
     let world = tree_to_world(p, inst.base, inst.scale);
     var out: TreeOut;
-    out.clip = globals.view_proj * vec4<f32>(world, 1.0);
+    out.clip = project(world);
     out.world = world;
     out.normal = rotate_z(n, inst.base.w);
     out.uv = v.uv;
@@ -40,8 +41,9 @@ fn fs_main(in: TreeOut) -> @location(0) vec4<f32> {
         discard;
     }
     let albedo = textureSample(bark_texture, linear_sampler, in.uv).rgb;
-    let lit = albedo * lighting(normalize(in.normal));
-    return vec4<f32>(apply_fog(lit, in.world), 1.0);
+    let n = normalize(in.normal);
+    let lit = albedo * lighting_lit(n, sun_visibility(in.world, n));
+    return finish(apply_fog(lit, in.world));
 }
 
 @fragment

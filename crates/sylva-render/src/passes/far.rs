@@ -15,7 +15,8 @@ use sylva_tree::mesh::TreeModel;
 use crate::gpu::{Gpu, RenderError};
 use crate::layout::{FarSpecies, Globals, instance_layout};
 use crate::shared::{
-    Mesh, PipelineSpec, buffer, globals_group, palette_buffer, pipeline, texture_entry, upload_mips,
+    GlobalsBinding, Mesh, PipelineSpec, buffer, globals_group, palette_buffer, pipeline,
+    texture_entry, upload_mips,
 };
 
 /// Views baked around each tree.
@@ -66,8 +67,9 @@ pub struct BakeContext<'a> {
     pub leaf: &'a wgpu::RenderPipeline,
     /// Group 0 layout.
     pub globals_layout: &'a wgpu::BindGroupLayout,
-    /// The linear sampler.
-    pub sampler: &'a wgpu::Sampler,
+    /// Samplers and the shadow map's placeholder (the bake is unshadowed); its `globals`
+    /// buffer is replaced by each view's.
+    pub globals: GlobalsBinding<'a>,
 }
 
 impl FarPass {
@@ -107,6 +109,7 @@ impl FarPass {
             cull: None,
             samples,
             targets: &[format],
+            shadow: false,
         };
         FarPass { pipeline: pipeline(dev, &spec), species_layout }
     }
@@ -186,7 +189,8 @@ impl FarPass {
                     bytemuck::bytes_of(&g),
                     wgpu::BufferUsages::UNIFORM,
                 );
-                globals_group(dev, ctx.globals_layout, &buf, &palettes, ctx.sampler)
+                let with = GlobalsBinding { globals: &buf, ..ctx.globals };
+                globals_group(dev, ctx.globals_layout, &with, &palettes)
             })
             .collect();
         let (w, h) = (VIEWS * VIEW_SIZE, VIEW_SIZE);

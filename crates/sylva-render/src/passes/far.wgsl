@@ -84,6 +84,7 @@ fn fs_main(in: FarOut) -> @location(0) vec4<f32> {
     n = rotate_z(normalize(n), in.yaw);
     // Leaf pixels (normal alpha 1) take the tree's colour variation, as near trees do.
     let tint = mix(vec3<f32>(1.0), in.tint, baked.a);
-    let lit = albedo.rgb * tint * (lighting(n) + baked.a * translucency(in.world));
-    return vec4<f32>(apply_fog(lit, in.world), 1.0);
+    let sun = sun_visibility(in.world, n);
+    let lit = albedo.rgb * tint * (lighting_lit(n, sun) + sun * baked.a * translucency(in.world));
+    return finish(apply_fog(lit, in.world));
 }

@@ -1,4 +1,5 @@
-//! Ground: the terrain as a grid mesh, denser near the centre where the trees stand,
+//! Ground: the terrain as a grid mesh, denser near the centre where the trees stand, and a
+//! flat skirt around it out to the horizon;
 //! grass and soil mixed by value noise, lit and fogged (`ground.wgsl`).
 
 use sylva_forest::Terrain;
@@ -16,6 +17,8 @@ pub struct GroundPass {
 
 /// Grid cells per side of the ground mesh.
 const CELLS: u32 = 192;
+/// The skirt around the grid reaches this many times its half side.
+const HORIZON: f32 = 8.0;
 
 impl GroundPass {
     /// Pipeline and mesh of `terrain` reaching `extent` m from the origin.
@@ -36,6 +39,7 @@ impl GroundPass {
             cull: Some(wgpu::Face::Back),
             samples,
             targets: &[format],
+            shadow: false,
         };
         GroundPass {
             pipeline: pipeline(&gpu.device, &spec),
@@ -67,13 +71,34 @@ fn ground_mesh(gpu: &Gpu, terrain: &Terrain, extent: f32) -> Mesh {
             });
         }
     }
-    let mut indices = Vec::with_capacity((n * n * 6) as usize);
+    let mut indices = Vec::with_capacity((n * n * 6 + 4 * n * 6) as usize);
     for j in 0..n {
         for i in 0..n {
             let a = j * (n + 1) + i;
             let b = a + n + 1;
             indices.extend_from_slice(&[a, a + 1, b + 1, a, b + 1, b]);
         }
+    }
+    // A skirt from the grid's edge out to HORIZON × extent at the edge's height: the ground
+    // reaches the horizon, where the aerial perspective has turned it into the sky.
+    let edge: Vec<u32> = (0..n)
+        .chain((0..n).map(|j| j * (n + 1) + n))
+        .chain((0..n).map(|i| n * (n + 1) + n - i))
+        .chain((0..n).map(|j| (n - j) * (n + 1)))
+        .collect();
+    let first_far = verts.len() as u32;
+    for &e in &edge {
+        let p = verts[e as usize].position;
+        verts.push(GroundVertex {
+            position: [p[0] * HORIZON, p[1] * HORIZON, p[2]],
+            normal: [0.0, 0.0, 1.0],
+        });
+    }
+    let m = edge.len() as u32;
+    for k in 0..m {
+        let (a, b) = (edge[k as usize], edge[((k + 1) % m) as usize]);
+        let (fa, fb) = (first_far + k, first_far + (k + 1) % m);
+        indices.extend_from_slice(&[a, fa, fb, a, fb, b]);
     }
     Mesh::new(gpu, "ground", &verts, &indices)
 }

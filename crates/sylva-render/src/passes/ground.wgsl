@@ -1,4 +1,5 @@
-// Ground: the terrain mesh, grass and soil mixed by value noise, lit and fogged.
+// Ground: the terrain mesh, grass and soil mixed by value noise, lit (trees' shadows from
+// the shadow map) and fogged into the sky at the horizon.
 
 struct GroundIn {
     @location(0) position: vec3<f32>,
@@ -42,6 +43,7 @@ fn fs_main(in: GroundOut) -> @location(0) vec4<f32> {
     let grass = vec3<f32>(0.07, 0.15, 0.035);
     let dry = vec3<f32>(0.17, 0.16, 0.07);
     let albedo = mix(grass, dry, smoothstep(0.35, 0.75, n));
-    let lit = albedo * lighting(normalize(in.normal));
-    return vec4<f32>(apply_fog(lit, in.world), 1.0);
+    let normal = normalize(in.normal);
+    let lit = albedo * lighting_lit(normal, sun_visibility(in.world, normal));
+    return finish(apply_fog(lit, in.world));
 }

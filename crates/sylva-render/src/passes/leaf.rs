@@ -38,6 +38,7 @@ impl LeafPass {
             cull: None,
             samples,
             targets: &[format],
+            shadow: false,
         };
         let (draw, bake) = draw_and_bake(dev, &spec, bake_targets);
         LeafPass { draw, bake }

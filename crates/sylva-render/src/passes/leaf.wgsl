@@ -2,7 +2,8 @@
 // mesh.rs) and turned part way towards the viewer, so none is seen edge-on, keeping the
 // twig's direction. Each swings about its hanging point by amplitude * sin(tree phase +
 // cluster phase) (the flutter model of sylva-sway), then follows its joint's palette.
-// Alpha-tested against the leaf atlas; darker deeper in the crown (exposure). `fs_bake`
+// Alpha-tested against the leaf atlas; darker deeper in the crown (exposure), shadowed by
+// the sun's shadow map. In the shadow pass the cards turn towards the sun instead. `fs_bake`
 // writes albedo and tree-space normal instead, for the impostor atlas (far.rs).
 
 struct LeafIn {
@@ -46,7 +47,7 @@ fn vs_main(v: LeafIn, inst: InstanceIn) -> TreeOut {
     var u = rotate_z(palette_rotate(m, rotate_axis(v.up, k, swing)), inst.base.w) * inst.scale;
     // Turn the card towards the viewer about the axis between its normal and the new one.
     let n = normalize(cross(r, u));
-    let view = normalize(globals.eye - c);
+    let view = towards_viewer(c);
     let ns = select(-n, n, dot(n, view) >= 0.0);
     let nt = normalize(ns + TURN * view);
     let turn_axis = cross(ns, nt);
@@ -58,7 +59,7 @@ fn vs_main(v: LeafIn, inst: InstanceIn) -> TreeOut {
     }
     let world = c + r * v.corner.x + u * v.corner.y;
     var out: TreeOut;
-    out.clip = globals.view_proj * vec4<f32>(world, 1.0);
+    out.clip = project(world);
     out.world = world;
     // Shade by the card's own normal (out of the crown), whichever side is seen.
     out.normal = n;
@@ -83,9 +84,20 @@ fn fs_main(in: TreeOut) -> @location(0) vec4<f32> {
     if (t.a < 0.5 || !dither_keeps(in.clip.xy, in.fade)) {
         discard;
     }
-    let light = lighting(leaf_normal(in)) * foliage_occlusion(in.exposure);
-    let lit = t.rgb * in.tint * (light + translucency(in.world));
-    return vec4<f32>(apply_fog(lit, in.world), 1.0);
+    let n = leaf_normal(in);
+    let sun = sun_visibility(in.world, n);
+    let light = lighting_lit(n, sun) * foliage_occlusion(in.exposure);
+    let lit = t.rgb * in.tint * (light + sun * translucency(in.world));
+    return finish(apply_fog(lit, in.world));
+}
+
+// The shadow pass: only the alpha test, so light passes between the leaves.
+@fragment
+fn fs_shadow(in: TreeOut) {
+    let t = textureSample(leaf_texture, linear_sampler, in.uv);
+    if (t.a < 0.5) {
+        discard;
+    }
 }
 
 @fragment

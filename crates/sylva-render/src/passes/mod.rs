@@ -1,8 +1,9 @@
 //! The render passes, one module each with its pipeline, bind groups and `.wgsl` side by
-//! side: sky, ground, branches, leaves and far-tree impostors.
+//! side: the sun's shadow map, sky, ground, branches, leaves and far-tree impostors.
 
 pub mod branch;
 pub mod far;
 pub mod ground;
 pub mod leaf;
+pub mod shadow;
 pub mod sky;

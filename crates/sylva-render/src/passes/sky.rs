@@ -27,6 +27,7 @@ impl SkyPass {
             cull: None,
             samples,
             targets: &[format],
+            shadow: false,
         };
         SkyPass { pipeline: pipeline(dev, &spec) }
     }

@@ -18,5 +18,5 @@ fn vs_main(@builtin(vertex_index) i: u32) -> SkyOut {
 fn fs_main(in: SkyOut) -> @location(0) vec4<f32> {
     let far = globals.inv_view_proj * vec4<f32>(in.ndc, 1.0, 1.0);
     let dir = normalize(far.xyz / far.w - globals.eye);
-    return vec4<f32>(sky_colour(dir), 1.0);
+    return finish(sky_colour(dir));
 }

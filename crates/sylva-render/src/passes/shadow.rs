@@ -1,0 +1,208 @@
+//! The sun's shadow map: the near trees' branches and leaf cards drawn from the sun into a
+//! depth texture, which every lit pass samples (`sun_visibility` in common.wgsl, four
+//! bilinear percentage-closer comparisons). One orthographic map covers a sphere around the first
+//! [`ShadowPass::reach`] metres of the view, its centre snapped to whole texels so the
+//! shadows do not shimmer as the camera moves. Trees drawn as impostors cast no shadow.
+//!
+//! The pipelines are the branch and leaf shaders themselves with the `SHADOW` override set:
+//! the same skinning and flutter, projected with the sun's matrix, cards turned towards the
+//! sun, leaves alpha-tested (`fs_shadow`) so light falls between them.
+
+use sylva_forest::Camera;
+
+use crate::layout::{BRANCH_ATTRIBUTES, BranchVertex, LEAF_ATTRIBUTES, LeafVertex};
+use crate::layout::{instance_layout, vertex_layout};
+use crate::shared::{DEPTH, PipelineSpec, pipeline};
+
+/// Side of the shadow map, texels.
+pub const SHADOW_SIZE: u32 = 2048;
+
+/// The shadow pass: its two pipelines, the map and a placeholder bound while drawing it.
+#[derive(Debug)]
+pub struct ShadowPass {
+    /// Branches into the map.
+    pub branch: wgpu::RenderPipeline,
+    /// Leaf cards into the map.
+    pub leaf: wgpu::RenderPipeline,
+    map: wgpu::TextureView,
+    placeholder: wgpu::TextureView,
+    /// Comparison sampler of the map.
+    pub sampler: wgpu::Sampler,
+}
+
+impl ShadowPass {
+    /// Pipelines (with the trees' `layout`) and the map.
+    pub fn new(dev: &wgpu::Device, layout: &wgpu::PipelineLayout) -> ShadowPass {
+        let spec = |shader, fragment, buffers| PipelineSpec {
+            shader,
+            fragment,
+            layout,
+            buffers,
+            depth: true,
+            cull: None,
+            samples: 1,
+            targets: &[],
+            shadow: true,
+        };
+        let branch_buffers =
+            [Some(vertex_layout::<BranchVertex>(&BRANCH_ATTRIBUTES)), Some(instance_layout())];
+        let leaf_buffers =
+            [Some(vertex_layout::<LeafVertex>(&LEAF_ATTRIBUTES)), Some(instance_layout())];
+        let depth = |size, label| {
+            dev.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size: wgpu::Extent3d { width: size, height: size, depth_or_array_layers: 1 },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: DEPTH,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                    | wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            })
+            .create_view(&wgpu::TextureViewDescriptor::default())
+        };
+        ShadowPass {
+            branch: pipeline(dev, &spec("branch.wgsl", "", &branch_buffers)),
+            leaf: pipeline(dev, &spec("leaf.wgsl", "fs_shadow", &leaf_buffers)),
+            map: depth(SHADOW_SIZE, "shadow map"),
+            placeholder: depth(1, "no shadow map"),
+            sampler: dev.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some("shadow"),
+                mag_filter: wgpu::FilterMode::Linear,
+                min_filter: wgpu::FilterMode::Linear,
+                compare: Some(wgpu::CompareFunction::LessEqual),
+                ..Default::default()
+            }),
+        }
+    }
+
+    /// The map, to sample.
+    pub fn map(&self) -> &wgpu::TextureView {
+        &self.map
+    }
+
+    /// A 1 × 1 depth texture bound in the map's place where the map is a target (or absent).
+    pub fn placeholder(&self) -> &wgpu::TextureView {
+        &self.placeholder
+    }
+
+    /// Open the pass drawing into the map (cleared).
+    pub fn begin<'e>(&self, enc: &'e mut wgpu::CommandEncoder) -> wgpu::RenderPass<'e> {
+        enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("shadow map"),
+            color_attachments: &[],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &self.map,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        })
+    }
+
+    /// How far along the view the map reaches for `camera`, m: 1.2 × the distance to the
+    /// point looked at, within 40 … 250 m.
+    pub fn reach(camera: &Camera) -> f32 {
+        let d = (0..3).map(|k| (camera.target[k] - camera.eye[k]).powi(2)).sum::<f32>().sqrt();
+        (1.2 * d).clamp(40.0, 250.0)
+    }
+
+    /// World → the map's clip space for `camera` (image `aspect`) and the unit direction
+    /// towards the sun: an orthographic view along the sun's rays of the sphere around the
+    /// first [`ShadowPass::reach`] metres of the view, depth reaching 150 m beyond it so
+    /// tall trees outside still cast into it.
+    pub fn sun_matrix(camera: &Camera, aspect: f32, sun: [f32; 3]) -> [[f32; 4]; 4] {
+        let reach = ShadowPass::reach(camera);
+        let dot = |a: [f32; 3], b: [f32; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+        let norm = |a: [f32; 3]| {
+            let n = dot(a, a).sqrt().max(1e-9);
+            [a[0] / n, a[1] / n, a[2] / n]
+        };
+        let cross = |a: [f32; 3], b: [f32; 3]| {
+            [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+        };
+        let fwd = norm([
+            camera.target[0] - camera.eye[0],
+            camera.target[1] - camera.eye[1],
+            camera.target[2] - camera.eye[2],
+        ]);
+        // Sphere around the view's first `reach` metres (half-depth, corner spread).
+        let tan_v = (0.5 * camera.fov_deg.to_radians()).tan();
+        let radius = reach * (0.25 + tan_v * tan_v * (1.0 + aspect * aspect)).sqrt();
+        let centre = [
+            camera.eye[0] + fwd[0] * 0.5 * reach,
+            camera.eye[1] + fwd[1] * 0.5 * reach,
+            camera.eye[2] + fwd[2] * 0.5 * reach,
+        ];
+        let f = norm([-sun[0], -sun[1], -sun[2]]);
+        let r = if f[0].abs() + f[1].abs() < 1e-4 {
+            [1.0, 0.0, 0.0]
+        } else {
+            norm(cross(f, [0.0, 0.0, 1.0]))
+        };
+        let u = cross(r, f);
+        // Snap the centre to whole texels across the sun's view.
+        let texel = 2.0 * radius / SHADOW_SIZE as f32;
+        let cr = (dot(centre, r) / texel).round() * texel;
+        let cu = (dot(centre, u) / texel).round() * texel;
+        let cf = dot(centre, f);
+        let depth = radius + 150.0;
+        let zs = 1.0 / (2.0 * depth);
+        // Column-major: m[column][row].
+        [
+            [r[0] / radius, u[0] / radius, f[0] * zs, 0.0],
+            [r[1] / radius, u[1] / radius, f[1] * zs, 0.0],
+            [r[2] / radius, u[2] / radius, f[2] * zs, 0.0],
+            [-cr / radius, -cu / radius, (depth - cf) * zs, 1.0],
+        ]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_sun_matrix_maps_the_near_view_inside_the_map_and_depth_along_the_rays() {
+        let camera = Camera {
+            eye: [-30.0, -20.0, 8.0],
+            target: [0.0, 0.0, 5.0],
+            fov_deg: 50.0,
+            near: 0.5,
+            far: 2000.0,
+        };
+        let sun = [-0.35f32, -0.55, 0.75];
+        let n = (sun[0] * sun[0] + sun[1] * sun[1] + sun[2] * sun[2]).sqrt();
+        let sun = [sun[0] / n, sun[1] / n, sun[2] / n];
+        let m = ShadowPass::sun_matrix(&camera, 1.5, sun);
+        let apply = |p: [f32; 3]| {
+            let mut o = [0.0f32; 4];
+            for (row, v) in o.iter_mut().enumerate() {
+                *v = m[0][row] * p[0] + m[1][row] * p[1] + m[2][row] * p[2] + m[3][row];
+            }
+            o
+        };
+        // The point looked at and a tree top beside it lie inside the map.
+        for p in [camera.target, [5.0, 3.0, 25.0], camera.eye] {
+            let c = apply(p);
+            assert!(c[0].abs() < 1.0 && c[1].abs() < 1.0, "{p:?} at {c:?}");
+            assert!((0.0..1.0).contains(&c[2]), "{p:?} depth {}", c[2]);
+            assert!((c[3] - 1.0).abs() < 1e-6, "orthographic");
+        }
+        // Moving towards the sun brings a point nearer (smaller depth), across it not.
+        let a = apply(camera.target);
+        let b = apply([
+            camera.target[0] + 3.0 * sun[0],
+            camera.target[1] + 3.0 * sun[1],
+            camera.target[2] + 3.0 * sun[2],
+        ]);
+        assert!(b[2] < a[2], "towards the sun is nearer: {} vs {}", b[2], a[2]);
+        assert!((b[0] - a[0]).abs() < 1e-4 && (b[1] - a[1]).abs() < 1e-4, "along a ray");
+    }
+}
