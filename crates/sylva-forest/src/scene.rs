@@ -172,9 +172,9 @@ pub struct Lighting {
     pub ambient_sky: [f32; 3],
     /// Ambient light from the ground (surfaces facing down). Default (0.22, 0.2, 0.16).
     pub ambient_ground: [f32; 3],
-    /// Sky colour at the zenith. Default (0.18, 0.36, 0.72).
+    /// Sky colour at the zenith. Default (0.08, 0.22, 0.62).
     pub sky_zenith: [f32; 3],
-    /// Sky colour at the horizon, also the fog colour. Default (0.62, 0.72, 0.82).
+    /// Sky colour at the horizon (the haze the distance fades into). Default (0.5, 0.62, 0.78).
     pub sky_horizon: [f32; 3],
     /// Aerial perspective (exponential fog towards the sky's colour in each direction),
     /// per metre, ≥ 0. Default: scaled to the scene ([`Lighting::fog_for_radius`]), so a
@@ -192,8 +192,8 @@ impl Default for Lighting {
             sun_colour: [1.0, 0.95, 0.85],
             ambient_sky: [0.32, 0.38, 0.48],
             ambient_ground: [0.22, 0.2, 0.16],
-            sky_zenith: [0.18, 0.36, 0.72],
-            sky_horizon: [0.62, 0.72, 0.82],
+            sky_zenith: [0.08, 0.22, 0.62],
+            sky_horizon: [0.5, 0.62, 0.78],
             fog_density: None,
             shadows: true,
         }

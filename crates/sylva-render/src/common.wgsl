@@ -185,7 +185,7 @@ fn tree_to_world(p: vec3<f32>, base: vec4<f32>, scale: f32) -> vec3<f32> {
 // The sky's colour looking along `dir`, without the sun's disc: horizon to zenith, the same
 // colour below the horizon as at it (no seam), brighter towards the sun.
 fn sky_dome(dir: vec3<f32>) -> vec3<f32> {
-    let t = pow(clamp(dir.z, 0.0, 1.0), 0.6);
+    let t = pow(clamp(dir.z, 0.0, 1.0), 0.45);
     let c = mix(globals.sky_horizon, globals.sky_zenith, t);
     let sun = max(dot(dir, globals.sun_dir), 0.0);
     return c + vec3<f32>(1.0, 0.9, 0.7) * (pow(sun, 12.0) * 0.25);

@@ -33,6 +33,9 @@ pub struct SceneAssets<'a> {
     pub lighting: Lighting,
 }
 
+/// Mesh levels coarser than drawn that trees cast their shadows with.
+const SHADOW_COARSER: usize = 1;
+
 /// The ground reaches this far beyond three forest radii, m.
 const GROUND_MARGIN: f32 = 600.0;
 
@@ -377,7 +380,10 @@ impl Renderer {
 
 impl Renderer {
     /// Draw every tree drawn as a mesh (not the impostors) with `pipelines` (branches,
-    /// leaves), bound through the frame's palette windows (`shadow`: the shadow pass's).
+    /// leaves), bound through the frame's palette windows. `shadow`: into the shadow map,
+    /// through the shadow pass's windows and one mesh level coarser than the tree is drawn
+    /// at (its joints are a prefix of the drawn level's, so its palettes are there): a
+    /// shadow-map texel spans several centimetres, so the finest twigs add cost, not shade.
     fn draw_trees(
         &self,
         pass: &mut wgpu::RenderPass<'_>,
@@ -391,7 +397,15 @@ impl Renderer {
             for &(bucket, window, first, count) in &self.draws {
                 let b = &frame.buckets[bucket];
                 let Some(sp) = self.species.get(b.species as usize) else { continue };
-                let Some((branch, leaf)) = sp.lods.get(b.lod as usize) else { continue };
+                let level = if shadow {
+                    (b.lod as usize + SHADOW_COARSER).min(sp.lods.len().saturating_sub(1))
+                } else {
+                    b.lod as usize
+                };
+                if b.lod as usize >= sp.lods.len() {
+                    continue;
+                }
+                let Some((branch, leaf)) = sp.lods.get(level) else { continue };
                 let Some(mesh) = (if leaves { leaf } else { branch }) else { continue };
                 pass.set_bind_group(0, &windows[window], &[]);
                 pass.set_bind_group(1, &sp.textures, &[]);

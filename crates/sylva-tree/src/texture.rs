@@ -197,10 +197,11 @@ fn rot(d: [f32; 2], a: f32) -> [f32; 2] {
     [d[0] * c - d[1] * s, d[0] * s + d[1] * c]
 }
 
-/// Cell side in leaf lengths: a broadleaf cluster spans three and a half leaves, a needle
-/// spray seven (tight around the twig, so little of a card is transparent).
+/// Cell side in leaf lengths: a broadleaf cluster spans three and a half leaves (tight
+/// around the twig, so little of a card is transparent), a needle spray (a shoot with its
+/// side shoots) twelve needles.
 fn span_in_leaves(needle: bool) -> f32 {
-    if needle { 7.0 } else { 3.5 }
+    if needle { 12.0 } else { 3.5 }
 }
 
 /// Whether `species` has needles (LeafShape 6).
@@ -224,35 +225,35 @@ pub fn cluster_layout(species: &Species, seed: u64, cell: u32) -> (Vec<Twig>, Ve
         r(k)
     };
     if needle {
-        // A spray: a main twig up the cell and three side twigs a side, needles on both
+        // A spray: a main twig up the cell and five side twigs a side, needles on both
         // sides of every twig, spreading forwards.
         let lean = 0.25 * (next() - 0.5);
         let main = ([0.5 - 0.3 * lean.sin(), 0.96], [0.5 + 0.3 * lean.sin(), 0.06]);
-        twigs.push((main.0, main.1, 0.006));
+        twigs.push((main.0, main.1, 0.004));
         let dir = {
             let d = [main.1[0] - main.0[0], main.1[1] - main.0[1]];
             let n = (d[0] * d[0] + d[1] * d[1]).sqrt();
             [d[0] / n, d[1] / n]
         };
         let mut all = vec![(main.0, main.1)];
-        for s in 0..6 {
-            let at = 0.18 + 0.13 * (s / 2) as f32 + 0.04 * next();
+        for s in 0..10 {
+            let at = 0.12 + 0.085 * (s / 2) as f32 + 0.03 * next();
             let side = if s % 2 == 0 { 1.0 } else { -1.0 };
             let from = [
                 main.0[0] + (main.1[0] - main.0[0]) * at,
                 main.0[1] + (main.1[1] - main.0[1]) * at,
             ];
-            let d = rot(dir, side * (0.75 + 0.25 * next()));
-            let l = 0.42 * (1.0 - 0.7 * at) + 0.05 * next();
+            let d = rot(dir, side * (0.8 + 0.25 * next()));
+            let l = 0.45 * (1.0 - 0.75 * at) + 0.04 * next();
             let to = [from[0] + d[0] * l, from[1] + d[1] * l];
-            twigs.push((from, to, 0.004));
+            twigs.push((from, to, 0.003));
             all.push((from, to));
         }
         for (a, b) in all {
             let d = [b[0] - a[0], b[1] - a[1]];
             let l = (d[0] * d[0] + d[1] * d[1]).sqrt();
             let u = [d[0] / l, d[1] / l];
-            let n = (l / (0.18 * len)).ceil() as usize;
+            let n = (l / (0.09 * len)).ceil() as usize;
             for i in 0..n {
                 let t = (i as f32 + 0.5) / n as f32;
                 for side in [-1.0f32, 1.0] {
@@ -277,7 +278,7 @@ pub fn cluster_layout(species: &Species, seed: u64, cell: u32) -> (Vec<Twig>, Ve
         let b = [a[0] + dir[0] * twig_len, a[1] + dir[1] * twig_len];
         twigs.push((a, b, 0.008));
         let one = len * len * aspect * PI / 4.0;
-        let n = ((0.9 / one).round() as usize).clamp(4, 32);
+        let n = ((0.9 / one).round() as usize).clamp(4, 48);
         let petiole = if species.leaf_shape == 3 { 0.35 } else { 0.15 } * len;
         for i in 0..n {
             let tip = i + 1 == n;

@@ -15,7 +15,7 @@ use crate::layout::{instance_layout, vertex_layout};
 use crate::shared::{DEPTH, PipelineSpec, pipeline};
 
 /// Side of the shadow map, texels.
-pub const SHADOW_SIZE: u32 = 2048;
+pub const SHADOW_SIZE: u32 = 1024;
 
 /// The shadow pass: its two pipelines, the map and a placeholder bound while drawing it.
 #[derive(Debug)]
