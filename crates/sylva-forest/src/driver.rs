@@ -416,13 +416,14 @@ impl Forest {
                     leaf: LeafSway::default(),
                 });
             }
-            let sway =
-                SwaySpecies::new(&model.tree.skeleton, SwayParams::default()).map_err(|e| {
-                    ForestError::Species {
-                        name: spec.species[si].name.clone(),
-                        message: e.to_string(),
-                    }
-                })?;
+            let sway = SwaySpecies::new(
+                &model.tree.skeleton,
+                SwayParams::for_leaves(model.leaves.needles),
+            )
+            .map_err(|e| ForestError::Species {
+                name: spec.species[si].name.clone(),
+                message: e.to_string(),
+            })?;
             let mut batch = SwayBatch::new(sway, n_groups);
             let mut prefixes = order.prefix.clone();
             prefixes.push(order.trunk);

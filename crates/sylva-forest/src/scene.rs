@@ -201,10 +201,11 @@ impl Default for Lighting {
 }
 
 impl Lighting {
-    /// The fog density a scene of `radius` m gets by default: 90 % fog at six forest
-    /// radii, and never nearer than 2 km.
+    /// The fog density a scene of `radius` m gets by default: 90 % fog at twelve forest
+    /// radii, and never nearer than 4 km (a hazy day's visibility; the forest's far edge
+    /// stays readable at any scene size).
     pub fn fog_for_radius(radius: f32) -> f32 {
-        10f32.ln() / (6.0 * radius).max(2000.0)
+        10f32.ln() / (12.0 * radius).max(4000.0)
     }
 
     /// The fog density in use for a forest of `radius` m: the scene's, else the default.
@@ -602,6 +603,7 @@ pub fn default_camera(spec: &SceneSpec, radius: f32) -> Camera {
         target: c.target,
         fov_deg: c.fov_deg,
         near: 0.5,
-        far: 20.0 * radius + 400.0,
+        // Far enough for the ground to reach the horizon (fogged into the sky by then).
+        far: (20.0 * radius + 400.0).max(8000.0),
     }
 }

@@ -19,5 +19,5 @@ pub mod species;
 
 pub use batch::{LANES, Lanes, Palette, SwayBatch, transform};
 pub use leaves::{LeafParams, LeafSway};
-pub use params::{SwayParamError, SwayParams};
+pub use params::{NEEDLE_LEAF_DRAG, SwayParamError, SwayParams};
 pub use species::{JointSpring, SwaySpecies};

@@ -53,7 +53,19 @@ impl Default for SwayParams {
     }
 }
 
+/// Drag coefficient per one-sided needle area of a conifer: the leaf value 0.2 times the
+/// shoot silhouette-to-total-needle-area ratio, about 0.15 (needles on a shoot shade each
+/// other; conifer shoots measure roughly 0.1–0.2), so 0.03.
+pub const NEEDLE_LEAF_DRAG: f32 = 0.2 * 0.15;
+
 impl SwayParams {
+    /// The defaults for a species whose leaves are needles (`needles`) or broad leaves:
+    /// needles take [`NEEDLE_LEAF_DRAG`] per unit of their area.
+    pub fn for_leaves(needles: bool) -> SwayParams {
+        let d = SwayParams::default();
+        if needles { SwayParams { leaf_drag: NEEDLE_LEAF_DRAG, ..d } } else { d }
+    }
+
     /// Check every field; the error names it.
     pub fn validate(&self) -> Result<(), SwayParamError> {
         let check = |ok: bool, field, value: f32, expected| {

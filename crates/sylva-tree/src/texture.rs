@@ -43,6 +43,8 @@ pub struct LeafAtlas {
     pub span: f32,
     /// Leaves (needles) drawn in each cell, row-major.
     pub leaves: Vec<u32>,
+    /// The cells show needle sprays (LeafShape 6), not broad leaves.
+    pub needles: bool,
 }
 
 /// One leaf of a cluster, in cell units (0 … 1, y down): where its blade starts, its unit
@@ -381,5 +383,6 @@ pub fn leaf_atlas(species: &Species, seed: u64, size: u32) -> LeafAtlas {
         coverage,
         span: species.leaf_scale * span_in_leaves(needle),
         leaves: counts,
+        needles: needle,
     }
 }

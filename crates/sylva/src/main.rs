@@ -5,6 +5,7 @@
 //! so every check happens once, at the edge, with an error that names the flag.
 
 mod bench;
+mod gallery;
 mod render;
 mod table3;
 mod tree;
@@ -39,6 +40,8 @@ enum Command {
     /// Branch sway: probe how a tree moves in wind.
     #[command(subcommand)]
     Sway(tree::SwayCommand),
+    /// Render the gallery: every preset close up in calm and storm, scenes A and D.
+    Gallery(gallery::GalleryArgs),
     /// Benchmarks (figures with the machine they ran on).
     #[command(subcommand)]
     Bench(bench::BenchCommand),
@@ -131,5 +134,6 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Tree(c) => tree::run_tree(c),
         Command::Sway(c) => tree::run_sway(c),
         Command::Bench(c) => bench::run(c),
+        Command::Gallery(a) => gallery::gallery(&a),
     }
 }

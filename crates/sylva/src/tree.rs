@@ -288,7 +288,8 @@ pub fn run_sway(cmd: SwayCommand) -> anyhow::Result<()> {
                 .collect()
         }
     };
-    let sp = SwaySpecies::new(sk, SwayParams::default())?;
+    let sp =
+        SwaySpecies::new(sk, SwayParams::for_leaves(sylva_tree::texture::is_needle(&species)))?;
     let mut batch = SwayBatch::new(sp, 1);
     let top = sk.trunk_top();
     // Named branches: the three heaviest stems that start on the trunk.
