@@ -11,7 +11,7 @@ use sylva_forest::{Camera, Forest, FrameData, SceneSpec};
 use sylva_render::Headless;
 use sylva_tree::PRESETS;
 
-use crate::render::{parse_size, write_png};
+use crate::render::{parse_size, shrink, write_png};
 
 #[derive(Debug, Args)]
 pub struct GalleryArgs {
@@ -92,11 +92,23 @@ pub fn gallery(a: &GalleryArgs) -> anyhow::Result<()> {
          viewpoints, rendered headless as `sylva render` does.\n\n\
          | species | calm | storm |\n|---|---|---|\n",
     );
-    for (name, _) in PRESETS {
+    // Contact sheet: calm row above storm row, each picture at half size.
+    let (sw, sh) = (size.0 / 2, size.1 / 2);
+    let sheet_w = sw * PRESETS.len() as u32;
+    let mut sheet = vec![0u8; (sheet_w * 2 * sh * 4) as usize];
+    for (column, (name, _)) in PRESETS.iter().enumerate() {
         let mut row = format!("| {name} |");
         for (wind, seconds) in [("calm", 0.1f32), ("storm", 3.0)] {
             let spec = specimen(name, wind)?;
             let img = picture(&spec, seconds, size, &framing)?;
+            let (small, w, h) = shrink(&img, size.0, size.1, 2);
+            let line = (w * 4) as usize;
+            for y in 0..h.min(sh) {
+                let at = (((usize::from(wind == "storm") as u32 * sh + y) * sheet_w
+                    + column as u32 * sw)
+                    * 4) as usize;
+                sheet[at..at + line].copy_from_slice(&small[(y * w * 4) as usize..][..line]);
+            }
             let file = format!("{name}-{wind}.png");
             write_png(&a.out.join(&file), size.0, size.1, &img)?;
             println!("wrote {}", a.out.join(&file).display());
@@ -105,7 +117,8 @@ pub fn gallery(a: &GalleryArgs) -> anyhow::Result<()> {
         index += &row;
         index += "\n";
     }
-    index += "\n";
+    write_png(&a.out.join("presets.png"), sheet_w, 2 * sh, &sheet)?;
+    index += "\nAll six, calm above storm: ![presets](presets.png)\n\n";
     let scenes: &[&str] = if a.no_scene_d { &["A"] } else { &["A", "D"] };
     let big = (2 * size.0, 2 * size.1 * 3 / 4);
     for scene in scenes {

@@ -111,7 +111,7 @@ pub fn write_png(path: &Path, w: u32, h: u32, rgba: &[u8]) -> anyhow::Result<()>
 }
 
 /// Half-size (or smaller) copy for the GIF: box filter by `k`.
-fn shrink(rgba: &[u8], w: u32, h: u32, k: u32) -> (Vec<u8>, u32, u32) {
+pub fn shrink(rgba: &[u8], w: u32, h: u32, k: u32) -> (Vec<u8>, u32, u32) {
     let (nw, nh) = (w / k, h / k);
     let mut out = vec![0u8; (nw * nh * 4) as usize];
     for y in 0..nh {
