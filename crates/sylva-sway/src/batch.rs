@@ -1,6 +1,7 @@
 //! Many instances of one species stepped together (structure of arrays, rayon).
 //!
-//! Per instance and step: (1) loads — eq.-8 drag on every segment and its leaves, with the
+//! Per instance and step: (1) loads — eq.-8 drag on every segment and its leaves (leaves
+//! reconfigured: their drag divided by 1 + |u|/U_r, see `SwayParams`), with the
 //! wind relative to the segment's own motion, accumulated from the tips inwards into the
 //! moment about each joint; (2) springs — the exact zero-order-hold step of each active
 //! joint's two bending angles; joints beyond the instance's budget are frozen and their
@@ -16,9 +17,10 @@
 //! are the joints a coarse level draws). The joints beyond are not touched at all: no
 //! loads, springs or palettes. Held at rest, their drag is still felt by the simulated
 //! joints as a lumped static load — with one wind velocity `u` per instance, the drag of a
-//! rigid segment k is `c_k |u| u`, so everything hanging from simulated joint i adds force
-//! `D_i |u| u` and moment `(P_i − D_i o_i) × |u| u` about its origin, `D_i = Σ c_k`,
-//! `P_i = Σ c_k (o_k + arm_k)`, precomputed per prefix. Joints switched back on restart at
+//! rigid segment k is `c_k |u| u` (its leaves' `l_k |u| u / (1 + |u|/U_r)`), so everything
+//! hanging from simulated joint i adds force `D_i |u| u` and moment `(P_i − D_i o_i) × |u| u`
+//! about its origin, `D_i = Σ c_k`, `P_i = Σ c_k (o_k + arm_k)` — wood and leaves lumped
+//! apart, the leaves' with their reconfigured `|u| u` — precomputed per prefix. Joints switched back on restart at
 //! their static equilibrium and blend in over `blend_time`.
 //!
 //! Layout: instances are gathered in groups of [`LANES`]; within a group every array is
@@ -52,6 +54,9 @@ fn dot(a: [f32; 3], b: [f32; 3]) -> f32 {
 }
 const ZERO: Lanes = [0.0; LANES];
 
+/// Lumped static drag of held joints: [D, c] of their wood, then of their leaves.
+type Lump = [[f32; 4]; 2];
+
 /// Instances of one species and their animation state.
 #[derive(Debug, Clone)]
 pub struct SwayBatch {
@@ -70,8 +75,8 @@ pub struct SwayBatch {
     /// Per group: joints simulated (a prefix).
     active: Vec<u32>,
     /// Registered prefixes and, per joint of each, the lumped static drag [D, c] with
-    /// `c = P − D o` (see the module documentation).
-    lumped: Vec<(usize, Vec<[f32; 4]>)>,
+    /// `c = P − D o` (see the module documentation), of the wood and of the leaves.
+    lumped: Vec<(usize, Vec<Lump>)>,
     /// Joint updates (joints × instances) of the last step.
     updates: usize,
     transitions: Vec<Transition>,
@@ -185,27 +190,30 @@ impl SwayBatch {
             if p == n || self.lumped.iter().any(|(q, _)| *q == p) {
                 continue;
             }
-            let mut sums = vec![[0.0f32; 4]; p];
+            let mut sums: Vec<Lump> = vec![[[0.0f32; 4]; 2]; p];
             // The simulated ancestor each held joint hangs from (parents come first).
             let mut anchor: Vec<u32> = (0..n as u32).collect();
             for k in p..n {
                 let parent = sp.parent[k] as usize;
                 let a = if parent < p { parent } else { anchor[parent] as usize };
                 anchor[k] = a as u32;
-                let c = sp.drag[k];
                 let at = [
                     sp.origin[k][0] + sp.arm[k][0],
                     sp.origin[k][1] + sp.arm[k][1],
                     sp.origin[k][2] + sp.arm[k][2],
                 ];
-                sums[a][0] += c;
-                for d in 0..3 {
-                    sums[a][1 + d] += c * at[d];
+                for (part, c) in [sp.drag[k], sp.leaf_drag[k]].into_iter().enumerate() {
+                    sums[a][part][0] += c;
+                    for d in 0..3 {
+                        sums[a][part][1 + d] += c * at[d];
+                    }
                 }
             }
             for (i, s) in sums.iter_mut().enumerate() {
-                for d in 0..3 {
-                    s[1 + d] -= s[0] * sp.origin[i][d];
+                for part in s.iter_mut() {
+                    for d in 0..3 {
+                        part[1 + d] -= part[0] * sp.origin[i][d];
+                    }
                 }
             }
             self.lumped.push((p, sums));
@@ -345,7 +353,7 @@ struct Group<'a> {
     /// Joints simulated (a prefix).
     active: usize,
     /// Lumped static drag of the held joints, per simulated joint (none: all simulated).
-    held: Option<&'a [[f32; 4]]>,
+    held: Option<&'a [Lump]>,
 }
 
 /// Step one group, vectorised with the widest instruction set the CPU has.
@@ -409,13 +417,17 @@ fn step_group_impl(
     st: &mut Group<'_>,
 ) {
     let n = st.active.min(st.theta.len());
-    // |u| u per lane: the drag on held (rigid) joints.
-    let mut q = [ZERO; 3];
+    // Leaves reconfigure: their drag is divided by 1 + |u| / U_r.
+    let inv_ur = 1.0 / sp.params.leaf_reconfiguration_speed;
+    // |u| u per lane for the held (rigid) joints' wood, and reconfigured for their leaves.
+    let mut q = [[ZERO; 3]; 2];
     if st.held.is_some() {
         for l in 0..LANES {
             let speed = (u[0][l] * u[0][l] + u[1][l] * u[1][l] + u[2][l] * u[2][l]).sqrt();
+            let leaves = speed / (1.0 + speed * inv_ur);
             for c in 0..3 {
-                q[c][l] = speed * u[c][l];
+                q[0][c][l] = speed * u[c][l];
+                q[1][c][l] = leaves * u[c][l];
             }
         }
     }
@@ -424,7 +436,7 @@ fn step_group_impl(
     for i in (0..n).rev() {
         let [ax, ay] = sp.axes[i];
         let arm = sp.arm[i];
-        let drag = sp.drag[i];
+        let (drag, leaf) = (sp.drag[i], sp.leaf_drag[i]);
         let (ra, w) = (&st.rate[i], &st.weight[i]);
         let li = &mut st.loads[i];
         // Simple lane loops, one quantity each, so they vectorise.
@@ -445,8 +457,8 @@ fn step_group_impl(
         }
         let mut f = [ZERO; 3];
         for l in 0..LANES {
-            let k = drag
-                * (rel[0][l] * rel[0][l] + rel[1][l] * rel[1][l] + rel[2][l] * rel[2][l]).sqrt();
+            let s = (rel[0][l] * rel[0][l] + rel[1][l] * rel[1][l] + rel[2][l] * rel[2][l]).sqrt();
+            let k = s * (drag + leaf / (1.0 + s * inv_ur));
             f[0][l] = k * rel[0][l];
             f[1][l] = k * rel[1][l];
             f[2][l] = k * rel[2][l];
@@ -460,14 +472,16 @@ fn step_group_impl(
             li[5][l] += arm[0] * f[1][l] - arm[1] * f[0][l];
         }
         if let Some(held) = st.held {
-            let [d, cx, cy, cz] = held[i];
-            for l in 0..LANES {
-                li[0][l] += d * q[0][l];
-                li[1][l] += d * q[1][l];
-                li[2][l] += d * q[2][l];
-                li[3][l] += cy * q[2][l] - cz * q[1][l];
-                li[4][l] += cz * q[0][l] - cx * q[2][l];
-                li[5][l] += cx * q[1][l] - cy * q[0][l];
+            for (part, q) in held[i].iter().zip(&q) {
+                let [d, cx, cy, cz] = *part;
+                for l in 0..LANES {
+                    li[0][l] += d * q[0][l];
+                    li[1][l] += d * q[1][l];
+                    li[2][l] += d * q[2][l];
+                    li[3][l] += cy * q[2][l] - cz * q[1][l];
+                    li[4][l] += cz * q[0][l] - cx * q[2][l];
+                    li[5][l] += cx * q[1][l] - cy * q[0][l];
+                }
             }
         }
         let p = sp.parent[i];

@@ -32,6 +32,13 @@ pub struct SwayParams {
     /// Drag coefficient of leaves per one-sided leaf area, C_d. Default 0.2 (leaves
     /// streamline and reconfigure; broadleaf crowns measure about 0.1–0.4).
     pub leaf_drag: f32,
+    /// Speed U_r at which leaves have halved their drag by reconfiguring (folding, rolling
+    /// into cones, crowns streamlining), m/s (> 0): the leaf drag is C_d A |u| u / (1 +
+    /// |u| / U_r) — quadratic in light wind, linear in strong wind (a Vogel exponent of −1;
+    /// leaves and crowns measure −0.2 to −1.2, de Langre 2008, Annu. Rev. Fluid Mech.).
+    /// Default 8: crown drag areas falling by about half between 4 and 20 m/s (Rudnicki,
+    /// Mitchell & Novak 2004, three conifers in a wind tunnel). Wood does not reconfigure.
+    pub leaf_reconfiguration_speed: f32,
     /// Air density ρ, kg/m³ (eq. 8). Default 1.2.
     pub air_density: f32,
     /// Time over which a joint switched off by the animation LOD blends its rotation to the
@@ -47,6 +54,7 @@ impl Default for SwayParams {
             damping_ratio: 0.08,
             wood_drag: 1.0,
             leaf_drag: 0.2,
+            leaf_reconfiguration_speed: 8.0,
             air_density: 1.2,
             blend_time: 0.5,
         }
@@ -85,6 +93,12 @@ impl SwayParams {
         )?;
         check(self.wood_drag >= 0.0, "wood_drag", self.wood_drag, "≥ 0")?;
         check(self.leaf_drag >= 0.0, "leaf_drag", self.leaf_drag, "≥ 0")?;
+        check(
+            self.leaf_reconfiguration_speed > 0.0,
+            "leaf_reconfiguration_speed",
+            self.leaf_reconfiguration_speed,
+            "> 0 m/s",
+        )?;
         check(self.air_density > 0.0, "air_density", self.air_density, "> 0 kg/m³")?;
         check(self.blend_time > 0.0, "blend_time", self.blend_time, "> 0 s")?;
         Ok(())

@@ -4,19 +4,34 @@
 /// Frequency (Hz) and damping ratio of a free decay sampled every `dt` seconds as the
 /// horizontal displacements `xs`, `ys` of a point (the trunk top).
 ///
-/// Frequency: the peak of the spectrum between 0.05 and 5 Hz after a linear trend is
-/// removed (swaying branches load the trunk through their drag and add a slow drift).
+/// Frequency: the peak of the spectrum between 0.05 and 5 Hz after a slow trend is removed:
+/// swaying branches load the trunk through their drag, and heavy hanging parts (a willow's
+/// curtains) settle slowly, adding a drift that would otherwise outweigh the sway. The trend
+/// is the best least-squares fit of `a + b·t` or `a + b·exp(−t/τ)` (τ from 1 to 64 s).
 /// Damping: the logarithmic decrement δ over up to four periods of the detrended motion along
 /// its main direction, ζ = δ/√(4π² + δ²); NaN when fewer than three peaks show.
 pub fn free_decay(xs: &[f64], ys: &[f64], dt: f64) -> (f64, f64) {
     let n = xs.len() as f64;
     let detrend = |v: &[f64]| {
-        let tm = (n - 1.0) / 2.0;
-        let vm = v.iter().sum::<f64>() / n;
-        let den: f64 = (0..v.len()).map(|k| (k as f64 - tm).powi(2)).sum();
-        let slope =
-            v.iter().enumerate().map(|(k, x)| (k as f64 - tm) * (x - vm)).sum::<f64>() / den;
-        v.iter().enumerate().map(|(k, x)| x - vm - slope * (k as f64 - tm)).collect::<Vec<f64>>()
+        // Fit v ≈ a + b·g(t) by least squares for a trend shape g; keep the best residual.
+        let fit = |g: &dyn Fn(f64) -> f64| {
+            let gs: Vec<f64> = (0..v.len()).map(|k| g(k as f64 * dt)).collect();
+            let (gm, vm) = (gs.iter().sum::<f64>() / n, v.iter().sum::<f64>() / n);
+            let sgg: f64 = gs.iter().map(|g| (g - gm).powi(2)).sum();
+            let sgv: f64 = gs.iter().zip(v).map(|(g, x)| (g - gm) * (x - vm)).sum();
+            let b = if sgg > 0.0 { sgv / sgg } else { 0.0 };
+            let r: Vec<f64> = gs.iter().zip(v).map(|(g, x)| x - vm - b * (g - gm)).collect();
+            (r.iter().map(|e| e * e).sum::<f64>(), r)
+        };
+        let mut best = fit(&|t| t);
+        for k in 0..=12 {
+            let tau = 2f64.powf(k as f64 / 2.0);
+            let candidate = fit(&|t| (-t / tau).exp());
+            if candidate.0 < best.0 {
+                best = candidate;
+            }
+        }
+        best.1
     };
     let (x, y) = (detrend(xs), detrend(ys));
     let power = |f: f64| {
@@ -67,5 +82,21 @@ mod tests {
         let (f, z) = free_decay(&xs, &ys, dt);
         assert!((f - f0 * (1.0 - zeta * zeta).sqrt()).abs() < 0.01, "{f}");
         assert!((z / zeta - 1.0).abs() < 0.2, "{z}");
+    }
+
+    #[test]
+    fn a_slow_settling_drift_does_not_hide_the_sway() {
+        // A 0.9 Hz decay riding on a part settling with a 6 s time constant, larger than the
+        // sway after its first seconds: the frequency is the sway's.
+        let (f0, zeta) = (0.9f64, 0.08f64);
+        let w = 2.0 * std::f64::consts::PI * f0;
+        let dt = 0.04;
+        let xs: Vec<f64> = (0..400)
+            .map(|k| k as f64 * dt)
+            .map(|t| 0.08 * (-zeta * w * t).exp() * (w * t).cos() + 0.05 * (-t / 6.0).exp())
+            .collect();
+        let ys = vec![0.0; xs.len()];
+        let (f, _) = free_decay(&xs, &ys, dt);
+        assert!((f - f0).abs() < 0.02, "{f} Hz");
     }
 }

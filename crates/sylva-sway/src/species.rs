@@ -54,8 +54,10 @@ pub struct SwaySpecies {
     pub(crate) axes: Vec<[[f32; 3]; 2]>,
     /// Lever arm from the joint to the centre of pressure (mid segment), tree space.
     pub(crate) arm: Vec<[f32; 3]>,
-    /// ½ ρ C_d A of the segment and its leaves, kg/m.
+    /// ½ ρ C_d A of the segment's wood, kg/m.
     pub(crate) drag: Vec<f32>,
+    /// ½ ρ C_d A of its leaves in still air, kg/m (reconfigured with speed in the step).
+    pub(crate) leaf_drag: Vec<f32>,
     /// Linearised aerodynamic damping rate per unit wind speed, 2·drag·(L/2)²/I, 1/m: the
     /// relative-wind drag damps the joint at about this rate × |U|.
     pub(crate) aero: Vec<f32>,
@@ -80,6 +82,7 @@ impl SwaySpecies {
             axes: Vec::with_capacity(n),
             arm: Vec::with_capacity(n),
             drag: Vec::with_capacity(n),
+            leaf_drag: Vec::with_capacity(n),
             aero: Vec::with_capacity(n),
             springs: Vec::with_capacity(n),
             priority: Vec::new(),
@@ -134,8 +137,8 @@ impl SwaySpecies {
             let h = 0.5 * j.length;
             sp.arm.push([j.axis[0] * h, j.axis[1] * h, j.axis[2] * h]);
             let d = 2.0 * j.radius;
-            let area = params.wood_drag * d * j.length + params.leaf_drag * j.leaf_area;
-            sp.drag.push(0.5 * params.air_density * area);
+            sp.drag.push(0.5 * params.air_density * params.wood_drag * d * j.length);
+            sp.leaf_drag.push(0.5 * params.air_density * params.leaf_drag * j.leaf_area);
             let l = rest_len[i];
             let m_stem = rest_mass[i].max(1e-6);
             let inertia = inertia[i].max(1e-9);
@@ -145,7 +148,7 @@ impl SwaySpecies {
             let w = 2.0 * PI * frequency;
             let stiffness = inertia * w * w;
             let damping = 2.0 * params.damping_ratio * (stiffness * inertia).sqrt();
-            sp.aero.push(2.0 * sp.drag[i] * h * h / inertia);
+            sp.aero.push(2.0 * (sp.drag[i] + sp.leaf_drag[i]) * h * h / inertia);
             sp.springs.push(JointSpring { inertia, stiffness, damping, frequency });
         }
         let mut order: Vec<u32> = (0..n as u32).collect();
