@@ -55,7 +55,7 @@ pub struct Globals {
     pub sky_zenith: [f32; 3],
     /// Padding.
     pub pad4: f32,
-    /// Sky at the horizon and fog colour.
+    /// Sky at the horizon (where the aerial perspective fades to).
     pub sky_horizon: [f32; 3],
     /// Exposure multiplying the linear colour before the filmic tone map.
     pub exposure: f32,
