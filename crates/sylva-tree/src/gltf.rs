@@ -14,8 +14,8 @@
 //!
 //! glTF stores joint indices as unsigned 16-bit numbers, so at most 65 535 joints are
 //! exported: beyond `max_joints`, the lightest joints (least carried mass) are folded into
-//! their nearest exported ancestor. Leaf billboards, camera-facing in the renderer, become
-//! fixed quads facing away from the trunk.
+//! their nearest exported ancestor. Leaf cards, which the renderer turns part way towards
+//! the viewer, are exported as their fixed oriented quads (facing out of the crown).
 
 use std::fmt::Write as _;
 

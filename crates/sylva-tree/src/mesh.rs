@@ -74,7 +74,7 @@ impl BranchMesh {
     }
 }
 
-/// One leaf-cluster billboard.
+/// One leaf-cluster card.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LeafCluster {
     /// Joint the cluster hangs from.

@@ -1,4 +1,5 @@
-//! Leaves: the LOD's leaf-cluster billboards, facing the camera, swung about their hanging
+//! Leaves: the LOD's leaf-cluster cards, oriented out of the crown and turned part way
+//! towards the viewer (or the sun, in the shadow pass), swung about their hanging
 //! point and skinned to their joint, alpha-tested against the species' leaf atlas
 //! (`leaf.wgsl`). A second pipeline (`fs_bake`) writes albedo and normals for the impostor
 //! atlas.
