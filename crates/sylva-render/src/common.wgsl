@@ -7,16 +7,11 @@ struct Globals {
     // Eye position (m) and simulation time (s).
     eye: vec3<f32>,
     time: f32,
-    // Camera right and up in world space (billboards); fog density per metre.
-    cam_right: vec3<f32>,
-    fog_density: f32,
-    cam_up: vec3<f32>,
-    sun_intensity: f32,
-    // Unit direction towards the sun.
+    // Unit direction towards the sun; fog density per metre.
     sun_dir: vec3<f32>,
-    pad0: f32,
+    fog_density: f32,
     sun_colour: vec3<f32>,
-    pad1: f32,
+    sun_intensity: f32,
     ambient_sky: vec3<f32>,
     pad2: f32,
     ambient_ground: vec3<f32>,
@@ -206,15 +201,10 @@ fn apply_fog(colour: vec3<f32>, world: vec3<f32>) -> vec3<f32> {
 }
 
 // Ambient from the sky plus one directional light, `sun` the share of it reaching here.
-fn lighting_lit(n: vec3<f32>, sun: f32) -> vec3<f32> {
+fn lighting(n: vec3<f32>, sun: f32) -> vec3<f32> {
     let sky = mix(globals.ambient_ground, globals.ambient_sky, 0.5 + 0.5 * n.z);
     let direct = max(dot(n, globals.sun_dir), 0.0) * globals.sun_intensity * sun;
     return sky + globals.sun_colour * direct;
-}
-
-// Ambient from the sky plus the unshadowed sun.
-fn lighting(n: vec3<f32>) -> vec3<f32> {
-    return lighting_lit(n, 1.0);
 }
 
 // Thin leaves pass some light: a little sun shows through from behind.

@@ -27,22 +27,14 @@ pub struct Globals {
     pub eye: [f32; 3],
     /// Simulation time, s.
     pub time: f32,
-    /// Camera right, world (billboards).
-    pub cam_right: [f32; 3],
-    /// Fog density, per m.
-    pub fog_density: f32,
-    /// Camera up, world (billboards).
-    pub cam_up: [f32; 3],
-    /// Sun intensity.
-    pub sun_intensity: f32,
     /// Unit direction towards the sun.
     pub sun_dir: [f32; 3],
-    /// Padding.
-    pub pad0: f32,
+    /// Fog density, per m.
+    pub fog_density: f32,
     /// Sun colour.
     pub sun_colour: [f32; 3],
-    /// Padding.
-    pub pad1: f32,
+    /// Sun intensity.
+    pub sun_intensity: f32,
     /// Ambient light from above.
     pub ambient_sky: [f32; 3],
     /// Padding.
@@ -75,24 +67,15 @@ pub struct Globals {
 pub const EXPOSURE: f32 = 0.8;
 
 impl Globals {
-    /// The globals for `view_proj` (and its inverse), seen from `eye` with billboard axes
-    /// `right` and `up`, at `time`, under `light`.
-    pub fn new(
-        view_proj: [[f32; 4]; 4],
-        eye: [f32; 3],
-        right: [f32; 3],
-        up: [f32; 3],
-        time: f32,
-        light: &Lighting,
-    ) -> Globals {
+    /// The globals for `view_proj` (and its inverse), seen from `eye`, at `time`, under
+    /// `light`.
+    pub fn new(view_proj: [[f32; 4]; 4], eye: [f32; 3], time: f32, light: &Lighting) -> Globals {
         Globals {
             view_proj,
             inv_view_proj: invert(&view_proj),
             eye,
             time,
-            cam_right: right,
             fog_density: light.fog(0.0),
-            cam_up: up,
             sun_intensity: light.sun_intensity,
             sun_dir: light.sun_unit(),
             sun_colour: light.sun_colour,
@@ -107,10 +90,7 @@ impl Globals {
 
     /// The globals of a perspective `camera` for an image of `aspect` = width / height.
     pub fn for_camera(camera: &Camera, aspect: f32, time: f32, light: &Lighting) -> Globals {
-        let view = camera.view();
-        let right = [view[0][0], view[1][0], view[2][0]];
-        let up = [view[0][1], view[1][1], view[2][1]];
-        Globals::new(camera.view_projection(aspect), camera.eye, right, up, time, light)
+        Globals::new(camera.view_projection(aspect), camera.eye, time, light)
     }
 }
 

@@ -14,8 +14,8 @@ use crate::passes::leaf::{self, LeafPass};
 use crate::passes::shadow::{SHADOW_SIZE, ShadowPass};
 use crate::passes::sky::SkyPass;
 use crate::shared::{
-    DEPTH, GlobalsBinding, Mesh, box_mips, globals_group, globals_layout, instance_buffer,
-    palette_buffer, pipeline_layout, texture_entry, upload_mips,
+    DEPTH, Mesh, box_mips, globals_group, globals_layout, instance_buffer, palette_buffer,
+    pipeline_layout, texture_entry, upload_mips,
 };
 
 /// What the renderer draws a scene with: tree models (in the scene's species order, as
@@ -165,13 +165,7 @@ impl Renderer {
         });
         let palettes = palette_buffer(dev, 48 * 1024);
         let instances = instance_buffer(dev, 1024);
-        let lit = GlobalsBinding {
-            globals: &globals,
-            sampler: &sampler,
-            shadow: shadow.map(),
-            shadow_sampler: &shadow.sampler,
-        };
-        let unlit = GlobalsBinding { shadow: shadow.placeholder(), ..lit };
+        let (lit, unlit) = shadow.bindings(&globals, &sampler);
         let windows = vec![globals_group(dev, &globals_layout, &lit, &palettes)];
         let shadow_windows = vec![globals_group(dev, &globals_layout, &unlit, &palettes)];
         let bake = BakeContext {
@@ -467,13 +461,7 @@ impl Renderer {
         if grown || offsets != self.window_offsets {
             self.windows.clear();
             self.shadow_windows.clear();
-            let lit = GlobalsBinding {
-                globals: &self.globals,
-                sampler: &self.sampler,
-                shadow: self.shadow.map(),
-                shadow_sampler: &self.shadow.sampler,
-            };
-            let unlit = GlobalsBinding { shadow: self.shadow.placeholder(), ..lit };
+            let (lit, unlit) = self.shadow.bindings(&self.globals, &self.sampler);
             for &o in &offsets {
                 let offset = 4 * o;
                 let size = (self.palettes.size() - offset).min(max_binding);

@@ -42,7 +42,7 @@ fn fs_main(in: TreeOut) -> @location(0) vec4<f32> {
     }
     let albedo = textureSample(bark_texture, linear_sampler, in.uv).rgb;
     let n = normalize(in.normal);
-    let lit = albedo * lighting_lit(n, sun_visibility(in.world, n));
+    let lit = albedo * lighting(n, sun_visibility(in.world, n));
     return finish(apply_fog(lit, in.world));
 }
 

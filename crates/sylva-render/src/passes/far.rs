@@ -175,14 +175,7 @@ impl FarPass {
                     [0.0, -mid / h, 0.5, 1.0],
                 ];
                 let eye = [-d[0] * depth_range, -d[1] * depth_range, mid];
-                let g = Globals::new(
-                    view_proj,
-                    eye,
-                    [right[0], right[1], 0.0],
-                    [0.0, 0.0, 1.0],
-                    0.0,
-                    &light,
-                );
+                let g = Globals::new(view_proj, eye, 0.0, &light);
                 let buf = buffer(
                     gpu,
                     "bake globals",
@@ -377,23 +370,22 @@ pub fn impostor_mips(
     let opaque = |img: &[u8], i: usize| img[4 * i + 3] >= 128;
     let covered = (0..n).filter(|&i| opaque(albedo, i)).count();
     let (tx, ty) = (tiles.0.clamp(1, w.max(1)), tiles.1.clamp(1, h.max(1)));
-    // Level-0 coverage of each tile, row-major.
-    let tile_cover = |img_w: u32, img_h: u32, pass: &dyn Fn(usize) -> bool| -> Vec<f64> {
-        let (sw, sh) = ((img_w / tx).max(1), (img_h / ty).max(1));
-        (0..tx * ty)
-            .map(|t| {
-                let (x0, y0) = ((t % tx) * sw, (t / tx) * sh);
-                let mut k = 0usize;
-                for y in y0..(y0 + sh).min(img_h) {
-                    for x in x0..(x0 + sw).min(img_w) {
-                        k += usize::from(pass((y * img_w + x) as usize));
-                    }
-                }
-                k as f64 / (sw * sh) as f64
-            })
+    // Texel indices of tile t of a `lw × lh` level, row-major tiles.
+    let tile = |t: u32, lw: u32, lh: u32| -> Vec<usize> {
+        let (sw, sh) = ((lw / tx).max(1), (lh / ty).max(1));
+        let (x0, y0) = ((t % tx) * sw, (t / tx) * sh);
+        (y0..(y0 + sh).min(lh))
+            .flat_map(|y| (x0..(x0 + sw).min(lw)).map(move |x| (y * lw + x) as usize))
             .collect()
     };
-    let coverage = tile_cover(w, h, &|i| opaque(albedo, i));
+    // Level-0 coverage of each tile.
+    let coverage: Vec<f64> = (0..tx * ty)
+        .map(|t| {
+            let texels = tile(t, w, h);
+            let k = texels.iter().filter(|&&i| opaque(albedo, i)).count();
+            k as f64 / texels.len().max(1) as f64
+        })
+        .collect();
     // Mean opaque colour and normal fill the transparent texels.
     let mut mean = [[0.0f64; 4]; 2];
     for i in (0..n).filter(|&i| opaque(albedo, i)) {
@@ -453,15 +445,10 @@ pub fn impostor_mips(
         }
         // Alpha scale keeping each tile's alpha-tested coverage: the raw value at the
         // tile's coverage quantile maps to 128.
-        let (sw, sh) = ((nw / tx).max(1), (nh / ty).max(1));
         for t in 0..tx * ty {
-            let (x0, y0) = ((t % tx) * sw, (t / tx) * sh);
-            let texels: Vec<usize> = (y0..(y0 + sh).min(nh))
-                .flat_map(|y| (x0..(x0 + sw).min(nw)).map(move |x| (y * nw + x) as usize))
-                .collect();
             // Rank by raw alpha (ties broken by a hash of the texel, so equal values do not
             // all pass or all fail together); the first `k` pass the test.
-            let mut ranked = texels.clone();
+            let mut ranked = tile(t, nw, nh);
             let tie = |o: usize| (o as u32).wrapping_mul(0x9e37_79b9).rotate_left(13);
             ranked.sort_by(|&a, &b| next_raw[b].total_cmp(&next_raw[a]).then(tie(a).cmp(&tie(b))));
             let k =

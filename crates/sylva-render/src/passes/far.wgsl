@@ -85,6 +85,6 @@ fn fs_main(in: FarOut) -> @location(0) vec4<f32> {
     // Leaf pixels (normal alpha 1) take the tree's colour variation, as near trees do.
     let tint = mix(vec3<f32>(1.0), in.tint, baked.a);
     let sun = sun_visibility(in.world, n);
-    let lit = albedo.rgb * tint * (lighting_lit(n, sun) + sun * baked.a * translucency(in.world));
+    let lit = albedo.rgb * tint * (lighting(n, sun) + sun * baked.a * translucency(in.world));
     return finish(apply_fog(lit, in.world));
 }

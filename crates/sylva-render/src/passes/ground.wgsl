@@ -44,6 +44,6 @@ fn fs_main(in: GroundOut) -> @location(0) vec4<f32> {
     let dry = vec3<f32>(0.17, 0.16, 0.07);
     let albedo = mix(grass, dry, smoothstep(0.35, 0.75, n));
     let normal = normalize(in.normal);
-    let lit = albedo * lighting_lit(normal, sun_visibility(in.world, normal));
+    let lit = albedo * lighting(normal, sun_visibility(in.world, normal));
     return finish(apply_fog(lit, in.world));
 }

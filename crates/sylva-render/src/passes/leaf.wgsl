@@ -86,7 +86,7 @@ fn fs_main(in: TreeOut) -> @location(0) vec4<f32> {
     }
     let n = leaf_normal(in);
     let sun = sun_visibility(in.world, n);
-    let light = lighting_lit(n, sun) * foliage_occlusion(in.exposure);
+    let light = lighting(n, sun) * foliage_occlusion(in.exposure);
     let lit = t.rgb * in.tint * (light + sun * translucency(in.world));
     return finish(apply_fog(lit, in.world));
 }

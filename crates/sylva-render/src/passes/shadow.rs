@@ -12,7 +12,7 @@ use sylva_forest::Camera;
 
 use crate::layout::{BRANCH_ATTRIBUTES, BranchVertex, LEAF_ATTRIBUTES, LeafVertex};
 use crate::layout::{instance_layout, vertex_layout};
-use crate::shared::{DEPTH, PipelineSpec, pipeline};
+use crate::shared::{DEPTH, GlobalsBinding, PipelineSpec, pipeline};
 
 /// Side of the shadow map, texels.
 pub const SHADOW_SIZE: u32 = 1024;
@@ -27,7 +27,7 @@ pub struct ShadowPass {
     map: wgpu::TextureView,
     placeholder: wgpu::TextureView,
     /// Comparison sampler of the map.
-    pub sampler: wgpu::Sampler,
+    sampler: wgpu::Sampler,
 }
 
 impl ShadowPass {
@@ -77,14 +77,17 @@ impl ShadowPass {
         }
     }
 
-    /// The map, to sample.
-    pub fn map(&self) -> &wgpu::TextureView {
-        &self.map
-    }
-
-    /// A 1 × 1 depth texture bound in the map's place where the map is a target (or absent).
-    pub fn placeholder(&self) -> &wgpu::TextureView {
-        &self.placeholder
+    /// Group 0's resources with `globals` and `sampler`: (lit) the map to sample, for the
+    /// frame's passes; (unlit) a 1 × 1 placeholder in its place, for passes that draw into
+    /// the map or must not be shadowed (the impostor bake).
+    pub fn bindings<'a>(
+        &'a self,
+        globals: &'a wgpu::Buffer,
+        sampler: &'a wgpu::Sampler,
+    ) -> (GlobalsBinding<'a>, GlobalsBinding<'a>) {
+        let lit =
+            GlobalsBinding { globals, sampler, shadow: &self.map, shadow_sampler: &self.sampler };
+        (lit, GlobalsBinding { shadow: &self.placeholder, ..lit })
     }
 
     /// Open the pass drawing into the map (cleared).
