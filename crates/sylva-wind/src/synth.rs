@@ -20,8 +20,22 @@
 //!   √(−expm1(−2a·gap)) for accuracy at low frequency). Height-dependent spectra stay exact since
 //!   chol(D C D) = D chol(C). O(n N) + O(n N log N).
 //!
-//! Taylor advection multiplies every coefficient by e^{−iω x/U_c} (U_c: the reference speed),
-//! a diagonal unitary factor that keeps both factorisations exact.
+//! * [`Method::Embedding`] — exact in the CPSDM for either coherence speed, on regular x–y
+//!   grids: circulant embedding across x and y with one dense nz × nz block per horizontal
+//!   wavenumber ([`embed`]). The only fast method for the paper's pair-mean speed on several
+//!   heights, whose coherence matrix is no Kronecker product.
+//!
+//! [`Method::fastest`] picks the separable method where it is exact and the embedding
+//! otherwise.
+//!
+//! Taylor advection multiplies every coefficient at height z by e^{−iω (x − x_c)/Ū(z)}: gusts
+//! travel downwind at the local mean speed (Taylor's hypothesis is local), so the lag over Δx
+//! at height z is Δx/Ū(z). x_c is the middle of the grid's x range. The factor is diagonal
+//! and unitary: it keeps every factorisation exact and leaves the coherence magnitudes of
+//! eq. 5 untouched. Between two heights it adds the phase ω (x − x_c)(1/Ū_h − 1/Ū_k): eddies
+//! are sheared by the mean profile, so the vertical co-coherence at one point is eq. 5 times
+//! the cosine of that phase, largest in the middle of the grid (turn advection off for the
+//! paper's real coherence everywhere).
 //!
 //! Memory and order of work: the separable method walks the grid one x-column at a time,
 //! carrying the x-recursion state from column to column; each column is transformed and
@@ -43,15 +57,48 @@ use crate::spectrum;
 
 type C64 = Complex<f64>;
 
+mod embed;
+
 /// Synthesis method.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
 pub enum Method {
-    /// Exact Kronecker/AR(1) factor plus inverse real FFT (default). O(n N log N).
+    /// Exact Kronecker/AR(1) factor plus inverse real FFT (default). O(n N log N). Exact with
+    /// one coherence speed: the reference speed, or any speed on one height.
     #[default]
     Separable,
+    /// Circulant embedding across x and y, dense over heights: exact in distribution for the
+    /// pair-mean speed on several heights; regular x and y only. About nz²/6 + 4 log P
+    /// times the separable cost per point.
+    Embedding,
     /// The paper's dense CPSDM Cholesky per frequency line, in f64. O(N n³); small grids only.
     Cholesky,
+}
+
+impl Method {
+    /// The fastest method that is exact for these parameters on this grid: the separable
+    /// factor when one speed divides every separation, else the embedding on regular x–y
+    /// grids, else the dense Cholesky.
+    pub fn fastest(params: &WindParams, grid: &Grid) -> Method {
+        if params.coherence_speed == CoherenceSpeed::Reference || grid.nz() == 1 {
+            Method::Separable
+        } else if Grid::regular_spacing(&grid.xs).is_some()
+            && Grid::regular_spacing(&grid.ys).is_some()
+        {
+            Method::Embedding
+        } else {
+            Method::Cholesky
+        }
+    }
+
+    /// Lower-case name, as on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Separable => "separable",
+            Method::Embedding => "embedding",
+            Method::Cholesky => "cholesky",
+        }
+    }
 }
 
 /// How to synthesise: seed and method.
@@ -254,8 +301,12 @@ struct Lines {
     keys: Vec<u64>,
     /// √Δω · √S0(ω_j, z) per (z, j); zero at DC and Nyquist.
     scale: Vec<f64>,
-    /// Reference speed U_c (m/s) for coherence and advection.
+    /// Reference speed U_c (m/s) for the coherence of the separable method.
     u_ref: f64,
+    /// Mean speed Ū(z) at each height (m/s): the advection speed.
+    speeds: Vec<f64>,
+    /// Origin x_c of the advection phase: the middle of the grid's x range (m).
+    x_mid: f64,
     /// √Δω.
     sqrt_dw: f64,
 }
@@ -274,17 +325,26 @@ impl Lines {
             }
         }
         let u_ref = reference_speed(params, grid);
-        Lines { nc, omega, keys, scale, u_ref, sqrt_dw: dw.sqrt() }
+        let speeds = grid.zs.iter().map(|&z| params.mean_speed(z)).collect();
+        let x_mid = 0.5 * (grid.xs[0] + grid.xs[grid.nx() - 1]);
+        Lines { nc, omega, keys, scale, u_ref, speeds, x_mid, sqrt_dw: dw.sqrt() }
     }
 
-    /// Taylor-advection factor e^{−iω_j x/U_c} per line at along-wind position x (1 when off).
-    fn advection(&self, on: bool, x: f64) -> Vec<C64> {
-        self.omega
-            .iter()
-            .map(
-                |w| if on { C64::from_polar(1.0, -w * x / self.u_ref) } else { C64::new(1.0, 0.0) },
-            )
-            .collect()
+    /// Emission factors of the column at along-wind position `x`, per (height, line): the
+    /// Taylor-advection phase e^{−iω_j (x − x_c)/Ū(z)} (1 when `advect` is off) times √Δω·√S0
+    /// (`with_spectrum`) or √Δω alone (a factor that already holds √S0).
+    fn column_factors(&self, advect: bool, x: f64, with_spectrum: bool, out: &mut [C64]) {
+        for (iz, f) in out.chunks_mut(self.nc).enumerate() {
+            let u = self.speeds[iz];
+            for (j, f) in f.iter_mut().enumerate() {
+                let amp = if with_spectrum { self.scale[iz * self.nc + j] } else { self.sqrt_dw };
+                *f = if advect {
+                    C64::from_polar(amp, -self.omega[j] * (x - self.x_mid) / u)
+                } else {
+                    C64::new(amp, 0.0)
+                };
+            }
+        }
     }
 
     /// AR(1) factors (ρ, √(1−ρ²)) per line for a gap of `gap` metres with decay constant `c`.
@@ -487,12 +547,7 @@ fn synth_component<T: Sample>(
             for ix in 0..nx {
                 // √Δω·√S0(z) times this column's advection factor, per (height, line): one
                 // complex factor applied at emission.
-                let adv = lines.advection(params.advection, grid.xs[ix]);
-                for (f, s) in fac.chunks_mut(nc).zip(lines.scale.chunks(nc)) {
-                    for ((f, s), a) in f.iter_mut().zip(s).zip(&adv) {
-                        *f = *a * *s;
-                    }
-                }
+                lines.column_factors(params.advection, grid.xs[ix], true, &mut fac);
                 let (xs_ptr, col_ptr) = (RowsPtr(xstate.as_mut_ptr()), RowsPtr(col.as_mut_ptr()));
                 ranges.par_iter().for_each(|r| {
                     let at = |p: usize| p * nc + r.start;
@@ -541,11 +596,6 @@ fn synth_component<T: Sample>(
         }
         Method::Cholesky => {
             let n = grid.points();
-            if n > CHOLESKY_MAX_POINTS {
-                return Err(WindError::Unsupported(format!(
-                    "the Cholesky method is limited to {CHOLESKY_MAX_POINTS} points; this grid has {n}"
-                )));
-            }
             let pos = |k: usize| {
                 let (ix, iy, iz) = (k % nx, (k / nx) % ny, k / (nx * ny));
                 [grid.xs[ix], grid.ys[iy], grid.zs[iz], params.mean_speed(grid.zs[iz])]
@@ -591,12 +641,50 @@ fn synth_component<T: Sample>(
             // The dense factor already holds √S0: emit with √Δω and the advection alone.
             let mut fac = vec![C64::default(); nz * nc];
             for (ix, col) in block.chunks(col_len).enumerate() {
-                let adv = lines.advection(params.advection, grid.xs[ix]);
-                for f in fac.chunks_mut(nc) {
-                    for (f, a) in f.iter_mut().zip(&adv) {
-                        *f = *a * lines.sqrt_dw;
+                lines.column_factors(params.advection, grid.xs[ix], false, &mut fac);
+                emitter.push(ix, col, &fac);
+            }
+        }
+        Method::Embedding => {
+            let emb = embed::Embedding::new(params, grid, comp, lines.u_ref)?;
+            // Coefficients laid out (x, z, y, j), one column after another; every line is
+            // independent and fills its own index j of every point.
+            let mut block = vec![C64::default(); nx * col_len];
+            let out = OutPtr(block.as_mut_ptr(), block.len());
+            let done = std::sync::atomic::AtomicUsize::new(0);
+            let failed = std::sync::Mutex::new(None);
+            let kappas = emb.wavenumbers();
+            (1..nc - 1).into_par_iter().for_each_init(
+                || emb.scratch(),
+                |s, j| {
+                    let key = lines.keys[j];
+                    let xi = |m: usize, k: usize| phasor(key, (m * kappas + k) as u64);
+                    let f = lines.omega[j] / (2.0 * PI);
+                    if let Err(row) = emb.line(f, &xi, s) {
+                        if let Ok(mut e) = failed.lock() {
+                            e.get_or_insert((j, f, row));
+                        }
+                        return;
                     }
-                }
+                    for (p, w) in s.w.chunks(nx).enumerate() {
+                        for (ix, w) in w.iter().enumerate() {
+                            // SAFETY: index j of every point belongs to this line's task alone,
+                            // and the index lies inside `block` (nx · nz · ny · nc entries).
+                            unsafe { out.write(ix * col_len + p * nc + j, *w) };
+                        }
+                    }
+                    let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+                    progress(d as f64 / (nc - 2) as f64);
+                },
+            );
+            if let Some((j, f, row)) = failed.into_inner().ok().flatten() {
+                return Err(WindError::Unsupported(format!(
+                    "CPSDM not positive semidefinite at line {j} (f = {f:.4} Hz), height row {row}"
+                )));
+            }
+            let mut fac = vec![C64::default(); nz * nc];
+            for (ix, col) in block.chunks(col_len).enumerate() {
+                lines.column_factors(params.advection, grid.xs[ix], true, &mut fac);
                 emitter.push(ix, col, &fac);
             }
         }
@@ -627,6 +715,37 @@ fn cholesky_lower(a: &mut [f64], n: usize) -> Result<(), usize> {
     Ok(())
 }
 
+/// What the dense Cholesky method will cost on a grid, estimated before it starts.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CholeskyEstimate {
+    /// Peak working memory beside the output, bytes: the n × n matrix and the coefficients.
+    pub bytes: f64,
+    /// Floating-point operations of the factorisations, all lines and components.
+    pub flops: f64,
+    /// Time at [`CHOLESKY_FLOPS_PER_S`], s.
+    pub seconds: f64,
+}
+
+/// Throughput the dense factorisation reaches on one core (it runs on one), flop/s; measured
+/// on a 2.4 GHz AMD EPYC with `sylva bench wind` (about 1.4e9) and rounded down.
+pub const CHOLESKY_FLOPS_PER_S: f64 = 1.0e9;
+
+impl std::fmt::Display for CholeskyEstimate {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{:.0} MB of memory and about {:.0} s", self.bytes / 1e6, self.seconds.ceil())
+    }
+}
+
+/// Estimate the dense Cholesky method's memory and time on `grid`: per component and line,
+/// n³/3 flops for the factor and n² for the matrix; memory n² f64 plus n (M/2 + 1) complex.
+pub fn cholesky_estimate(grid: &Grid) -> CholeskyEstimate {
+    let n = grid.points() as f64;
+    let lines = (grid.frames / 2).saturating_sub(1) as f64;
+    let flops = 3.0 * lines * (n * n * n / 3.0 + 4.0 * n * n);
+    let bytes = 8.0 * n * n + 16.0 * n * (grid.frames / 2 + 1) as f64;
+    CholeskyEstimate { bytes, flops, seconds: flops / CHOLESKY_FLOPS_PER_S }
+}
+
 /// Check that the parameters, grid and method can be synthesised together.
 pub fn check_config(params: &WindParams, grid: &Grid, synth: SynthParams) -> Result<(), WindError> {
     params.validate()?;
@@ -636,10 +755,27 @@ pub fn check_config(params: &WindParams, grid: &Grid, synth: SynthParams) -> Res
         && grid.nz() > 1
     {
         return Err(WindError::Unsupported(
-            "pair-mean coherence speed on several heights needs --method cholesky; \
-             the separable method uses one reference speed"
+            "pair-mean coherence speed on several heights needs --method embedding (or \
+             cholesky); the separable method uses one reference speed"
                 .into(),
         ));
+    }
+    if synth.method == Method::Embedding
+        && (Grid::regular_spacing(&grid.xs).is_none() || Grid::regular_spacing(&grid.ys).is_none())
+    {
+        return Err(WindError::Unsupported(
+            "the embedding method needs regularly spaced x and y; use --method cholesky on \
+             small uneven grids"
+                .into(),
+        ));
+    }
+    if synth.method == Method::Cholesky && grid.points() > CHOLESKY_MAX_POINTS {
+        return Err(WindError::Unsupported(format!(
+            "the Cholesky method is limited to {CHOLESKY_MAX_POINTS} points; this grid has {} \
+             (estimated {})",
+            grid.points(),
+            cholesky_estimate(grid)
+        )));
     }
     Ok(())
 }
