@@ -42,7 +42,7 @@ fn period(n: usize) -> usize {
     }
     let smooth = |mut p: usize| {
         for f in [2, 3, 5] {
-            while p % f == 0 {
+            while p.is_multiple_of(f) {
                 p /= f;
             }
         }
@@ -70,7 +70,7 @@ fn folded_spectrum(a: f64, out: &mut [f64]) {
     let em1 = (-a).exp_m1();
     for (k, o) in out.iter_mut().enumerate() {
         // 1 − (−1)^κ ρ^m, accurate when ρ^m is close to 1.
-        let lead = if k % 2 == 0 { -(-m * a).exp_m1() } else { 1.0 + (-m * a).exp() };
+        let lead = if k.is_multiple_of(2) { -(-m * a).exp_m1() } else { 1.0 + (-m * a).exp() };
         let s = (PI * k as f64 / p as f64).sin();
         *o = lead * one_minus_rho2 / (em1 * em1 + 4.0 * rho * s * s);
     }
