@@ -32,6 +32,10 @@ pub struct WindField {
     pub synth: SynthParams,
     /// Velocities in m/s, layout (frame, component, z, y, x), `u` including Ū(z).
     pub data: Vec<f32>,
+    /// Bound on how far any coherence of the synthesised CPSDM departs from the model's:
+    /// 0 for the exact methods; for the embedding, what projecting the pair-mean model onto
+    /// a valid covariance cost where it is not one (see [`crate::synth::Method::Embedding`]).
+    pub coherence_error: f64,
 }
 
 /// Statistics of what a finite loop keeps of the model.
@@ -56,8 +60,8 @@ impl WindField {
         synth::check_config(params, grid, synth)?;
         let mut data = vec![0.0f32; grid.points() * 3 * grid.frames];
         advise_huge_pages(&mut data);
-        synth::synthesize_into(params, grid, synth, &mut data, progress)?;
-        Ok(WindField { grid: grid.clone(), params: params.clone(), synth, data })
+        let coherence_error = synth::synthesize_into(params, grid, synth, &mut data, progress)?;
+        Ok(WindField { grid: grid.clone(), params: params.clone(), synth, data, coherence_error })
     }
 
     /// Index of sample (frame, component, z, y, x) in `data`.

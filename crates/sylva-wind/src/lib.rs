@@ -3,8 +3,9 @@
 //! The velocity at Q = (x, y, z) is U = Ū(z) + u, V = v, W = w (eq. 1), with u, v, w
 //! independent stationary Gaussian processes described by the point spectra of eq. 4
 //! ([`spectrum`]) and the coherence of eq. 5, synthesised by the spectral representation of
-//! eqs. 6–7 ([`synth`]) either literally (dense Cholesky, the reference) or by the exact
-//! separable factorisation (the default, thousands of times faster). The result is a periodic
+//! eqs. 6–7 ([`synth`]) either literally (dense Cholesky, the reference), by the exact
+//! separable factorisation (one coherence speed; thousands of times faster), or by circulant
+//! embedding (the paper's pair-mean speed on several heights). The result is a periodic
 //! loop ([`WindField`]) sampled smoothly in space and time, with a mip pyramid for the wind LOD,
 //! the drag force of eq. 8, file formats ([`io`]) and statistics against the model ([`stats`]).
 //!

@@ -123,8 +123,8 @@ pub enum CoherenceSpeed {
     /// (TurbSim's convention). Exact for the fast separable synthesis at any number of heights.
     #[default]
     Reference,
-    /// The paper's pair average Ū_m = (Ū_j + Ū_k)/2. Only the dense `Cholesky` method can use
-    /// it on several heights; on one height it equals `Reference`.
+    /// The paper's pair average Ū_m = (Ū_j + Ū_k)/2. On several heights it needs the
+    /// `Embedding` (or dense `Cholesky`) method; on one height it equals `Reference`.
     PairMean,
 }
 
@@ -143,13 +143,16 @@ pub struct WindParams {
     pub spectrum_constants: [SpectrumConstants; 3],
     /// Eq.-5 constants for u, v, w (Table 2).
     pub coherence: [CoherenceConstants; 3],
-    /// Mean speed in the coherence denominator. Default [`CoherenceSpeed::Reference`].
+    /// Mean speed in the coherence denominator. Default [`CoherenceSpeed::Reference`] (exact
+    /// with the fast separable factor, and what the forest's two-height field uses); the
+    /// command line defaults to the paper's [`CoherenceSpeed::PairMean`] with its spectrum.
     pub coherence_speed: CoherenceSpeed,
     /// Direction the wind blows *towards*, in degrees counter-clockwise from world +x.
     /// Default 0.
     pub direction_deg: f64,
-    /// Taylor advection: gusts travel downwind at the reference mean speed (multiplies each
-    /// coefficient by e^{−iωx/Ū}). Default `true`; `false` reproduces the paper exactly.
+    /// Taylor advection: gusts travel downwind at each height's mean speed Ū(z) (multiplies
+    /// each coefficient by e^{−iω(x − x_c)/Ū(z)}). Default `true`; `false` reproduces the
+    /// paper's real coherence (with [`CoherenceSpeed::PairMean`], exactly).
     pub advection: bool,
 }
 
@@ -279,6 +282,16 @@ impl WindParams {
                 self.u_star / KARMAN * (zz / z0).ln()
             }
             Profile::Power { u_ref, z_ref, alpha } => u_ref * (z.max(1e-3) / z_ref).powf(alpha),
+        }
+    }
+
+    /// Lowest height (m) where the mean profile is the law it names: d + 2·z0 for the log
+    /// law (below it [`WindParams::mean_speed`] holds the speed at d + 2·z0, the floor);
+    /// `None` for the power law, valid down to the ground.
+    pub fn log_law_floor(&self) -> Option<f64> {
+        match self.profile {
+            Profile::Log { z0, d } => Some(d + 2.0 * z0),
+            Profile::Power { .. } => None,
         }
     }
 

@@ -7,9 +7,13 @@
 //! (Σ Re S_ab / √(Σ S_aa Σ S_bb)). A single-record magnitude coherence is biased upwards
 //! (≈ 0.18 where the truth is 0), which is why it is not used.
 //!
-//! With Taylor advection the model co-coherence along x is Coh(f, Δx) · cos(ωΔx/U_c).
-//! The two lowest log bands are biased by window leakage on the steep low end of the
-//! spectrum and are reported but flagged.
+//! With Taylor advection the model co-coherence along x is Coh(f, Δx) · cos(ωΔx/Ū(z)).
+//!
+//! Every estimate comes with the scatter one expects from the model for this grid and this
+//! number of realisations ([`line_power_scatter`]): with random phases a synthesised line's
+//! power is fixed at each point only up to how its points share it, and the slow lines,
+//! coherent over the whole grid, scatter as a single sample. The lowest bands, where few
+//! such lines fall, therefore scatter most; they are held to their scatter, not excluded.
 
 use std::f64::consts::PI;
 use std::sync::Arc;
@@ -21,7 +25,7 @@ use realfft::num_complex::Complex;
 use serde::{Deserialize, Serialize};
 
 use crate::field::WindField;
-use crate::params::Component;
+use crate::params::{CoherenceSpeed, Component};
 use crate::spectrum;
 use crate::synth;
 
@@ -209,8 +213,12 @@ pub struct BandRow {
     /// Model value the estimator expects (the discrete model lines seen through the window,
     /// leakage included), averaged over the band.
     pub model: f64,
-    /// Whether the band is one of the two lowest (leakage-biased, not held to tolerance).
-    pub low_biased: bool,
+    /// Expected scatter (one standard deviation) over realisations, from the model, for
+    /// Gaussian amplitudes: of `measured/model − 1` for spectra ([`line_power_scatter`] over
+    /// the band's lines), of `measured − model` for co-coherence (the delta method over the
+    /// pooled pairs, which share their slow lines; for two heights at the same points it
+    /// reduces to (1 − γ²)/√(2n), Bendat & Piersol, *Random Data*, §9.2).
+    pub scatter: f64,
 }
 
 impl BandRow {
@@ -223,7 +231,7 @@ impl BandRow {
 /// Co-coherence against eq. 5 at one separation.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct CoherenceRow {
-    /// Axis of the separation: "x" or "y".
+    /// Axis of the separation: "x", "y" or "z".
     pub axis: String,
     /// Separation in grid steps.
     pub steps: usize,
@@ -234,12 +242,11 @@ pub struct CoherenceRow {
 }
 
 impl CoherenceRow {
-    /// Largest |measured − model| over bands where the model exceeds `above`, the two
-    /// lowest (leakage-biased) bands excluded.
+    /// Largest |measured − model| over bands where the model exceeds `above`.
     pub fn max_abs_error(&self, above: f64) -> f64 {
         self.bands
             .iter()
-            .filter(|b| b.model > above && !b.low_biased)
+            .filter(|b| b.model > above)
             .map(|b| (b.measured - b.model).abs())
             .fold(0.0, f64::max)
     }
@@ -250,10 +257,17 @@ impl CoherenceRow {
 pub struct ComponentStats {
     /// Component letter.
     pub component: String,
-    /// Measured σ of the fluctuations (all points and frames at the first height), m/s.
+    /// Measured σ of the fluctuations (all points and frames at this height, all fields), m/s.
     pub sigma: f64,
     /// σ of the discrete target Σ 2 S0 Δω, m/s.
     pub sigma_target: f64,
+    /// σ/σ_target − 1.
+    pub sigma_error: f64,
+    /// σ²/σ_target² − 1 (about twice `sigma_error`).
+    pub variance_error: f64,
+    /// Expected scatter (one standard deviation) of `sigma_error` over realisations of this
+    /// grid with this many fields, from the model ([`line_power_scatter`]).
+    pub sigma_scatter: f64,
     /// σ of the model (infinite loop), m/s.
     pub sigma_model: f64,
     /// Measured mean, m/s.
@@ -264,72 +278,222 @@ pub struct ComponentStats {
     pub coherence: Vec<CoherenceRow>,
 }
 
-/// Statistics of every component.
+impl ComponentStats {
+    /// The σ error in units of its expected scatter (∞ when no scatter is expected and the
+    /// error is not zero).
+    pub fn sigma_deviations(&self) -> f64 {
+        let e = self.sigma_error.abs();
+        if self.sigma_scatter > 0.0 {
+            e / self.sigma_scatter
+        } else if e > 0.0 {
+            f64::INFINITY
+        } else {
+            0.0
+        }
+    }
+}
+
+/// Statistics of every component at one height.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct FieldStats {
-    /// Height (m) the statistics were taken at (the grid's first).
+    /// Height (m) the statistics were taken at.
     pub height: f64,
+    /// Index of that height in the grid.
+    pub height_index: usize,
+    /// Number of fields (realisations) pooled.
+    pub fields: usize,
+    /// Mean speed in the coherence denominator of eq. 5 for two points at this height, m/s
+    /// (the reference speed, or Ū(z) itself with the pair-mean speed).
+    pub coherence_speed: f64,
     /// Welch segment length used.
     pub segment: usize,
     /// Per component u, v, w.
     pub components: Vec<ComponentStats>,
 }
 
-/// Compute the statistics of `field` at its first height. Separations of 1, 2 and 4 grid
-/// steps along x and y (those that fit). `segment`: Welch segment length (None: frames/8,
-/// at least 32).
+/// Statistics of `field` at its first height. Separations of 1, 2 and 4 grid steps along x
+/// and y (those that fit) and one step up where there is a second height. `segment`: Welch
+/// segment length (None: frames/8, at least 32).
 pub fn field_stats(field: &WindField, segment: Option<usize>) -> FieldStats {
     ensemble_stats(std::slice::from_ref(field), segment)
 }
 
+/// [`ensemble_stats_at`] at the first height.
+pub fn ensemble_stats(fields: &[WindField], segment: Option<usize>) -> FieldStats {
+    ensemble_stats_at(fields, segment, 0)
+}
+
+/// Relative scatter of the power one synthesised line carries at one height, averaged over
+/// the height's points: the variance of Y_j = (1/N) Σ_p |w_p|² with w the line's unit
+/// coherence field, Var Y_j ≤ (1/N²) Σ_pq |Coh_pq|² (equality for Gaussian amplitudes; random
+/// phases on a factor scatter a little less, so this is an upper bound). Coh is separable
+/// along x and y at one height, so the double sum is a product of two 1-D sums. Lines
+/// coherent over the whole grid (the slow ones) scatter as one sample; lines whose
+/// coherence length is below the spacing average over all N points.
+pub fn line_power_scatter(xs: &[f64], ys: &[f64], cx: f64, cy: f64, f: f64, u: f64) -> f64 {
+    let axis_sum = |c: &[f64], k: f64| -> f64 {
+        let a = 2.0 * f * k / u;
+        if let Some(g) = crate::Grid::regular_spacing(c) {
+            let n = c.len();
+            let rho = (-a * g).exp();
+            let mut s = n as f64;
+            let mut r = 1.0;
+            for d in 1..n {
+                r *= rho;
+                if r < 1e-18 {
+                    break;
+                }
+                s += 2.0 * (n - d) as f64 * r;
+            }
+            s
+        } else {
+            c.iter().map(|p| c.iter().map(|q| (-a * (p - q).abs()).exp()).sum::<f64>()).sum()
+        }
+    };
+    let n = (xs.len() * ys.len()) as f64;
+    axis_sum(xs, cx) * axis_sum(ys, cy) / (n * n)
+}
+
+/// Variance of one line's contribution to a pooled co-coherence estimate between points
+/// `s` steps apart along an axis with coordinates `c` (other axis: coordinates `o`), for
+/// Gaussian amplitudes, by the delta method: with A = Σ Re w_a w_b*, B = Σ |w_a|²,
+/// D = Σ |w_b|² over the pairs and γ the band's model co-coherence,
+///   Var = [Var A + γ²/4 (Var B + Var D + 2 Cov(B, D)) − γ (Cov(A, B) + Cov(A, D))] / N_p²,
+/// every term a product of a sum along the axis and Σ Coh² across it (the horizontal
+/// coherence is separable). `a`, `a_o`: decay per metre e^{−a|Δ|} along and across.
+/// Neighbouring pairs share their slow lines, so this is much larger than (1 − γ²)²/(2N).
+fn pair_line_variance(c: &[f64], o: &[f64], s: usize, a: f64, a_o: f64, gamma: f64) -> f64 {
+    let n = c.len();
+    if s >= n {
+        return 0.0;
+    }
+    let x = |i: usize, k: usize| (-a * (c[i] - c[k]).abs()).exp();
+    let (mut taa, mut tbb, mut tdd, mut tbd, mut tab, mut tad) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+    for i in 0..n - s {
+        for k in 0..n - s {
+            let (ik, is_ks, i_ks, is_k) = (x(i, k), x(i + s, k + s), x(i, k + s), x(i + s, k));
+            taa += 0.5 * (ik * is_ks + i_ks * is_k);
+            tbb += ik * ik;
+            tdd += is_ks * is_ks;
+            tbd += i_ks * i_ks;
+            tab += ik * is_k;
+            tad += i_ks * is_ks;
+        }
+    }
+    let across: f64 =
+        o.iter().map(|p| o.iter().map(|q| (-2.0 * a_o * (p - q).abs()).exp()).sum::<f64>()).sum();
+    let np = ((n - s) * o.len()) as f64;
+    let v = taa + gamma * gamma / 4.0 * (tbb + tdd + 2.0 * tbd) - gamma * (tab + tad);
+    (v.max(0.0) * across) / (np * np)
+}
+
 /// Statistics pooled over an ensemble of fields that share grid and parameters (different
-/// seeds): the mean, variance, spectra and co-coherence estimators average over every
-/// field's records. One realisation of a grid only holds as many independent samples of a
-/// low frequency as the grid spans coherence lengths at that frequency; an ensemble adds more.
+/// seeds), at height index `iz`: the mean, variance, spectra and co-coherence estimators
+/// average over every field's records. One realisation of a grid only holds as many
+/// independent samples of a low frequency as the grid spans coherence lengths at that
+/// frequency; an ensemble adds more, and the scatter estimates shrink with it.
+///
+/// The models are those the fields were generated with: the coherence speed of
+/// [`crate::WindParams::coherence_speed`], and with advection the x co-coherence
+/// Coh · cos(ωΔx/Ū(z)) and the z co-coherence Coh times the mean over the grid's x of
+/// cos(ω (x − x_c)(1/Ū_h − 1/Ū_k)).
 ///
 /// # Panics
-/// If `fields` is empty or the fields' grids differ (a programming error, not input).
-pub fn ensemble_stats(fields: &[WindField], segment: Option<usize>) -> FieldStats {
+/// If `fields` is empty, the fields' grids differ or `iz` is outside the grid (a programming
+/// error, not input).
+pub fn ensemble_stats_at(fields: &[WindField], segment: Option<usize>, iz: usize) -> FieldStats {
     let field = &fields[0];
     assert!(fields.iter().all(|f| f.grid == field.grid), "ensemble fields must share a grid");
     let g = &field.grid;
+    assert!(iz < g.nz(), "height index {iz} outside the grid");
     let m = g.frames;
     let welch = Welch::new(segment.unwrap_or((m / 8).max(32)).min(m), g.dt);
     let seg = welch.segment();
     let freqs = welch.freqs();
     let bands = log_bands(&freqs, 8.0);
-    let z = g.zs[0];
-    let u_ref = synth::reference_speed(&field.params, g);
-    let band_rows = |meas: &[f64], model: &[f64], keep: &dyn Fn(f64) -> bool| {
+    let z = g.zs[iz];
+    let p = &field.params;
+    let u_local = p.mean_speed(z);
+    let u_same = match p.coherence_speed {
+        CoherenceSpeed::Reference => synth::reference_speed(p, g),
+        CoherenceSpeed::PairMean => u_local,
+    };
+    let df = 1.0 / (m as f64 * g.dt);
+    let per_bin = m as f64 / seg as f64;
+    let nfields = fields.len() as f64;
+    let x_mid = 0.5 * (g.xs[0] + g.xs[g.nx() - 1]);
+    let band_rows = |meas: &[f64],
+                     model: &[f64],
+                     keep: &dyn Fn(f64) -> bool,
+                     scatter: &dyn Fn(&[usize], f64) -> f64| {
         let mut rows = Vec::new();
-        for (i, b) in bands.iter().enumerate() {
+        for b in &bands {
             let mv = b.iter().map(|&k| model[k]).sum::<f64>() / b.len() as f64;
             if !keep(mv) {
                 continue;
             }
             let me = b.iter().map(|&k| meas[k]).sum::<f64>() / b.len() as f64;
             let f = (freqs[b[0]] * freqs[b[b.len() - 1]]).sqrt();
-            rows.push(BandRow { f, measured: me, model: mv, low_biased: i < 2 });
+            rows.push(BandRow { f, measured: me, model: mv, scatter: scatter(b, mv) });
         }
         rows
     };
+    let per_field = g.nx() * g.ny();
+    let records = |comp: Component, level: usize| -> Vec<Vec<f64>> {
+        fields
+            .iter()
+            .flat_map(|f| {
+                (0..per_field).map(move |q| f.record(comp, level, q / g.nx(), q % g.nx()))
+            })
+            .collect()
+    };
     let mut components = Vec::new();
     for comp in Component::ALL {
-        let per_field = g.nx() * g.ny();
-        let recs: Vec<Vec<f64>> = fields
-            .iter()
-            .flat_map(|f| (0..per_field).map(move |p| f.record(comp, 0, p / g.nx(), p % g.nx())))
-            .collect();
+        let recs = records(comp, iz);
         let n = (recs.len() * m) as f64;
         let mean = recs.iter().flatten().sum::<f64>() / n;
         let var = recs.iter().flatten().map(|x| (x - mean).powi(2)).sum::<f64>() / n;
         let specs: Vec<Segments> = recs.par_iter().map(|r| welch.spectra(r)).collect();
         let psd = welch.psd(&specs);
-        let p = &field.params;
-        let df = 1.0 / (m as f64 * g.dt);
         let line = |j: usize| spectrum::one_sided(p, comp, j as f64 * df, z) * df;
+        // Scatter of each line's power over realisations (pooled fields are independent).
+        let cc = p.coherence[comp.index()];
+        let line_var: Vec<f64> = (0..m / 2)
+            .map(|j| {
+                if j == 0 {
+                    0.0
+                } else {
+                    line_power_scatter(&g.xs, &g.ys, cc.cx, cc.cy, j as f64 * df, u_same) / nfields
+                }
+            })
+            .collect();
+        // The synthesised lines a band of Welch bins sees, each with the power it brings to
+        // the band through the window (the Hann main lobe spans ±2 bins, so the slow, strong
+        // lines just below a band weigh on it).
+        let band_lines = |b: &[usize]| -> Vec<(usize, f64)> {
+            let lo = ((b[0] as f64 - 4.0) * per_bin).floor().max(1.0) as usize;
+            let hi = (((b[b.len() - 1] as f64 + 4.0) * per_bin).ceil() as usize).min(m / 2);
+            (lo..hi)
+                .map(|j| {
+                    let c = j as f64 / per_bin;
+                    (j, line(j) * b.iter().map(|&k| welch.hann_gain(k as f64 - c)).sum::<f64>())
+                })
+                .collect()
+        };
+        let weighted_scatter = |w: &[(usize, f64)], var: &dyn Fn(usize) -> f64| -> f64 {
+            let pw: f64 = w.iter().map(|p| p.1).sum();
+            let v: f64 = w.iter().map(|&(j, p)| p * p * var(j)).sum();
+            if pw > 0.0 { v.sqrt() / pw } else { 0.0 }
+        };
+        let band_scatter = |b: &[usize]| weighted_scatter(&band_lines(b), &|j| line_var[j]);
+        let all_lines: Vec<(usize, f64)> = (1..m / 2).map(|j| (j, line(j))).collect();
         let expected_auto = welch.expected(m, &line);
-        let spectrum = band_rows(&psd, &expected_auto, &|_| true);
+        let spectrum = band_rows(&psd, &expected_auto, &|_| true, &|b, _| band_scatter(b));
+        // Two heights at the same points: the classic (1 − γ²)/√(2n), n the band's effective
+        // number of independent samples.
+        let coh_scatter = |b: &[usize], gamma: f64| {
+            (1.0 - gamma * gamma).max(0.0) * band_scatter(b) / std::f64::consts::SQRT_2
+        };
         let mut coherence = Vec::new();
         for (axis, coords, n_axis) in [("x", &g.xs, g.nx()), ("y", &g.ys, g.ny())] {
             for steps in [1usize, 2, 4] {
@@ -353,28 +517,89 @@ pub fn ensemble_stats(fields: &[WindField], segment: Option<usize>) -> FieldStat
                     welch.pooled_cocoherence(pairs.iter().map(|&(a, b)| (&specs[a], &specs[b])));
                 let d = if axis == "x" { [metres, 0.0, 0.0] } else { [0.0, metres, 0.0] };
                 let model = |f: f64| {
-                    let c = spectrum::coherence(p, comp, f, d, u_ref);
-                    if p.advection { c * (2.0 * PI * f * d[0] / u_ref).cos() } else { c }
+                    let c = spectrum::coherence(p, comp, f, d, u_same);
+                    if p.advection { c * (2.0 * PI * f * d[0] / u_local).cos() } else { c }
                 };
                 let cross = welch.expected(m, &|j| line(j) * model(j as f64 * df));
                 let expected: Vec<f64> =
                     cross.iter().zip(&expected_auto).map(|(c, a)| c / a).collect();
-                let bands = band_rows(&coh, &expected, &|mv| mv > 0.02);
+                let (along, across, c_along, c_across) = if axis == "x" {
+                    (&g.xs, &g.ys, cc.cx, cc.cy)
+                } else {
+                    (&g.ys, &g.xs, cc.cy, cc.cx)
+                };
+                let pair_scatter = |b: &[usize], gamma: f64| {
+                    let var = |j: usize| {
+                        let f = j as f64 * df;
+                        let (a, a_o) = (f * c_along / u_same, f * c_across / u_same);
+                        pair_line_variance(along, across, steps, a, a_o, gamma) / nfields
+                    };
+                    weighted_scatter(&band_lines(b), &var)
+                };
+                let bands = band_rows(&coh, &expected, &|mv| mv > 0.02, &pair_scatter);
                 coherence.push(CoherenceRow { axis: axis.into(), steps, metres, bands });
             }
         }
+        if iz + 1 < g.nz() {
+            // One step up: every point with the point above it.
+            let z2 = g.zs[iz + 1];
+            let upper: Vec<Segments> =
+                records(comp, iz + 1).par_iter().map(|r| welch.spectra(r)).collect();
+            let coh = welch.pooled_cocoherence(specs.iter().zip(&upper));
+            let u_up = p.mean_speed(z2);
+            let um = match p.coherence_speed {
+                CoherenceSpeed::Reference => u_same,
+                CoherenceSpeed::PairMean => 0.5 * (u_local + u_up),
+            };
+            let shear = 1.0 / u_local - 1.0 / u_up;
+            let model = |f: f64| {
+                let c = spectrum::coherence(p, comp, f, [0.0, 0.0, z2 - z], um);
+                if p.advection {
+                    let w = 2.0 * PI * f;
+                    c * g.xs.iter().map(|x| (w * (x - x_mid) * shear).cos()).sum::<f64>()
+                        / g.nx() as f64
+                } else {
+                    c
+                }
+            };
+            // The two heights have different spectra: the expected pooled co-coherence is
+            // the cross term over the geometric mean of the two auto terms.
+            let line_up = |j: usize| spectrum::one_sided(p, comp, j as f64 * df, z2) * df;
+            let cross =
+                welch.expected(m, &|j| (line(j) * line_up(j)).sqrt() * model(j as f64 * df));
+            let auto_up = welch.expected(m, &line_up);
+            let expected: Vec<f64> = cross
+                .iter()
+                .zip(expected_auto.iter().zip(&auto_up))
+                .map(|(c, (a, b))| c / (a * b).sqrt())
+                .collect();
+            let bands = band_rows(&coh, &expected, &|mv| mv > 0.02, &coh_scatter);
+            coherence.push(CoherenceRow { axis: "z".into(), steps: 1, metres: z2 - z, bands });
+        }
         let cap = field.captured();
+        let sigma_target = spectrum::discrete_variance(p, comp, z, m, g.dt).sqrt();
+        let sigma = var.sqrt();
         components.push(ComponentStats {
             component: comp.name().into(),
-            sigma: var.sqrt(),
-            sigma_target: spectrum::discrete_variance(p, comp, z, m, g.dt).sqrt(),
+            sigma,
+            sigma_target,
+            sigma_error: sigma / sigma_target - 1.0,
+            variance_error: var / (sigma_target * sigma_target) - 1.0,
+            sigma_scatter: 0.5 * weighted_scatter(&all_lines, &|j| line_var[j]),
             sigma_model: cap.sigma_model[comp.index()],
             mean,
             spectrum,
             coherence,
         });
     }
-    FieldStats { height: z, segment: seg, components }
+    FieldStats {
+        height: z,
+        height_index: iz,
+        fields: fields.len(),
+        coherence_speed: u_same,
+        segment: seg,
+        components,
+    }
 }
 
 /// Write `spectra.png` (Welch bands vs eq. 4, per component) and `coherence.png`

@@ -77,31 +77,38 @@ fn spectra_and_cocoherence_match_eq4_and_eq5() {
         let fields: Vec<WindField> = seeds.iter().map(|&s| generate(&grid, &params, s)).collect();
         let s = ensemble_stats(&fields, Some(512));
         for c in &s.components {
-            // Auto-spectra within 3 % of eq. 4 (as the Welch estimator sees its lines) in
-            // log bands above the two lowest.
-            let held: Vec<_> = c.spectrum.iter().filter(|b| !b.low_biased).collect();
-            assert!(held.len() >= 10);
-            for b in held {
+            // Auto-spectra within 3 % of eq. 4 (as the Welch estimator sees its lines), or
+            // within four times the scatter the model expects where the band holds only a
+            // few slow lines coherent over the whole grid. (About a hundred bands are held
+            // here: at 4σ a correct field fails one of them with odds under 1 %.)
+            assert!(c.spectrum.len() >= 12);
+            for b in &c.spectrum {
                 assert!(
-                    b.rel_error().abs() < 0.03,
+                    b.rel_error().abs() < 0.03f64.max(4.0 * b.scatter),
                     "seeds {seeds:?} {}: spectrum at {:.3} Hz off by {:+.4}",
                     c.component,
                     b.f,
                     b.rel_error()
                 );
             }
-            // Pooled co-coherence within 0.03 of eq. 5 where above 0.1, along x and y.
+            // Pooled co-coherence within 0.03 of eq. 5 where above 0.1, along x and y, or
+            // within four times its expected scatter in the slowest bands.
             let mut checked = 0;
             for row in &c.coherence {
-                let err = row.max_abs_error(0.1);
+                let err = row
+                    .bands
+                    .iter()
+                    .filter(|b| b.model > 0.1)
+                    .map(|b| (b.measured - b.model).abs() - 0.03f64.max(4.0 * b.scatter))
+                    .fold(f64::NEG_INFINITY, f64::max);
                 assert!(
-                    err < 0.03,
-                    "seeds {seeds:?} {} {}{}: co-coherence off by {err:.4}",
+                    err < 0.0,
+                    "seeds {seeds:?} {} {}{}: co-coherence off by {err:.4} beyond its tolerance",
                     c.component,
                     row.axis,
                     row.steps
                 );
-                let n = row.bands.iter().filter(|b| b.model > 0.1 && !b.low_biased).count();
+                let n = row.bands.iter().filter(|b| b.model > 0.1).count();
                 // (With advection the x co-coherence oscillates as cos(ωΔx/U) and is mostly
                 // below 0.1 at 24 m; it is still held to 0.03 wherever it is above.)
                 let expect_bands = row.steps == 1 && (!advection || row.axis == "y");

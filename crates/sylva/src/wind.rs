@@ -6,9 +6,11 @@ use std::time::Instant;
 use anyhow::{Context, bail};
 use clap::{Args, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
-use sylva_wind::stats::{FieldStats, field_stats, write_plots};
+use sylva_wind::stats::{FieldStats, ensemble_stats_at, field_stats, write_plots};
+use sylva_wind::synth::{cholesky_estimate, memory_estimate};
 use sylva_wind::{
-    Grid, Method, Preset, Profile, SpectrumModel, SynthParams, WindField, WindParams, io,
+    CoherenceSpeed, Grid, Method, Preset, Profile, SpectrumModel, SynthParams, WindField,
+    WindParams, io,
 };
 
 #[derive(Debug, Subcommand)]
@@ -51,12 +53,27 @@ pub enum SpectrumArg {
     VonKarman,
 }
 
-#[derive(Debug, Clone, Copy, ValueEnum)]
+#[derive(Debug, Clone, Copy, ValueEnum, PartialEq, Eq)]
 pub enum MethodArg {
-    /// Exact Kronecker/AR(1) factor + FFT (fast, default).
+    /// The fastest exact method for the model and grid (default): separable where one speed
+    /// divides every separation, else the embedding (regular x–y), else the dense Cholesky.
+    Auto,
+    /// Exact Kronecker/AR(1) factor + FFT (one coherence speed).
     Separable,
+    /// Circulant embedding across x–y, dense over heights (the pair-mean speed on several
+    /// heights; regular x–y).
+    Embedding,
     /// The paper's dense CPSDM Cholesky (reference; small grids only).
     Cholesky,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum, PartialEq, Eq)]
+pub enum CoherenceSpeedArg {
+    /// The paper's pair mean Ū_m = (Ū_j + Ū_k)/2 (default with --spectrum paper).
+    PairMean,
+    /// One reference speed, Ū averaged over the heights (TurbSim's and IEC's convention;
+    /// default with --spectrum kaimal and von-karman).
+    Reference,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum, PartialEq, Eq)]
@@ -102,7 +119,12 @@ pub struct ModelArgs {
     /// Direction the wind blows towards, degrees counter-clockwise from +x.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     direction: f64,
-    /// Turn Taylor advection of gusts off (reproduces the paper exactly).
+    /// Mean speed dividing the separations in eq. 5 (default: pair-mean with the paper's
+    /// spectrum, reference with the IEC ones).
+    #[arg(long, value_enum)]
+    coherence_speed: Option<CoherenceSpeedArg>,
+    /// Turn Taylor advection of gusts off (with the pair-mean speed, reproduces the paper's
+    /// coherence exactly). With it on, gusts travel at each height's own mean speed.
     #[arg(long)]
     no_advection: bool,
 }
@@ -129,6 +151,12 @@ impl ModelArgs {
             SpectrumArg::Paper => SpectrumModel::Paper,
             SpectrumArg::Kaimal => SpectrumModel::Kaimal,
             SpectrumArg::VonKarman => SpectrumModel::VonKarman,
+        };
+        p.coherence_speed = match (self.coherence_speed, self.spectrum) {
+            (Some(CoherenceSpeedArg::PairMean), _) | (None, SpectrumArg::Paper) => {
+                CoherenceSpeed::PairMean
+            }
+            (Some(CoherenceSpeedArg::Reference), _) | (None, _) => CoherenceSpeed::Reference,
         };
         p.direction_deg = self.direction;
         p.advection = !self.no_advection;
@@ -169,12 +197,12 @@ pub struct GridArgs {
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// Synthesis method.
-    #[arg(long, value_enum, default_value = "separable")]
+    #[arg(long, value_enum, default_value = "auto")]
     method: MethodArg,
 }
 
 impl GridArgs {
-    fn grid(&self) -> anyhow::Result<(Grid, SynthParams)> {
+    fn grid(&self, params: &WindParams) -> anyhow::Result<(Grid, SynthParams)> {
         if self.nx == 0 || self.ny == 0 {
             bail!("--nx and --ny must be at least 1 (got {} and {})", self.nx, self.ny);
         }
@@ -192,7 +220,9 @@ impl GridArgs {
         g.validate()
             .context("invalid grid (see --nx/--ny/--spacing/--xs/--ys/--heights/--frames/--dt)")?;
         let method = match self.method {
+            MethodArg::Auto => Method::fastest(params, &g),
             MethodArg::Separable => Method::Separable,
+            MethodArg::Embedding => Method::Embedding,
             MethodArg::Cholesky => Method::Cholesky,
         };
         Ok((g, SynthParams { seed: self.seed, method }))
@@ -218,8 +248,14 @@ pub struct GenerateArgs {
 
 #[derive(Debug, Args)]
 pub struct StatsArgs {
-    /// A field file (.swf, or .npy with its .json sidecar).
-    file: PathBuf,
+    /// Field files (.swf, or .npy with its .json sidecar). Several files of one grid and
+    /// model (different seeds) are pooled: the estimates average over them and their
+    /// expected scatter shrinks accordingly.
+    #[arg(required = true)]
+    files: Vec<PathBuf>,
+    /// Height index to report (default: every height).
+    #[arg(long)]
+    height: Option<usize>,
     /// Welch segment length in frames (default frames/8, at least 32).
     #[arg(long)]
     segment: Option<usize>,
@@ -252,23 +288,49 @@ pub fn run(cmd: WindCommand) -> anyhow::Result<()> {
         WindCommand::Demo(a) => demo(a),
         WindCommand::Generate(a) => {
             let params = a.model.params()?;
-            let (grid, synth) = a.grid.grid()?;
+            let (grid, synth) = a.grid.grid(&params)?;
             let format = match a.format {
                 Some(f) => f,
                 None => format_of(&a.out)?,
             };
+            // Everything that can fail on the output is checked before the synthesis.
+            if format == FormatArg::Bts {
+                io::check_bts(&grid, a.bts_x_index)?;
+            }
+            preflight(&params, &grid, synth)?;
             let field = generate(&params, &grid, synth)?;
             write(&field, &a.out, format, a.bts_x_index)?;
             println!("wrote {}", a.out.display());
             Ok(())
         }
         WindCommand::Stats(a) => {
-            let field = read(&a.file)?;
-            let stats = field_stats(&field, a.segment);
+            let fields = a.files.iter().map(|f| read(f)).collect::<anyhow::Result<Vec<_>>>()?;
+            for (f, path) in fields.iter().zip(&a.files).skip(1) {
+                if f.grid != fields[0].grid || f.params != fields[0].params {
+                    bail!(
+                        "{} has another grid or model than {}: only realisations of one grid \
+                         and model can be pooled",
+                        path.display(),
+                        a.files[0].display()
+                    );
+                }
+            }
+            let nz = fields[0].grid.nz();
+            let heights: Vec<usize> = match a.height {
+                Some(h) if h >= nz => {
+                    bail!("--height {h} is outside the grid ({nz} heights, so 0 … {})", nz - 1)
+                }
+                Some(h) => vec![h],
+                None => (0..nz).collect(),
+            };
+            let stats: Vec<FieldStats> =
+                heights.iter().map(|&h| ensemble_stats_at(&fields, a.segment, h)).collect();
             if a.json {
                 println!("{}", serde_json::to_string_pretty(&stats)?);
             } else {
-                print_stats(&field, &stats);
+                for s in &stats {
+                    print_stats(&fields[0], s);
+                }
             }
             Ok(())
         }
@@ -287,9 +349,10 @@ pub fn run(cmd: WindCommand) -> anyhow::Result<()> {
 
 /// The main job until the forest renderer lands: generate, check and plot the default field.
 pub fn demo(a: DemoArgs) -> anyhow::Result<()> {
-    let params = Preset::Breeze.params();
+    let params =
+        WindParams { coherence_speed: CoherenceSpeed::PairMean, ..Preset::Breeze.params() };
     let grid = Grid::regular(64, 64, 4.0, &[20.0], 2048, 0.1);
-    let synth = SynthParams { seed: 1, method: Method::Separable };
+    let synth = SynthParams { seed: 1, method: Method::fastest(&params, &grid) };
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     println!(
         "sylva wind demo: breeze over a 15 m forest, 64×64 points at 4 m, 2048 frames at 0.1 s"
@@ -305,6 +368,57 @@ pub fn demo(a: DemoArgs) -> anyhow::Result<()> {
         println!("wrote {}", p.display());
     }
     Ok(())
+}
+
+/// Checks before a synthesis starts: the method fits the model and grid, the memory it needs
+/// is there, the dense method's cost is stated, and heights under the log law's floor are
+/// named.
+fn preflight(params: &WindParams, grid: &Grid, synth: SynthParams) -> anyhow::Result<()> {
+    sylva_wind::synth::check_config(params, grid, synth)?;
+    let need = memory_estimate(grid, synth.method);
+    if let Some(avail) = available_memory() {
+        // A quarter of what is free stays free for the writer and the rest of the machine.
+        if need > 0.75 * avail {
+            bail!(
+                "this field needs about {:.1} GB ({} points × 3 components × {} frames, method \
+                 {}), more than three quarters of the {:.1} GB this machine has free; reduce \
+                 --frames, --nx/--ny or --heights",
+                need / 1e9,
+                grid.points(),
+                grid.frames,
+                synth.method.name(),
+                avail / 1e9
+            );
+        }
+    }
+    if synth.method == Method::Cholesky {
+        let est = cholesky_estimate(grid);
+        eprintln!("dense Cholesky on {} points: {est}", grid.points());
+        if est.seconds > 60.0 {
+            eprintln!(
+                "warning: the dense method is a reference for small grids; --method auto gives \
+                 the same statistics in a fraction of the time"
+            );
+        }
+    }
+    if let Some(floor) = params.log_law_floor() {
+        for &z in grid.zs.iter().filter(|&&z| z < floor) {
+            eprintln!(
+                "warning: height {z} m is below d + 2·z0 = {floor} m, where the log law ends; its \
+                 mean speed is held at the floor's, {:.2} m/s",
+                params.mean_speed(floor)
+            );
+        }
+    }
+    Ok(())
+}
+
+/// Memory the kernel reports as available (MemAvailable), bytes; `None` where unknown.
+fn available_memory() -> Option<f64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024.0)
 }
 
 fn format_of(path: &Path) -> anyhow::Result<FormatArg> {
@@ -362,57 +476,91 @@ fn read(path: &Path) -> anyhow::Result<WindField> {
 
 fn print_stats(field: &WindField, s: &FieldStats) {
     let cap = field.captured();
+    let pooled = if s.fields > 1 { format!(", {} fields pooled", s.fields) } else { String::new() };
     println!(
-        "\nheight {:.1} m, Ū = {:.2} m/s, Welch segment {} frames",
+        "\nheight {:.1} m, Ū = {:.2} m/s, eq. 5 speed for this height {:.2} m/s ({}), Welch \
+         segment {} frames{pooled}",
         s.height,
         field.params.mean_speed(s.height),
+        s.coherence_speed,
+        match field.params.coherence_speed {
+            CoherenceSpeed::PairMean => "pair mean",
+            CoherenceSpeed::Reference => "reference",
+        },
         s.segment
     );
+    if field.coherence_error > 0.0 {
+        println!(
+            "(the pair-mean model is not a valid covariance on this grid at some low lines: the \
+             synthesis used its nearest valid one, coherences within {:.4} of eq. 5)",
+            field.coherence_error
+        );
+    }
     println!(
-        "{:<4}{:>10}{:>12}{:>10}{:>10}{:>11}",
-        "", "σ meas", "σ target", "error", "σ model", "captured"
+        "{:<4}{:>9}{:>10}{:>9}{:>10}{:>10}{:>9}{:>10}  verdict",
+        "", "σ meas", "σ target", "σ err", "var err", "scatter", "σ model", "captured"
     );
     for (c, comp) in s.components.iter().enumerate() {
+        let k = comp.sigma_deviations();
+        let verdict = if k <= 2.0 {
+            format!("within scatter ({k:.1} s.d.)")
+        } else {
+            format!("OUTSIDE scatter ({k:.1} s.d.)")
+        };
         println!(
-            "{:<4}{:>10.4}{:>12.4}{:>9.2}%{:>10.4}{:>10.1}%",
+            "{:<4}{:>9.4}{:>10.4}{:>8.2}%{:>9.2}%{:>9.2}%{:>9.4}{:>9.1}%  {verdict}",
             comp.component,
             comp.sigma,
             comp.sigma_target,
-            100.0 * ((comp.sigma / comp.sigma_target).powi(2) - 1.0),
+            100.0 * comp.sigma_error,
+            100.0 * comp.variance_error,
+            100.0 * comp.sigma_scatter,
             comp.sigma_model,
             100.0 * cap.fraction[c]
         );
     }
     println!(
-        "(σ target: the loop's discrete lines Σ 2 S0 Δω; σ model: eq. 4 over all frequencies)"
+        "(σ target: the loop's discrete lines Σ 2 S0 Δω; σ model: eq. 4 over all frequencies;\n \
+         scatter: one standard deviation of σ err expected over realisations of this grid,\n \
+         from the model — the slow lines are coherent over the whole grid)"
     );
     println!(
-        "\nauto-spectrum vs eq. 4 (as the Welch estimator sees it), relative error per log band:"
+        "\nauto-spectrum vs eq. 4 (as the Welch estimator sees it): relative error per log band, \
+         [expected scatter]"
     );
     print!("{:>9}", "f (Hz)");
     for c in &s.components {
-        print!("{:>9}", c.component);
+        print!("{:>18}", c.component);
     }
     println!();
     for (i, b) in s.components[0].spectrum.iter().enumerate() {
         print!("{:>9.4}", b.f);
         for c in &s.components {
-            print!("{:>8.2}%", 100.0 * c.spectrum[i].rel_error());
+            let r = &c.spectrum[i];
+            let flag = if r.rel_error().abs() > 0.03f64.max(3.0 * r.scatter) { '!' } else { ' ' };
+            print!("{:>8.2}% [{:>5.2}%]{flag}", 100.0 * r.rel_error(), 100.0 * r.scatter);
         }
-        println!("{}", if b.low_biased { "  (leakage-biased band)" } else { "" });
+        println!();
     }
     println!(
-        "\npooled co-coherence vs eq. 5: largest |error| where eq. 5 > 0.1 (bands above the two lowest)"
+        "\npooled co-coherence vs eq. 5: largest |error| where eq. 5 > 0.1, in units of its \
+         expected scatter (! beyond 3 s.d. and 0.03)"
     );
-    println!("{:<12}{:>9}{:>9}{:>9}", "separation", "u", "v", "w");
+    println!("{:<14}{:>18}{:>18}{:>18}", "separation", "u", "v", "w");
     for (k, row) in s.components[0].coherence.iter().enumerate() {
-        print!("{:<12}", format!("d{} {:.1} m", row.axis, row.metres));
+        print!("{:<14}", format!("d{} {:.1} m", row.axis, row.metres));
         for c in &s.components {
             let row = &c.coherence[k];
-            if row.bands.iter().any(|b| b.model > 0.1 && !b.low_biased) {
-                print!("{:>9.4}", row.max_abs_error(0.1));
-            } else {
-                print!("{:>9}", "—"); // eq. 5 below 0.1 at every band checked
+            let worst = row.bands.iter().filter(|b| b.model > 0.1).max_by(|a, b| {
+                (a.measured - a.model).abs().total_cmp(&(b.measured - b.model).abs())
+            });
+            match worst {
+                Some(b) => {
+                    let e = (b.measured - b.model).abs();
+                    let flag = if e > 0.03f64.max(3.0 * b.scatter) { '!' } else { ' ' };
+                    print!("{:>9.4} [{:>4.1}σ]{flag}", e, e / b.scatter.max(1e-12));
+                }
+                None => print!("{:>18}", "—"), // eq. 5 below 0.1 at every band checked
             }
         }
         println!();

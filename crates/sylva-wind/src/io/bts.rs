@@ -13,19 +13,35 @@ use crate::error::WindError;
 use crate::field::WindField;
 use crate::grid::Grid;
 
+/// Check that the x = `x_index` plane of a field on `grid` can be written as `.bts`: call it
+/// before synthesising, so a wrong column or uneven axes fail at once. Returns (dy, dz).
+pub fn check_bts(grid: &Grid, x_index: usize) -> Result<(f64, f64), WindError> {
+    if x_index >= grid.nx() {
+        return Err(WindError::Export(format!(
+            "--bts-x-index {x_index} is outside the grid (nx = {}, so 0 … {})",
+            grid.nx(),
+            grid.nx() - 1
+        )));
+    }
+    if grid.nz() > i32::MAX as usize || grid.ny() > i32::MAX as usize {
+        return Err(WindError::Export("the y–z plane is too large for TurbSim's i32 sizes".into()));
+    }
+    if grid.frames > i32::MAX as usize {
+        return Err(WindError::Export("too many frames for TurbSim's i32 step count".into()));
+    }
+    let dy = Grid::regular_spacing(&grid.ys).ok_or_else(|| {
+        WindError::Export("TurbSim needs evenly spaced y coordinates (see --ys)".into())
+    })?;
+    let dz = Grid::regular_spacing(&grid.zs).ok_or_else(|| {
+        WindError::Export(format!("TurbSim needs evenly spaced heights (got {:?} m)", grid.zs))
+    })?;
+    Ok((dy, dz))
+}
+
 /// Write the x = `x_index` plane of `field` as TurbSim `.bts`.
 pub fn write_bts(field: &WindField, x_index: usize, path: &Path) -> Result<(), WindError> {
     let g = &field.grid;
-    if x_index >= g.nx() {
-        return Err(WindError::Export(format!(
-            "x index {x_index} is outside the grid (nx = {})",
-            g.nx()
-        )));
-    }
-    let dy = Grid::regular_spacing(&g.ys)
-        .ok_or_else(|| WindError::Export("TurbSim needs evenly spaced y coordinates".into()))?;
-    let dz = Grid::regular_spacing(&g.zs)
-        .ok_or_else(|| WindError::Export("TurbSim needs evenly spaced heights".into()))?;
+    let (dy, dz) = check_bts(g, x_index)?;
     let (nz, ny) = (g.nz(), g.ny());
     let at = |t: usize, c: usize, iz: usize, iy: usize| {
         field.data[field.index(t, c, iz, iy, x_index)] as f64

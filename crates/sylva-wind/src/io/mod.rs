@@ -20,7 +20,7 @@
 mod bts;
 mod npy;
 
-pub use bts::write_bts;
+pub use bts::{check_bts, write_bts};
 pub use npy::{read_npy, write_npy};
 
 use std::io::Write;
@@ -57,6 +57,10 @@ pub struct SwfHeader {
     pub offset: [f64; 3],
     /// Largest quantisation error per component, scale/2 (m/s).
     pub max_error: [f64; 3],
+    /// Bound on the synthesised coherence's departure from the model
+    /// ([`WindField::coherence_error`]); absent in files from before it was recorded.
+    #[serde(default)]
+    pub coherence_error: f64,
 }
 
 /// Per-component (offset, scale) spanning min…max over ±32767 counts.
@@ -87,6 +91,7 @@ pub fn write_swf(field: &WindField, path: &Path) -> Result<(), WindError> {
         scale,
         offset,
         max_error: scale.map(|s| 0.5 * s),
+        coherence_error: field.coherence_error,
     };
     let json = serde_json::to_vec(&header).map_err(|e| WindError::Export(e.to_string()))?;
     let n = field.grid.points();
@@ -192,7 +197,13 @@ pub fn parse_swf(bytes: &[u8]) -> Result<WindField, WindError> {
             (header.offset[c] + header.scale[c] * i16::from_le_bytes([b[0], b[1]]) as f64) as f32
         })
         .collect();
-    Ok(WindField { grid: header.grid, params: header.params, synth: header.synth, data })
+    Ok(WindField {
+        grid: header.grid,
+        params: header.params,
+        synth: header.synth,
+        data,
+        coherence_error: header.coherence_error,
+    })
 }
 
 #[cfg(test)]

@@ -6,6 +6,7 @@
 //! mean speeds, grid coordinates and spacings, dt, the Table-1/Table-2 constants, the
 //! seed and method.
 
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
@@ -13,7 +14,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::WindError;
 use crate::field::{Captured, WindField};
 use crate::grid::Grid;
-use crate::params::WindParams;
+use crate::params::{CoherenceSpeed, WindParams};
 use crate::synth::{self, SynthParams};
 
 /// The JSON sidecar of an `.npy` export.
@@ -29,8 +30,21 @@ pub struct NpySidecar {
     pub heights: Vec<f64>,
     /// Ū at each height, m/s.
     pub mean_speeds: Vec<f64>,
-    /// Reference speed in the coherence denominator, m/s.
-    pub coherence_speed: f64,
+    /// Which speed divides the separations in eq. 5: `"reference"` (one speed for every
+    /// pair, `coherence_speed`) or `"pair-mean"` (the paper's (Ū_j + Ū_k)/2 of
+    /// `mean_speeds`, per pair of heights).
+    #[serde(default = "reference_model")]
+    pub coherence_model: String,
+    /// The one speed in eq. 5's denominator with the reference model, m/s; null with the
+    /// pair mean.
+    pub coherence_speed: Option<f64>,
+    /// Taylor advection: gusts at height z travel at `mean_speeds[z]`, with phase origin at
+    /// x = `advection_origin_x` (m); null when advection is off.
+    #[serde(default)]
+    pub advection_origin_x: Option<f64>,
+    /// Bound on the synthesised coherence's departure from the model (0 when exact).
+    #[serde(default)]
+    pub coherence_error: f64,
     /// Regular spacing along x and y in m (null where uneven; see `grid`).
     pub spacing: [Option<f64>; 2],
     /// Time step, s.
@@ -46,6 +60,10 @@ pub struct NpySidecar {
     /// CRC-32 (IEEE) of the `.npy` file's data bytes (after its header), so a reader can
     /// detect corruption; `.npy` itself carries no checksum.
     pub data_crc32: u32,
+}
+
+fn reference_model() -> String {
+    "reference".into()
 }
 
 fn sidecar_path(path: &Path) -> PathBuf {
@@ -68,23 +86,39 @@ pub fn write_npy(field: &WindField, path: &Path) -> Result<(), WindError> {
         dict.push(' ');
     }
     dict.push('\n');
-    let mut bytes = Vec::with_capacity(10 + dict.len() + 4 * field.data.len());
-    bytes.extend_from_slice(b"\x93NUMPY\x01\x00");
-    bytes.extend_from_slice(&(dict.len() as u16).to_le_bytes());
-    bytes.extend_from_slice(dict.as_bytes());
-    let data_start = bytes.len();
-    for v in &field.data {
-        bytes.extend_from_slice(&v.to_le_bytes());
+    // Streamed in blocks: the peak memory is the field plus one block, not a second copy.
+    let file = std::fs::File::create(path).map_err(|e| WindError::io(path, e))?;
+    let mut w = std::io::BufWriter::with_capacity(1 << 20, file);
+    let mut crc = crc32fast::Hasher::new();
+    let io = |e| WindError::io(path, e);
+    w.write_all(b"\x93NUMPY\x01\x00").map_err(io)?;
+    w.write_all(&(dict.len() as u16).to_le_bytes()).map_err(io)?;
+    w.write_all(dict.as_bytes()).map_err(io)?;
+    let mut block = Vec::with_capacity(4 << 16);
+    for chunk in field.data.chunks(1 << 16) {
+        block.clear();
+        for v in chunk {
+            block.extend_from_slice(&v.to_le_bytes());
+        }
+        crc.update(&block);
+        w.write_all(&block).map_err(io)?;
     }
-    let data_crc32 = crc32fast::hash(&bytes[data_start..]);
-    std::fs::write(path, &bytes).map_err(|e| WindError::io(path, e))?;
+    w.flush().map_err(io)?;
+    let data_crc32 = crc.finalize();
     let side = NpySidecar {
         shape,
         axes: axes.into_iter().map(String::from).collect(),
         u_star: field.params.u_star,
         heights: g.zs.clone(),
         mean_speeds: g.zs.iter().map(|&z| field.params.mean_speed(z)).collect(),
-        coherence_speed: synth::reference_speed(&field.params, g),
+        coherence_model: match field.params.coherence_speed {
+            CoherenceSpeed::Reference => "reference".into(),
+            CoherenceSpeed::PairMean => "pair-mean".into(),
+        },
+        coherence_speed: (field.params.coherence_speed == CoherenceSpeed::Reference)
+            .then(|| synth::reference_speed(&field.params, g)),
+        advection_origin_x: field.params.advection.then(|| 0.5 * (g.xs[0] + g.xs[g.nx() - 1])),
+        coherence_error: field.coherence_error,
         spacing: [Grid::regular_spacing(&g.xs), Grid::regular_spacing(&g.ys)],
         dt: g.dt,
         grid: g.clone(),
@@ -152,7 +186,13 @@ pub fn read_npy(path: &Path) -> Result<WindField, WindError> {
         .chunks_exact(4)
         .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
         .collect();
-    Ok(WindField { grid: side.grid, params: side.params, synth: side.synth, data })
+    Ok(WindField {
+        grid: side.grid,
+        params: side.params,
+        synth: side.synth,
+        data,
+        coherence_error: side.coherence_error,
+    })
 }
 
 #[cfg(test)]
