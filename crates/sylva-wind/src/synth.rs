@@ -656,27 +656,40 @@ fn synth_component<T: Sample>(
             let done = std::sync::atomic::AtomicUsize::new(0);
             let worst = std::sync::Mutex::new(0.0f64);
             let kappas = emb.wavenumbers();
-            (1..nc - 1).into_par_iter().for_each_init(
-                || emb.scratch(),
-                |s, j| {
-                    let key = lines.keys[j];
-                    let xi = |m: usize, k: usize| phasor(key, (m * kappas + k) as u64);
-                    let f = lines.omega[j] / (2.0 * PI);
-                    let clipped = emb.line(f, &xi, s);
-                    if clipped > 0.0
-                        && let Ok(mut w) = worst.lock()
-                    {
-                        *w = w.max(clipped);
-                    }
-                    for (p, w) in s.w.chunks(nx).enumerate() {
-                        for (ix, w) in w.iter().enumerate() {
-                            // SAFETY: index j of every point belongs to this line's task alone,
-                            // and the index lies inside `block` (nx · nz · ny · nc entries).
-                            unsafe { out.write(ix * col_len + p * nc + j, *w) };
+            // Tasks take runs of consecutive lines and write each point's run at once: one
+            // burst per point instead of one scattered write per point and line.
+            const RUN: usize = 16;
+            let np = nz * ny * nx;
+            let runs: Vec<usize> = (1..nc - 1).step_by(RUN).collect();
+            runs.par_iter().for_each_init(
+                || (emb.scratch(), vec![C64::default(); np * RUN]),
+                |(s, staged), &j0| {
+                    let j1 = (j0 + RUN).min(nc - 1);
+                    for j in j0..j1 {
+                        let key = lines.keys[j];
+                        let xi = |m: usize, k: usize| phasor(key, (m * kappas + k) as u64);
+                        let f = lines.omega[j] / (2.0 * PI);
+                        let clipped = emb.line(f, &xi, s);
+                        if clipped > 0.0
+                            && let Ok(mut w) = worst.lock()
+                        {
+                            *w = w.max(clipped);
+                        }
+                        for (q, w) in s.w.iter().enumerate() {
+                            staged[q * RUN + (j - j0)] = *w;
                         }
                     }
-                    let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-                    progress(d as f64 / (nc - 2) as f64);
+                    for (q, run) in staged.chunks(RUN).enumerate() {
+                        let (p, ix) = (q / nx, q % nx);
+                        let at = ix * col_len + p * nc + j0;
+                        for (d, w) in run[..j1 - j0].iter().enumerate() {
+                            // SAFETY: lines j0 … j1 of every point belong to this task alone,
+                            // and the index lies inside `block` (nx · nz · ny · nc entries).
+                            unsafe { out.write(at + d, *w) };
+                        }
+                    }
+                    let d = done.fetch_add(j1 - j0, std::sync::atomic::Ordering::Relaxed);
+                    progress((d + j1 - j0) as f64 / (nc - 2) as f64);
                 },
             );
             coherence_error = worst.into_inner().unwrap_or(f64::INFINITY);

@@ -7,7 +7,7 @@ use anyhow::Context;
 use clap::{Args, Subcommand};
 
 use crate::render::median;
-use sylva_wind::{Grid, Method, SynthParams, WindField, WindParams};
+use sylva_wind::{CoherenceSpeed, Grid, Method, SynthParams, WindField, WindParams};
 
 #[derive(Debug, Subcommand)]
 pub enum BenchCommand {
@@ -259,11 +259,19 @@ pub fn run(cmd: BenchCommand) -> anyhow::Result<()> {
 }
 
 fn time_generate(grid: &Grid, method: Method, runs: usize) -> anyhow::Result<f64> {
-    let params = WindParams::default();
+    time_generate_with(&WindParams::default(), grid, method, runs)
+}
+
+fn time_generate_with(
+    params: &WindParams,
+    grid: &Grid,
+    method: Method,
+    runs: usize,
+) -> anyhow::Result<f64> {
     let mut t = Vec::new();
     for seed in 0..runs.max(1) as u64 {
         let t0 = Instant::now();
-        let f = WindField::generate(&params, grid, SynthParams { seed, method }, &|_| {})?;
+        let f = WindField::generate(params, grid, SynthParams { seed, method }, &|_| {})?;
         t.push(t0.elapsed().as_secs_f64());
         std::hint::black_box(&f.data);
     }
@@ -316,6 +324,23 @@ fn wind(a: WindBench) -> anyhow::Result<()> {
         );
         Ok(())
     })?;
+    // Several heights, all cores: one reference speed (separable) against the paper's pair
+    // mean (embedding), side by side on the same grid.
+    for heights in
+        [&[15.0, 20.0, 30.0][..], &[12.0, 15.0, 20.0, 25.0, 30.0, 35.0, 40.0, 50.0, 60.0, 70.0]]
+    {
+        let g = Grid::regular(100, 100, 4.0, heights, 2048, 0.1);
+        let runs = if heights.len() > 3 { 1 } else { a.runs.min(3) };
+        let sep = time_generate(&g, Method::Separable, runs)?;
+        let pm = WindParams { coherence_speed: CoherenceSpeed::PairMean, ..WindParams::default() };
+        let emb = time_generate_with(&pm, &g, Method::Embedding, runs)?;
+        println!(
+            "100×100 points × {} heights × 3 × 2048 frames, all cores: separable (reference speed) \
+             {sep:.2} s, embedding (pair mean) {emb:.2} s → ratio {:.1} (median of {runs})",
+            heights.len(),
+            emb / sep
+        );
+    }
     if a.large {
         let g = Grid::regular(1000, 1000, 4.0, &[20.0], 1024, 0.1);
         let out_bytes = (g.points() * 3 * g.frames * 4) as f64;
