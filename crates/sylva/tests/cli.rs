@@ -156,3 +156,51 @@ fn lod_flags_are_checked_before_any_work() {
         assert!(!text.contains("panicked"), "{text}");
     }
 }
+
+#[test]
+fn output_errors_come_before_the_synthesis() {
+    // A .bts column outside the grid, uneven .bts heights, a field larger than the machine
+    // and a dense method past its size are refused at once: nothing is synthesised (no
+    // "synthesised" line) and no file is written.
+    let out = temp("early.bts");
+    let o = out.to_str().expect("utf-8 path");
+    for (args, needle) in [
+        (vec!["--nx", "8", "--bts-x-index", "8"], "--bts-x-index 8"),
+        (vec!["--nx", "8", "--heights", "15,20,40"], "evenly spaced heights"),
+        (vec!["--nx", "1900", "--ny", "1900", "--frames", "4096"], "GB"), // 177 GB
+        (vec!["--nx", "70", "--ny", "70", "--method", "cholesky"], "4096 points"),
+    ] {
+        let mut all = vec!["wind", "generate", "--out", o];
+        all.extend(args.iter());
+        let t0 = std::time::Instant::now();
+        let (ok, text) = sylva(&all);
+        assert!(!ok, "{args:?} must fail");
+        assert!(text.contains(needle), "{args:?}: error does not name {needle}: {text}");
+        assert!(!text.contains("synthesised"), "{args:?} synthesised first: {text}");
+        assert!(t0.elapsed().as_secs_f64() < 5.0, "{args:?} took {:?}", t0.elapsed());
+        assert!(!out.exists(), "{args:?} wrote a file");
+    }
+}
+
+#[test]
+fn heights_under_the_log_law_are_named_and_seeds_pool_in_stats() {
+    let (a, b) = (temp("pool-a.swf"), temp("pool-b.swf"));
+    let common = ["--nx", "8", "--ny", "8", "--frames", "256", "--heights", "8,20"];
+    let (ok, text) = sylva(
+        &[&["wind", "generate", "--seed", "1", "--out", a.to_str().expect("utf-8")][..], &common]
+            .concat(),
+    );
+    assert!(ok, "{text}");
+    assert!(text.contains("height 8 m is below d + 2·z0 = 13 m"), "{text}");
+    let (ok, text) = sylva(
+        &[&["wind", "generate", "--seed", "2", "--out", b.to_str().expect("utf-8")][..], &common]
+            .concat(),
+    );
+    assert!(ok, "{text}");
+    let (ok, text) =
+        sylva(&["wind", "stats", a.to_str().expect("utf-8"), b.to_str().expect("utf-8")]);
+    assert!(ok, "{text}");
+    assert!(text.contains("2 fields pooled") && text.contains("pair mean"), "{text}");
+    assert!(text.contains("σ err") && text.contains("var err") && text.contains("scatter"));
+    assert!(text.contains("dz 12.0 m"), "{text}");
+}
