@@ -167,7 +167,7 @@ fn output_errors_come_before_the_synthesis() {
     for (args, needle) in [
         (vec!["--nx", "8", "--bts-x-index", "8"], "--bts-x-index 8"),
         (vec!["--nx", "8", "--heights", "15,20,40"], "evenly spaced heights"),
-        (vec!["--nx", "1900", "--ny", "1900", "--frames", "4096"], "GB"), // 177 GB
+        (vec!["--nx", "1700", "--ny", "1700", "--frames", "4096"], "GB"), // 142 GB
         (vec!["--nx", "70", "--ny", "70", "--method", "cholesky"], "4096 points"),
     ] {
         let mut all = vec!["wind", "generate", "--out", o];
