@@ -22,7 +22,7 @@
 //!
 //! * [`Method::Embedding`] — exact in the CPSDM for either coherence speed, on regular x–y
 //!   grids: circulant embedding across x and y with one dense nz × nz block per horizontal
-//!   wavenumber ([`embed`]). The only fast method for the paper's pair-mean speed on several
+//!   wavenumber (`synth/embed.rs`). The only fast method for the paper's pair-mean speed on several
 //!   heights, whose coherence matrix is no Kronecker product.
 //!
 //! [`Method::fastest`] picks the separable method where it is exact and the embedding
@@ -507,7 +507,7 @@ impl<'a, T: Sample> Emitter<'a, T> {
 
 /// Synthesise the fluctuations of one component into `out` (frame-major, layout described
 /// by `layout`), calling `progress` with the fraction of this component done. Returns the
-/// bound on the coherence error (0 for an exact synthesis; see [`embed`]).
+/// bound on the coherence error (0 for an exact synthesis; see `synth/embed.rs`).
 fn synth_component<T: Sample>(
     params: &WindParams,
     grid: &Grid,
