@@ -51,7 +51,7 @@ pub struct RenderBench {
     #[arg(long, default_value_t = 10)]
     frames: usize,
     /// Geometry-LOD threshold h₀ (see `sylva render --help`; default: the scene's).
-    #[arg(long)]
+    #[arg(value_parser = crate::finite::<f32>, long)]
     lod_fraction: Option<f32>,
     #[command(flatten)]
     lod: crate::render::LodArgs,
@@ -185,7 +185,7 @@ pub struct SwayBench {
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// Mean wind speed, m/s (instances get this plus 0 … 4 m/s, and a small cross-wind).
-    #[arg(long, default_value_t = 6.0)]
+    #[arg(value_parser = crate::finite::<f32>, long, default_value_t = 6.0)]
     wind: f32,
 }
 

@@ -14,6 +14,17 @@ mod wind;
 
 use clap::{Parser, Subcommand};
 
+/// The value parser of every floating-point flag: a finite number. NaN and ±∞ parse as
+/// floats but are never meaningful input; clap names the flag in the error.
+pub(crate) fn finite<T>(s: &str) -> Result<T, String>
+where
+    T: std::str::FromStr + Copy + Into<f64>,
+    T::Err: std::fmt::Display,
+{
+    let v: T = s.trim().parse().map_err(|e| format!("`{s}` is not a number ({e})"))?;
+    if v.into().is_finite() { Ok(v) } else { Err(format!("`{s}` is not a finite number")) }
+}
+
 /// Forests in wind: wind-engineering wind fields, Weber–Penn trees, swaying branches, rendered.
 #[derive(Debug, Parser)]
 #[command(name = "sylva", version, about, long_about = None)]

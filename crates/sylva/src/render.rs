@@ -14,10 +14,10 @@ pub struct RenderArgs {
     #[arg(long, default_value = "A")]
     pub scene: String,
     /// Seconds of simulated time to render.
-    #[arg(long, default_value_t = 5.0)]
+    #[arg(value_parser = crate::finite::<f64>, long, default_value_t = 5.0)]
     pub seconds: f64,
     /// Frames per second (the fixed simulation step is 1/fps).
-    #[arg(long, default_value_t = 12.0)]
+    #[arg(value_parser = crate::finite::<f64>, long, default_value_t = 12.0)]
     pub fps: f64,
     /// Image size, WIDTHxHEIGHT.
     #[arg(long, default_value = "1024x768")]
@@ -31,7 +31,7 @@ pub struct RenderArgs {
     /// Geometry-LOD threshold h₀: full detail only for trees taller than this fraction of
     /// the image; one level coarser per factor 3 smaller. Larger is coarser and faster.
     /// Default: the scene's (`[lod] fraction`, 1 unless set).
-    #[arg(long)]
+    #[arg(value_parser = crate::finite::<f32>, long)]
     pub lod_fraction: Option<f32>,
     /// Skip the animated GIF.
     #[arg(long)]

@@ -38,16 +38,16 @@ pub struct Table3Bench {
     #[arg(long, default_value_t = 2)]
     warmup: usize,
     /// Configurations drawing more triangles per frame are timed on the CPU side only.
-    #[arg(long, default_value_t = 12e6)]
+    #[arg(value_parser = crate::finite::<f64>, long, default_value_t = 12e6)]
     max_triangles: f64,
     /// Their last frame is still rendered for the image error below this many triangles.
-    #[arg(long, default_value_t = 80e6)]
+    #[arg(value_parser = crate::finite::<f64>, long, default_value_t = 80e6)]
     max_image_triangles: f64,
     /// First LOD level drawn as an impostor (1 … 6; default: the scene's).
     #[arg(long)]
     far_level: Option<u32>,
     /// Geometry-LOD threshold h₀ (default: the scene's).
-    #[arg(long)]
+    #[arg(value_parser = crate::finite::<f32>, long)]
     lod_fraction: Option<f32>,
     /// Frames of the popping measurement (scene `small`, calm, along its fly-in; 0: skip).
     #[arg(long, default_value_t = 40)]

@@ -95,10 +95,10 @@ pub struct ProbeArgs {
     #[arg(long, default_value = "breeze")]
     wind: String,
     /// Seconds to simulate.
-    #[arg(long, default_value_t = 60.0)]
+    #[arg(value_parser = crate::finite::<f64>, long, default_value_t = 60.0)]
     seconds: f64,
     /// Frames per second of the simulation.
-    #[arg(long, default_value_t = 60.0)]
+    #[arg(value_parser = crate::finite::<f64>, long, default_value_t = 60.0)]
     fps: f64,
     /// CSV output: time, wind at the crown, trunk-top and branch-tip displacements.
     #[arg(long, default_value = "out/probe.csv")]
@@ -261,6 +261,9 @@ pub fn run_sway(cmd: SwayCommand) -> anyhow::Result<()> {
     let steps = (a.seconds * a.fps).ceil() as usize;
     // Wind at the crown per step.
     let wind: Vec<[f32; 3]> = match a.wind.parse::<f64>() {
+        Ok(speed) if !speed.is_finite() || speed.abs() > 100.0 => {
+            bail!("--wind {}: a speed must be a finite number of m/s within ±100", a.wind)
+        }
         Ok(speed) => vec![[speed as f32, 0.0, 0.0]; steps],
         Err(_) => {
             let preset = Preset::from_name(&a.wind).with_context(|| {

@@ -23,7 +23,7 @@ pub struct ViewArgs {
     pub scene: String,
     /// Geometry-LOD threshold h₀ (see `sylva render --help`). Default: the scene's on a
     /// GPU, 3 on a software rasteriser such as lavapipe.
-    #[arg(long)]
+    #[arg(value_parser = crate::finite::<f32>, long)]
     pub lod_fraction: Option<f32>,
     #[command(flatten)]
     pub lod: crate::render::LodArgs,

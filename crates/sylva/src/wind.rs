@@ -93,31 +93,31 @@ pub struct ModelArgs {
     #[arg(long, value_enum, default_value = "breeze")]
     preset: PresetArg,
     /// Friction velocity U* in m/s (overrides the preset). σ_u = 2.5 U*.
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(value_parser = crate::finite::<f64>, long, allow_negative_numbers = true)]
     u_star: Option<f64>,
     /// Mean profile.
     #[arg(long, value_enum, default_value = "log")]
     profile: ProfileArg,
     /// Log law: roughness length z0 in m (forest ≈ 0.1 × canopy height).
-    #[arg(long, default_value_t = 1.5, allow_negative_numbers = true)]
+    #[arg(value_parser = crate::finite::<f64>, long, default_value_t = 1.5, allow_negative_numbers = true)]
     z0: f64,
     /// Log law: zero-plane displacement d in m (forest ≈ ⅔ × canopy height).
-    #[arg(long, default_value_t = 10.0, allow_negative_numbers = true)]
+    #[arg(value_parser = crate::finite::<f64>, long, default_value_t = 10.0, allow_negative_numbers = true)]
     displacement: f64,
     /// Power law: reference speed in m/s.
-    #[arg(long, default_value_t = 8.0)]
+    #[arg(value_parser = crate::finite::<f64>, long, default_value_t = 8.0)]
     u_ref: f64,
     /// Power law: reference height in m.
-    #[arg(long, default_value_t = 20.0)]
+    #[arg(value_parser = crate::finite::<f64>, long, default_value_t = 20.0)]
     z_ref: f64,
     /// Power law: exponent.
-    #[arg(long, default_value_t = 0.2)]
+    #[arg(value_parser = crate::finite::<f64>, long, default_value_t = 0.2)]
     alpha: f64,
     /// Point spectrum.
     #[arg(long, value_enum, default_value = "paper")]
     spectrum: SpectrumArg,
     /// Direction the wind blows towards, degrees counter-clockwise from +x.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    #[arg(value_parser = crate::finite::<f64>, long, default_value_t = 0.0, allow_negative_numbers = true)]
     direction: f64,
     /// Mean speed dividing the separations in eq. 5 (default: pair-mean with the paper's
     /// spectrum, reference with the IEC ones).
@@ -175,23 +175,23 @@ pub struct GridArgs {
     #[arg(long, default_value_t = 64)]
     ny: usize,
     /// Regular spacing of x and y in m.
-    #[arg(long, default_value_t = 4.0, allow_negative_numbers = true)]
+    #[arg(value_parser = crate::finite::<f64>, long, default_value_t = 4.0, allow_negative_numbers = true)]
     spacing: f64,
     /// Uneven x coordinates in m, comma-separated and increasing (overrides --nx/--spacing).
-    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+    #[arg(value_parser = crate::finite::<f64>, long, value_delimiter = ',', allow_negative_numbers = true)]
     xs: Option<Vec<f64>>,
     /// Uneven y coordinates in m (overrides --ny/--spacing).
-    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+    #[arg(value_parser = crate::finite::<f64>, long, value_delimiter = ',', allow_negative_numbers = true)]
     ys: Option<Vec<f64>>,
     /// Heights in m, comma-separated and increasing.
-    #[arg(long, value_delimiter = ',', default_value = "20")]
+    #[arg(value_parser = crate::finite::<f64>, long, value_delimiter = ',', default_value = "20")]
     heights: Vec<f64>,
     /// Frames in the loop (even). Loop length = frames × dt; longer loops keep more of the
     /// slow gusts' variance (reported as the captured fraction).
     #[arg(long, default_value_t = 2048)]
     frames: usize,
     /// Time step in s; resolves up to 1/(2 dt) Hz.
-    #[arg(long, default_value_t = 0.1, allow_negative_numbers = true)]
+    #[arg(value_parser = crate::finite::<f64>, long, default_value_t = 0.1, allow_negative_numbers = true)]
     dt: f64,
     /// Seed of the random phases. Same seed, same bits.
     #[arg(long, default_value_t = 1)]

@@ -204,3 +204,24 @@ fn heights_under_the_log_law_are_named_and_seeds_pool_in_stats() {
     assert!(text.contains("σ err") && text.contains("var err") && text.contains("scatter"));
     assert!(text.contains("dz 12.0 m"), "{text}");
 }
+
+#[test]
+fn nan_and_infinity_are_refused_by_float_flags_naming_the_flag() {
+    let out = temp("nan.swf");
+    let o = out.to_str().expect("utf-8 path");
+    for (args, needle) in [
+        (vec!["wind", "generate", "--out", o, "--u-star", "nan"], "--u-star"),
+        (vec!["wind", "generate", "--out", o, "--dt", "inf"], "--dt"),
+        (vec!["wind", "generate", "--out", o, "--heights", "20,NaN"], "--heights"),
+        (vec!["wind", "generate", "--out", o, "--direction=-inf"], "--direction"),
+        (vec!["sway", "probe", "--species", "quaking_aspen", "--wind", "nan"], "--wind"),
+        (vec!["render", "--seconds", "nan"], "--seconds"),
+        (vec!["bench", "sway", "--wind", "inf"], "--wind"),
+    ] {
+        let (ok, text) = sylva(&args);
+        assert!(!ok, "{args:?} must fail");
+        assert!(text.contains(needle) && text.contains("finite"), "{args:?}: {text}");
+        assert!(!text.contains("panicked"), "{text}");
+    }
+    assert!(!out.exists(), "no file is written");
+}
