@@ -241,13 +241,15 @@ pub fn write_png(path: &Path, panels: &[Panel]) -> Result<(), WindError> {
     for (i, p) in panels.iter().enumerate() {
         draw_panel(&mut cv, i * W, p);
     }
-    let file = std::fs::File::create(path).map_err(|e| WindError::io(path, e))?;
-    let mut enc = png::Encoder::new(std::io::BufWriter::new(file), cv.w as u32, cv.h as u32);
+    let mut file =
+        crate::io::atomic::AtomicFile::create(path).map_err(|e| WindError::io(path, e))?;
+    let mut enc = png::Encoder::new(&mut file, cv.w as u32, cv.h as u32);
     enc.set_color(png::ColorType::Rgb);
     enc.set_depth(png::BitDepth::Eight);
     let mut wr = enc.write_header().map_err(|e| WindError::Export(e.to_string()))?;
     wr.write_image_data(&cv.px).map_err(|e| WindError::Export(e.to_string()))?;
-    wr.finish().map_err(|e| WindError::Export(e.to_string()))
+    wr.finish().map_err(|e| WindError::Export(e.to_string()))?;
+    file.commit().map_err(|e| WindError::io(path, e))
 }
 
 #[cfg(test)]

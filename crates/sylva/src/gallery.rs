@@ -130,7 +130,8 @@ pub fn gallery(a: &GalleryArgs) -> anyhow::Result<()> {
         writeln!(index, "Scene {scene} ({} trees):\n\n![scene {scene}]({file})\n", spec.trees)?;
     }
     let path = a.out.join("README.md");
-    std::fs::write(&path, index).with_context(|| format!("writing {}", path.display()))?;
+    sylva_wind::io::atomic::write_atomic(&path, index.as_bytes())
+        .with_context(|| format!("writing {}", path.display()))?;
     println!("wrote {}", path.display());
     Ok(())
 }

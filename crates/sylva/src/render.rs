@@ -7,6 +7,7 @@ use anyhow::{Context, bail};
 use clap::Args;
 use sylva_forest::{Forest, FrameData, SceneSpec};
 use sylva_render::Headless;
+use sylva_wind::io::atomic::AtomicFile;
 
 #[derive(Debug, Args)]
 pub struct RenderArgs {
@@ -100,14 +101,17 @@ pub fn median(v: &mut [f64]) -> f64 {
     v[v.len() / 2]
 }
 
+/// Write an RGBA image as PNG, atomically (the previous file stays whole until the new one is).
 pub fn write_png(path: &Path, w: u32, h: u32, rgba: &[u8]) -> anyhow::Result<()> {
-    let file =
-        std::fs::File::create(path).with_context(|| format!("creating {}", path.display()))?;
-    let mut enc = png::Encoder::new(std::io::BufWriter::new(file), w, h);
+    let mut file =
+        AtomicFile::create(path).with_context(|| format!("creating {}", path.display()))?;
+    let mut enc = png::Encoder::new(&mut file, w, h);
     enc.set_color(png::ColorType::Rgba);
     enc.set_depth(png::BitDepth::Eight);
-    enc.write_header()?.write_image_data(rgba)?;
-    Ok(())
+    let mut wr = enc.write_header()?;
+    wr.write_image_data(rgba)?;
+    wr.finish()?;
+    file.commit().with_context(|| format!("writing {}", path.display()))
 }
 
 /// Half-size (or smaller) copy for the GIF: box filter by `k`.
@@ -190,10 +194,9 @@ pub fn render(a: &RenderArgs) -> anyhow::Result<RenderReport> {
     let mut gif = if a.no_gif {
         None
     } else {
-        let f = std::fs::File::create(&gif_path)
+        let f = AtomicFile::create(&gif_path)
             .with_context(|| format!("creating {}", gif_path.display()))?;
-        let mut e =
-            gif::Encoder::new(std::io::BufWriter::new(f), (w / k) as u16, (h / k) as u16, &[])?;
+        let mut e = gif::Encoder::new(f, (w / k) as u16, (h / k) as u16, &[])?;
         e.set_repeat(gif::Repeat::Infinite)?;
         Some(e)
     };
@@ -223,18 +226,26 @@ pub fn render(a: &RenderArgs) -> anyhow::Result<RenderReport> {
         bar.inc(1);
     }
     bar.finish_and_clear();
-    drop(gif);
+    if let Some(e) = gif {
+        let f = e.into_inner().with_context(|| format!("writing {}", gif_path.display()))?;
+        f.commit().with_context(|| format!("writing {}", gif_path.display()))?;
+    }
+    // ffmpeg writes to the temporary name (with the container named by `-f`); the clip
+    // replaces forest.mp4 only when the encoder succeeded.
     let mp4 = a.out.join("forest.mp4");
+    let mp4_file =
+        AtomicFile::create(&mp4).with_context(|| format!("creating {}", mp4.display()))?;
     let made_mp4 = std::process::Command::new("ffmpeg")
         .args(["-y", "-loglevel", "error", "-framerate"])
         .arg(format!("{}", a.fps))
         .arg("-i")
         .arg(a.out.join("frame_%04d.png"))
-        .args(["-pix_fmt", "yuv420p", "-vf", "scale=trunc(iw/2)*2:trunc(ih/2)*2"])
-        .arg(&mp4)
+        .args(["-pix_fmt", "yuv420p", "-vf", "scale=trunc(iw/2)*2:trunc(ih/2)*2", "-f", "mp4"])
+        .arg(mp4_file.temp_path())
         .status()
         .map(|s| s.success())
         .unwrap_or(false);
+    let made_mp4 = made_mp4 && mp4_file.commit().is_ok();
     Ok(RenderReport {
         frames,
         sim_ms: median(&mut sim),

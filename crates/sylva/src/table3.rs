@@ -20,6 +20,7 @@ use anyhow::Context;
 use clap::Args;
 use sylva_forest::{Forest, FrameData, SceneSpec};
 use sylva_render::Headless;
+use sylva_wind::io::atomic::write_atomic;
 
 use crate::render::{median, parse_size, write_png};
 
@@ -481,8 +482,8 @@ fn write_outputs(
     if let Some(p) = popping {
         md.push_str(p);
     }
-    std::fs::write(a.out.join("table3.md"), &md)?;
-    std::fs::write(a.out.join("table3.csv"), &csv)?;
+    write_atomic(&a.out.join("table3.md"), md.as_bytes())?;
+    write_atomic(&a.out.join("table3.csv"), csv.as_bytes())?;
     // Chart: FPS against trees, one line per configuration (ours solid colours).
     let colours = [[30, 110, 40], [200, 60, 40], [40, 80, 200], [150, 120, 20]];
     let series = CONFIGS

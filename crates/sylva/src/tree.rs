@@ -163,7 +163,7 @@ pub fn run_tree(cmd: TreeCommand) -> anyhow::Result<()> {
                 std::fs::create_dir_all(dir)
                     .with_context(|| format!("creating {}", dir.display()))?;
             }
-            std::fs::write(&a.out, &bytes)
+            sylva_wind::io::atomic::write_atomic(&a.out, &bytes)
                 .with_context(|| format!("writing {}", a.out.display()))?;
             let tris: usize = match a.lod {
                 Some(l) => model.lods[l].triangles(),
@@ -303,9 +303,8 @@ pub fn run_sway(cmd: SwayCommand) -> anyhow::Result<()> {
     if let Some(dir) = a.csv.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir)?;
     }
-    let mut out = std::io::BufWriter::new(
-        std::fs::File::create(&a.csv).with_context(|| format!("creating {}", a.csv.display()))?,
-    );
+    let mut out = sylva_wind::io::atomic::AtomicFile::create(&a.csv)
+        .with_context(|| format!("creating {}", a.csv.display()))?;
     write!(out, "time_s,wind_u,wind_v,wind_w,trunk_dx,trunk_dy")?;
     for k in 0..ends.len() {
         write!(out, ",branch{}_dx,branch{}_dy", k + 1, k + 1)?;
@@ -338,7 +337,7 @@ pub fn run_sway(cmd: SwayCommand) -> anyhow::Result<()> {
             ys.push(ty as f64);
         }
     }
-    out.flush()?;
+    out.commit().with_context(|| format!("writing {}", a.csv.display()))?;
     println!(
         "{}: {:.1} m tall, {} joints; wrote {} ({} rows)",
         species.name,

@@ -96,7 +96,7 @@ pub fn write_bts(field: &WindField, x_index: usize, path: &Path) -> Result<(), W
             }
         }
     }
-    std::fs::write(path, b).map_err(|e| WindError::io(path, e))
+    super::atomic::write_atomic(path, &b).map_err(|e| WindError::io(path, e))
 }
 
 #[cfg(test)]

@@ -17,6 +17,7 @@
 //! `max_error`; about 1/65534 of the component's range, e.g. 0.4 mm/s on a 25 m/s range).
 //! Reading checks magic, version, sizes and checksum and names the byte offset of a fault.
 
+pub mod atomic;
 mod bts;
 mod npy;
 
@@ -95,22 +96,33 @@ pub fn write_swf(field: &WindField, path: &Path) -> Result<(), WindError> {
     };
     let json = serde_json::to_vec(&header).map_err(|e| WindError::Export(e.to_string()))?;
     let n = field.grid.points();
-    let mut bytes = Vec::with_capacity(16 + json.len() + field.data.len() * 2 + 4);
-    bytes.extend_from_slice(SWF_MAGIC);
-    bytes.extend_from_slice(&SWF_VERSION.to_le_bytes());
-    bytes.extend_from_slice(&(json.len() as u32).to_le_bytes());
-    bytes.extend_from_slice(&json);
-    for (i, v) in field.data.iter().enumerate() {
-        let c = (i / n) % 3;
-        let x = ((*v as f64 - offset[c]) / scale[c]).clamp(-32767.0, 32767.0);
-        // Round half away from zero without a libm call (`as` truncates toward zero).
-        let q = (x + 0.5f64.copysign(x)) as i16;
-        bytes.extend_from_slice(&q.to_le_bytes());
+    // Streamed in blocks through a temporary file: peak memory one block, and the previous
+    // file stays whole until the new one is complete.
+    let io = |e| WindError::io(path, e);
+    let mut f = atomic::AtomicFile::create(path).map_err(io)?;
+    let mut crc = crc32fast::Hasher::new();
+    let mut head = Vec::with_capacity(16 + json.len());
+    head.extend_from_slice(SWF_MAGIC);
+    head.extend_from_slice(&SWF_VERSION.to_le_bytes());
+    head.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    head.extend_from_slice(&json);
+    crc.update(&head);
+    f.write_all(&head).map_err(io)?;
+    let mut block = Vec::with_capacity(2 << 16);
+    for (k, chunk) in field.data.chunks(1 << 16).enumerate() {
+        block.clear();
+        for (i, v) in chunk.iter().enumerate() {
+            let c = ((k << 16) + i) / n % 3;
+            let x = ((*v as f64 - offset[c]) / scale[c]).clamp(-32767.0, 32767.0);
+            // Round half away from zero without a libm call (`as` truncates toward zero).
+            let q = (x + 0.5f64.copysign(x)) as i16;
+            block.extend_from_slice(&q.to_le_bytes());
+        }
+        crc.update(&block);
+        f.write_all(&block).map_err(io)?;
     }
-    let crc = crc32fast::hash(&bytes);
-    bytes.extend_from_slice(&crc.to_le_bytes());
-    let mut f = std::fs::File::create(path).map_err(|e| WindError::io(path, e))?;
-    f.write_all(&bytes).map_err(|e| WindError::io(path, e))
+    f.write_all(&crc.finalize().to_le_bytes()).map_err(io)?;
+    f.commit().map_err(io)
 }
 
 fn u32_at(bytes: &[u8], at: usize) -> u32 {

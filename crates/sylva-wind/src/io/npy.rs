@@ -86,9 +86,9 @@ pub fn write_npy(field: &WindField, path: &Path) -> Result<(), WindError> {
         dict.push(' ');
     }
     dict.push('\n');
-    // Streamed in blocks: the peak memory is the field plus one block, not a second copy.
-    let file = std::fs::File::create(path).map_err(|e| WindError::io(path, e))?;
-    let mut w = std::io::BufWriter::with_capacity(1 << 20, file);
+    // Streamed in blocks through a temporary file: the peak memory is the field plus one
+    // block, not a second copy, and the previous file stays whole until this one is.
+    let mut w = super::atomic::AtomicFile::create(path).map_err(|e| WindError::io(path, e))?;
     let mut crc = crc32fast::Hasher::new();
     let io = |e| WindError::io(path, e);
     w.write_all(b"\x93NUMPY\x01\x00").map_err(io)?;
@@ -103,7 +103,7 @@ pub fn write_npy(field: &WindField, path: &Path) -> Result<(), WindError> {
         crc.update(&block);
         w.write_all(&block).map_err(io)?;
     }
-    w.flush().map_err(io)?;
+    w.commit().map_err(io)?;
     let data_crc32 = crc.finalize();
     let side = NpySidecar {
         shape,
@@ -129,7 +129,9 @@ pub fn write_npy(field: &WindField, path: &Path) -> Result<(), WindError> {
     };
     let sp = sidecar_path(path);
     let json = serde_json::to_string_pretty(&side).map_err(|e| WindError::Export(e.to_string()))?;
-    std::fs::write(&sp, json).map_err(|e| WindError::io(&sp, e))
+    // Written after the array: an interruption between the two leaves the previous sidecar,
+    // whose checksum then refuses the new array instead of misreading it.
+    super::atomic::write_atomic(&sp, json.as_bytes()).map_err(|e| WindError::io(&sp, e))
 }
 
 /// Read an `.npy` written by [`write_npy`] together with its sidecar.
