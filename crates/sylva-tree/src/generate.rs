@@ -113,6 +113,8 @@ struct Gen<'a> {
     tree_scale: f32,
     /// Stem levels actually grown: `Levels`, less trailing levels of zero length.
     levels: usize,
+    /// Set when growth passed `MaxJoints`: no further stem grows.
+    overflow: bool,
 }
 
 /// A stem to grow: where, which way, how long and thick.
@@ -137,8 +139,32 @@ struct StemSeed {
 }
 
 impl Species {
-    /// Generate the tree of this species for `seed`.
+    /// An upper bound on the joints a tree of this species grows without splits: every level
+    /// carries at most nBranches children per parent stem, each of nCurveRes segments.
+    pub fn joint_bound(&self) -> u64 {
+        let levels = self.levels.clamp(1, 4) as usize;
+        let (mut stems, mut joints) = (1.0f64, 0.0f64);
+        for n in 0..levels {
+            if n > 0 {
+                stems *= self.level[n].branches.max(0.0) as f64;
+            }
+            joints += stems * self.level[n].curve_res.max(1) as f64;
+        }
+        joints.min(u64::MAX as f64) as u64
+    }
+
+    /// Generate the tree of this species for `seed`. Refused, before anything grows, when
+    /// [`Species::joint_bound`] exceeds `MaxJoints`, and stopped when growth passes it (splits
+    /// can multiply stems beyond the bound).
     pub fn generate(&self, seed: u64) -> Result<Tree, SkeletonError> {
+        let bound = self.joint_bound();
+        if bound > self.max_joints as u64 {
+            return Err(SkeletonError::TooManyJoints {
+                joints: bound,
+                max: self.max_joints,
+                how: "nBranches and nCurveRes allow up to this many",
+            });
+        }
         let mut rng = Rng(seed ^ 0x5175_a000_0000_0000);
         let sp = self;
         let tree_scale = bounded_scale(sp.scale, sp.scale_v, rng.sym());
@@ -162,6 +188,7 @@ impl Species {
                 .take_while(|&n| sp.level[n].length + sp.level[n].length_v > 0.0)
                 .count()
                 + 1,
+            overflow: false,
         };
         let seed = StemSeed {
             level: 0,
@@ -177,6 +204,13 @@ impl Species {
             share: 1.0,
         };
         g.stem(seed);
+        if g.overflow {
+            return Err(SkeletonError::TooManyJoints {
+                joints: g.joints.len() as u64,
+                max: sp.max_joints,
+                how: "splits multiplied the stems: growth stopped at the limit",
+            });
+        }
         let height = g.joints.iter().map(|j| j.tip()[2]).fold(0.0, f32::max);
         let stats = TreeStats {
             height,
@@ -258,6 +292,9 @@ impl Gen<'_> {
     }
 
     fn stem(&mut self, s: StemSeed) {
+        if self.overflow {
+            return;
+        }
         let lp = self.sp.level[s.level];
         let res = lp.curve_res.max(1);
         let seg_len = s.length / res as f32;
@@ -347,6 +384,10 @@ impl Gen<'_> {
                 * LEAF_SHAPE_AREA;
             self.leaves += leaf_here;
             self.leaf_area += area;
+            if self.joints.len() >= self.sp.max_joints as usize {
+                self.overflow = true;
+                return;
+            }
             self.joints.push(Joint {
                 parent,
                 origin: pos,

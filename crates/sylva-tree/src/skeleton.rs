@@ -83,6 +83,19 @@ pub enum SkeletonError {
         /// Its parent.
         parent: u32,
     },
+    /// The species would grow more joints than its `MaxJoints` guard allows.
+    #[error(
+        "this species would grow {joints} joints ({how}), over MaxJoints = {max}: lower the \
+         nBranches, nCurveRes or nSegSplits, or raise MaxJoints in the species file"
+    )]
+    TooManyJoints {
+        /// Joints estimated or grown when the guard stopped it.
+        joints: u64,
+        /// The species' `MaxJoints`.
+        max: u32,
+        /// How the figure was found.
+        how: &'static str,
+    },
     /// A joint has a non-finite or out-of-range value.
     #[error("joint {joint}: {field} = {value} is invalid ({expected})")]
     Value {

@@ -73,6 +73,10 @@ pub struct Species {
     pub ratio_power: f32,
     /// Lobes: sinusoidal lobes of the trunk cross-section.
     pub lobes: u32,
+    /// MaxJoints (Sylva): the most joints a tree of this species may grow; generation is
+    /// refused beyond it (before growing when the branch counts already exceed it). A guard
+    /// against branch counts that would take the machine's memory, raised deliberately.
+    pub max_joints: u32,
     /// LobeDepth: their depth relative to the radius.
     pub lobe_depth: f32,
     /// Flare: widening of the trunk base, relative.
@@ -191,6 +195,16 @@ pub const PARAMS: &[ParamDoc] = &[
     g("ZScale", "", 0.0, 10.0, false, 1.0, "vertical scaling"),
     g("ZScaleV", "", 0.0, 10.0, false, 0.0, "variation of ZScale"),
     g("Levels", "", 1.0, 4.0, true, 3.0, "recursion depth: trunk, branches, sub-branches, twigs"),
+    g(
+        "MaxJoints",
+        "joints",
+        1000.0,
+        16_000_000.0,
+        true,
+        1_000_000.0,
+        "guard: the most joints a tree may grow (about 1 kB of memory each with its mesh); \
+         the weeping willow grows 80 000",
+    ),
     g("Ratio", "", 0.001, 0.5, false, 0.015, "trunk base radius divided by tree length"),
     g(
         "RatioPower",
@@ -444,6 +458,7 @@ impl Species {
             ratio: 0.0,
             ratio_power: 0.0,
             lobes: 0,
+            max_joints: 0,
             lobe_depth: 0.0,
             flare: 0.0,
             scale0: 0.0,
@@ -509,6 +524,7 @@ impl Species {
             "Ratio" => F(&mut self.ratio),
             "RatioPower" => F(&mut self.ratio_power),
             "Lobes" => U(&mut self.lobes),
+            "MaxJoints" => U(&mut self.max_joints),
             "LobeDepth" => F(&mut self.lobe_depth),
             "Flare" => F(&mut self.flare),
             "0Scale" => F(&mut self.scale0),

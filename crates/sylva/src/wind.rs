@@ -244,6 +244,10 @@ pub struct GenerateArgs {
     /// For .bts: which x column of the grid becomes the y–z plane.
     #[arg(long, default_value_t = 0)]
     bts_x_index: usize,
+    /// Memory the synthesis may use, GB (default: three quarters of what the machine has
+    /// free). A larger figure is taken as given: the field is refused only above it.
+    #[arg(long, value_parser = crate::finite::<f64>)]
+    max_memory: Option<f64>,
 }
 
 #[derive(Debug, Args)]
@@ -297,7 +301,10 @@ pub fn run(cmd: WindCommand) -> anyhow::Result<()> {
             if format == FormatArg::Bts {
                 io::check_bts(&grid, a.bts_x_index)?;
             }
-            preflight(&params, &grid, synth)?;
+            if let Some(gb) = a.max_memory.filter(|&g| g <= 0.0) {
+                bail!("--max-memory {gb}: a memory budget must be a positive number of GB");
+            }
+            preflight(&params, &grid, synth, a.max_memory.map(|gb| gb * 1e9))?;
             let field = generate(&params, &grid, synth)?;
             write(&field, &a.out, format, a.bts_x_index)?;
             println!("wrote {}", a.out.display());
@@ -373,23 +380,35 @@ pub fn demo(a: DemoArgs) -> anyhow::Result<()> {
 /// Checks before a synthesis starts: the method fits the model and grid, the memory it needs
 /// is there, the dense method's cost is stated, and heights under the log law's floor are
 /// named.
-fn preflight(params: &WindParams, grid: &Grid, synth: SynthParams) -> anyhow::Result<()> {
+fn preflight(
+    params: &WindParams,
+    grid: &Grid,
+    synth: SynthParams,
+    max_bytes: Option<f64>,
+) -> anyhow::Result<()> {
     sylva_wind::synth::check_config(params, grid, synth)?;
     let need = memory_estimate(grid, synth.method);
-    if let Some(avail) = available_memory() {
-        // A quarter of what is free stays free for the writer and the rest of the machine.
-        if need > 0.75 * avail {
-            bail!(
-                "this field needs about {:.1} GB ({} points × 3 components × {} frames, method \
-                 {}), more than three quarters of the {:.1} GB this machine has free; reduce \
-                 --frames, --nx/--ny or --heights",
-                need / 1e9,
-                grid.points(),
-                grid.frames,
-                synth.method.name(),
-                avail / 1e9
-            );
-        }
+    // A quarter of what is free stays free for the writer and the rest of the machine,
+    // unless the user set the budget.
+    let budget = match max_bytes {
+        Some(b) => Some((b, "the --max-memory budget".to_string())),
+        None => available_memory().map(|a| {
+            (0.75 * a, format!("three quarters of the {:.1} GB this machine has free", a / 1e9))
+        }),
+    };
+    if let Some((limit, what)) = budget
+        && need > limit
+    {
+        bail!(
+            "this field needs about {:.2} GB ({} points × 3 components × {} frames, method {}), \
+             more than {what} ({:.2} GB); reduce --frames, --nx/--ny or --heights, or set \
+             --max-memory",
+            need / 1e9,
+            grid.points(),
+            grid.frames,
+            synth.method.name(),
+            limit / 1e9
+        );
     }
     if synth.method == Method::Cholesky {
         let est = cholesky_estimate(grid);

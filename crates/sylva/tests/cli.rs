@@ -225,3 +225,31 @@ fn nan_and_infinity_are_refused_by_float_flags_naming_the_flag() {
     }
     assert!(!out.exists(), "no file is written");
 }
+
+#[test]
+fn resource_guards_refuse_before_work_with_what_to_change() {
+    // Branch counts inside their ranges that would grow 2.4·10¹⁰ joints.
+    let sp = temp("exploding.toml");
+    std::fs::write(&sp, "Levels = 4\n1Branches = 2000\n2Branches = 2000\n3Branches = 2000\n")
+        .expect("write species");
+    let t0 = std::time::Instant::now();
+    let (ok, text) = sylva(&["tree", "stats", "--species", sp.to_str().expect("utf-8")]);
+    assert!(!ok && text.contains("MaxJoints") && text.contains("nBranches"), "{text}");
+    assert!(t0.elapsed().as_secs_f64() < 5.0, "took {:?}", t0.elapsed());
+    // A wind field over a memory budget the user set.
+    let out = temp("budget.swf");
+    let (ok, text) = sylva(&[
+        "wind",
+        "generate",
+        "--nx",
+        "64",
+        "--ny",
+        "64",
+        "--max-memory",
+        "0.01",
+        "--out",
+        out.to_str().expect("utf-8"),
+    ]);
+    assert!(!ok && text.contains("--max-memory budget") && text.contains("0.12 GB"), "{text}");
+    assert!(!out.exists());
+}
