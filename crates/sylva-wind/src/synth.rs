@@ -410,7 +410,7 @@ struct OutLayout {
 
 /// Columns of records gathered before they are written out frame-major: 32 f32 make a
 /// 128-byte run of a frame row per write burst.
-const EMIT_COLUMNS: usize = 32;
+pub const EMIT_COLUMNS: usize = 32;
 
 /// Turns columns of coefficients into records and writes them frame-major.
 ///
@@ -421,7 +421,7 @@ const EMIT_COLUMNS: usize = 32;
 struct Emitter<'a, T> {
     grid: &'a Grid,
     layout: &'a OutLayout,
-    out: OutPtr<T>,
+    out: Sink<'a, T>,
     c2r: std::sync::Arc<dyn realfft::ComplexToReal<T>>,
     /// Records staged as (column in batch, point p = iz·ny + iy, frame).
     rec: Vec<T>,
@@ -430,14 +430,24 @@ struct Emitter<'a, T> {
     staged: usize,
 }
 
+/// Where emitted records go: a frame-major buffer, or a callback that takes each block of
+/// staged columns as it is ready (streaming).
+enum Sink<'a, T> {
+    Buffer(OutPtr<T>),
+    Stream(&'a mut StreamFn<'a, T>),
+}
+
+/// Receives (first column x0, columns, records laid out (column, point p = iz·ny + iy, frame)).
+type StreamFn<'a, T> = dyn FnMut(usize, usize, &[T]) -> Result<(), WindError> + 'a;
+
 impl<'a, T: Sample> Emitter<'a, T> {
-    fn new(grid: &'a Grid, layout: &'a OutLayout, out: &mut [T]) -> Self {
+    fn new(grid: &'a Grid, layout: &'a OutLayout, out: Sink<'a, T>) -> Self {
         let np = grid.nz() * grid.ny();
         let c2r = RealFftPlanner::<T>::new().plan_fft_inverse(grid.frames);
         Emitter {
             grid,
             layout,
-            out: OutPtr(out.as_mut_ptr(), out.len()),
+            out,
             c2r,
             rec: vec![T::default(); EMIT_COLUMNS.min(grid.nx()) * np * grid.frames],
             x0: 0,
@@ -448,7 +458,7 @@ impl<'a, T: Sample> Emitter<'a, T> {
     /// Emit column `ix`: coefficients `col` (point-major, nc lines each) times the factor
     /// `scale[iz·nc + j]` of the point's height (√Δω·√S0 and the column's advection), then
     /// one inverse FFT per point.
-    fn push(&mut self, ix: usize, col: &[C64], scale: &[C64]) {
+    fn push(&mut self, ix: usize, col: &[C64], scale: &[C64]) -> Result<(), WindError> {
         let (ny, m) = (self.grid.ny(), self.grid.frames);
         let nc = m / 2 + 1;
         let np = self.grid.nz() * ny;
@@ -477,16 +487,23 @@ impl<'a, T: Sample> Emitter<'a, T> {
         }
         self.staged += 1;
         if self.staged == EMIT_COLUMNS || ix + 1 == self.grid.nx() {
-            self.flush();
+            self.flush()?;
         }
+        Ok(())
     }
 
-    /// Write the staged columns frame-major, one task per point row, in tiles of frames.
-    fn flush(&mut self) {
+    /// Write the staged columns frame-major, one task per point row, in tiles of frames (or
+    /// hand them to the stream).
+    fn flush(&mut self) -> Result<(), WindError> {
         const TILE: usize = 64;
         let (nx, m) = (self.grid.nx(), self.grid.frames);
         let np = self.grid.nz() * self.grid.ny();
-        let (bw, x0, rec, out, layout) = (self.staged, self.x0, &self.rec, &self.out, self.layout);
+        let (bw, x0, rec, layout) = (self.staged, self.x0, &self.rec, self.layout);
+        self.staged = 0;
+        let out = match &mut self.out {
+            Sink::Buffer(out) => &*out,
+            Sink::Stream(f) => return f(x0, bw, &rec[..bw * np * m]),
+        };
         (0..np).into_par_iter().for_each(|p| {
             let base = layout.offset + p * nx + x0;
             for t0 in (0..m).step_by(TILE) {
@@ -501,20 +518,20 @@ impl<'a, T: Sample> Emitter<'a, T> {
                 }
             }
         });
-        self.staged = 0;
+        Ok(())
     }
 }
 
 /// Synthesise the fluctuations of one component into `out` (frame-major, layout described
 /// by `layout`), calling `progress` with the fraction of this component done. Returns the
 /// bound on the coherence error (0 for an exact synthesis; see `synth/embed.rs`).
-fn synth_component<T: Sample>(
+fn synth_component<'a, T: Sample>(
     params: &WindParams,
-    grid: &Grid,
+    grid: &'a Grid,
     synth: SynthParams,
     comp: Component,
-    out: &mut [T],
-    layout: &OutLayout,
+    out: Sink<'a, T>,
+    layout: &'a OutLayout,
     progress: &(dyn Fn(f64) + Sync),
 ) -> Result<f64, WindError> {
     let lines = Lines::new(params, grid, comp, synth.seed);
@@ -592,7 +609,7 @@ fn synth_component<T: Sample>(
                         }
                     }
                 });
-                emitter.push(ix, &col, &fac);
+                emitter.push(ix, &col, &fac)?;
                 progress((ix + 1) as f64 / nx as f64);
             }
         }
@@ -644,7 +661,7 @@ fn synth_component<T: Sample>(
             let mut fac = vec![C64::default(); nz * nc];
             for (ix, col) in block.chunks(col_len).enumerate() {
                 lines.column_factors(params.advection, grid.xs[ix], false, &mut fac);
-                emitter.push(ix, col, &fac);
+                emitter.push(ix, col, &fac)?;
             }
         }
         Method::Embedding => {
@@ -696,7 +713,7 @@ fn synth_component<T: Sample>(
             let mut fac = vec![C64::default(); nz * nc];
             for (ix, col) in block.chunks(col_len).enumerate() {
                 lines.column_factors(params.advection, grid.xs[ix], true, &mut fac);
-                emitter.push(ix, col, &fac);
+                emitter.push(ix, col, &fac)?;
             }
         }
     }
@@ -822,7 +839,8 @@ pub fn synthesize_component_f64(
     let n = grid.points();
     let mut out = vec![0.0f64; n * grid.frames];
     let layout = OutLayout { frame_stride: n, offset: 0, add: vec![0.0; grid.nz()] };
-    synth_component(params, grid, synth, comp, &mut out, &layout, &|_| {})?;
+    let sink = Sink::Buffer(OutPtr(out.as_mut_ptr(), out.len()));
+    synth_component(params, grid, synth, comp, sink, &layout, &|_| {})?;
     Ok(out)
 }
 
@@ -847,11 +865,60 @@ pub(crate) fn synthesize_into(
             .collect();
         let layout = OutLayout { frame_stride: 3 * n, offset: comp.index() * n, add };
         let c = comp.index() as f64;
-        let e =
-            synth_component(params, grid, synth, comp, out, &layout, &|f| progress((c + f) / 3.0))?;
+        let sink = Sink::Buffer(OutPtr(out.as_mut_ptr(), out.len()));
+        let e = synth_component(params, grid, synth, comp, sink, &layout, &|f| {
+            progress((c + f) / 3.0)
+        })?;
         worst = worst.max(e);
     }
     Ok(worst)
+}
+
+/// Peak working memory of [`synthesize_streaming`], bytes: the staged block of
+/// [`EMIT_COLUMNS`] columns of f32 records, two coefficient columns and the per-line factors
+/// — independent of nx, so of the output's size.
+pub fn streaming_memory_estimate(grid: &Grid) -> f64 {
+    let column = (grid.nz() * grid.ny()) as f64;
+    let nc = (grid.frames / 2 + 1) as f64;
+    let cols = EMIT_COLUMNS.min(grid.nx()) as f64;
+    4.0 * cols * column * grid.frames as f64 + 2.0 * 16.0 * column * nc + 64.0 * column * nc
+}
+
+/// Synthesise all three components without holding the field: every block of up to
+/// [`EMIT_COLUMNS`] x-columns of one component is handed to `emit` as soon as it is ready,
+/// as (component, first column x0, columns, records laid out (column, point p = iz·ny + iy,
+/// frame)) holding full velocities (Ū(z) added to `u`). Components come in the order u, v,
+/// w, columns in increasing x. Working memory is [`streaming_memory_estimate`], whatever nx.
+/// The separable method only (the others need every point's coefficients at once).
+pub fn synthesize_streaming(
+    params: &WindParams,
+    grid: &Grid,
+    synth: SynthParams,
+    emit: &mut dyn FnMut(Component, usize, usize, &[f32]) -> Result<(), WindError>,
+    progress: &(dyn Fn(f64) + Sync),
+) -> Result<(), WindError> {
+    check_config(params, grid, synth)?;
+    if synth.method != Method::Separable {
+        return Err(WindError::Unsupported(format!(
+            "streaming to disk needs the separable method (one coherence speed, or one height); \
+             the {} method holds every point's coefficients at once",
+            synth.method.name()
+        )));
+    }
+    for comp in Component::ALL {
+        let add = grid
+            .zs
+            .iter()
+            .map(|&z| if comp == Component::U { params.mean_speed(z) } else { 0.0 })
+            .collect();
+        let layout = OutLayout { frame_stride: 0, offset: 0, add };
+        let c = comp.index() as f64;
+        let mut each = |x0: usize, cols: usize, rec: &[f32]| emit(comp, x0, cols, rec);
+        synth_component(params, grid, synth, comp, Sink::Stream(&mut each), &layout, &|f| {
+            progress((c + f) / 3.0)
+        })?;
+    }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -84,6 +84,9 @@ pub enum FormatArg {
     Npy,
     /// TurbSim binary full-field (one y–z plane over time).
     Bts,
+    /// Zarr v3 store (a folder), streamed: fields larger than memory; chunks of 32
+    /// x-columns, read directly by xarray and zarr-python. Separable method only.
+    Zarr,
 }
 
 /// Wind model flags shared by `generate` and `demo`.
@@ -235,7 +238,7 @@ pub struct GenerateArgs {
     model: ModelArgs,
     #[command(flatten)]
     grid: GridArgs,
-    /// Output file (.swf, .npy or .bts).
+    /// Output file (.swf, .npy or .bts) or Zarr store (.zarr, streamed).
     #[arg(long, short, default_value = "out/wind.swf")]
     out: PathBuf,
     /// File format (default: from the extension of --out).
@@ -252,7 +255,7 @@ pub struct GenerateArgs {
 
 #[derive(Debug, Args)]
 pub struct StatsArgs {
-    /// Field files (.swf, or .npy with its .json sidecar). Several files of one grid and
+    /// Field files (.swf, .npy with its .json sidecar, or a .zarr store). Several files of one grid and
     /// model (different seeds) are pooled: the estimates average over them and their
     /// expected scatter shrinks accordingly.
     #[arg(required = true)]
@@ -304,9 +307,23 @@ pub fn run(cmd: WindCommand) -> anyhow::Result<()> {
             if let Some(gb) = a.max_memory.filter(|&g| g <= 0.0) {
                 bail!("--max-memory {gb}: a memory budget must be a positive number of GB");
             }
-            preflight(&params, &grid, synth, a.max_memory.map(|gb| gb * 1e9))?;
-            let field = generate(&params, &grid, synth)?;
-            write(&field, &a.out, format, a.bts_x_index)?;
+            let streaming = format == FormatArg::Zarr;
+            if streaming && synth.method != Method::Separable {
+                bail!(
+                    "--out {}: streaming to Zarr needs the separable method, and this model on \
+                     this grid needs {}; add --coherence-speed reference (or use one height), \
+                     or write .swf/.npy in memory",
+                    a.out.display(),
+                    synth.method.name()
+                );
+            }
+            preflight(&params, &grid, synth, a.max_memory.map(|gb| gb * 1e9), streaming)?;
+            if streaming {
+                generate_zarr(&params, &grid, synth, &a.out)?;
+            } else {
+                let field = generate(&params, &grid, synth)?;
+                write(&field, &a.out, format, a.bts_x_index)?;
+            }
             println!("wrote {}", a.out.display());
             Ok(())
         }
@@ -385,9 +402,14 @@ fn preflight(
     grid: &Grid,
     synth: SynthParams,
     max_bytes: Option<f64>,
+    streaming: bool,
 ) -> anyhow::Result<()> {
     sylva_wind::synth::check_config(params, grid, synth)?;
-    let need = memory_estimate(grid, synth.method);
+    let need = if streaming {
+        sylva_wind::synth::streaming_memory_estimate(grid)
+    } else {
+        memory_estimate(grid, synth.method)
+    };
     // A quarter of what is free stays free for the writer and the rest of the machine,
     // unless the user set the budget.
     let budget = match max_bytes {
@@ -445,8 +467,9 @@ fn format_of(path: &Path) -> anyhow::Result<FormatArg> {
         Some("swf") => Ok(FormatArg::Swf),
         Some("npy") => Ok(FormatArg::Npy),
         Some("bts") => Ok(FormatArg::Bts),
+        Some("zarr") => Ok(FormatArg::Zarr),
         _ => bail!(
-            "cannot tell the format of {}: use .swf, .npy or .bts, or --format",
+            "cannot tell the format of {}: use .swf, .npy, .bts or .zarr, or --format",
             path.display()
         ),
     }
@@ -473,6 +496,44 @@ fn generate(params: &WindParams, grid: &Grid, synth: SynthParams) -> anyhow::Res
     Ok(field)
 }
 
+/// Synthesise straight into a Zarr store, never holding the field; reports the time and the
+/// peak resident memory.
+fn generate_zarr(
+    params: &WindParams,
+    grid: &Grid,
+    synth: SynthParams,
+    out: &Path,
+) -> anyhow::Result<()> {
+    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    let bar = ProgressBar::new(1000);
+    bar.set_style(
+        ProgressStyle::with_template("synthesising {bar:40} {percent:>3}% {elapsed_precise}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let t0 = Instant::now();
+    io::write_zarr_streaming(params, grid, synth, out, &|f| bar.set_position((f * 1000.0) as u64))?;
+    bar.finish_and_clear();
+    let output = (grid.points() * 3 * grid.frames * 4) as f64;
+    println!(
+        "streamed {} points × 3 components × {} frames ({:.2} GB) in {:.1} s; peak resident {}",
+        grid.points(),
+        grid.frames,
+        output / 1e9,
+        t0.elapsed().as_secs_f64(),
+        peak_resident().map_or("unknown".into(), |b| format!("{:.2} GB", b / 1e9))
+    );
+    Ok(())
+}
+
+/// Peak resident memory of this process (VmHWM), bytes.
+fn peak_resident() -> Option<f64> {
+    let s = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = s.lines().find(|l| l.starts_with("VmHWM:"))?;
+    Some(line.split_whitespace().nth(1)?.parse::<f64>().ok()? * 1024.0)
+}
+
 fn write(field: &WindField, path: &Path, format: FormatArg, x_index: usize) -> anyhow::Result<()> {
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
@@ -481,6 +542,7 @@ fn write(field: &WindField, path: &Path, format: FormatArg, x_index: usize) -> a
         FormatArg::Swf => io::write_swf(field, path)?,
         FormatArg::Npy => io::write_npy(field, path)?,
         FormatArg::Bts => io::write_bts(field, x_index, path)?,
+        FormatArg::Zarr => bail!("Zarr stores are written while synthesising (streamed)"),
     }
     Ok(())
 }
@@ -488,6 +550,7 @@ fn write(field: &WindField, path: &Path, format: FormatArg, x_index: usize) -> a
 fn read(path: &Path) -> anyhow::Result<WindField> {
     let field = match path.extension().and_then(|e| e.to_str()) {
         Some("npy") => io::read_npy(path),
+        Some("zarr") => io::read_zarr(path),
         _ => io::read_swf(path),
     };
     field.with_context(|| format!("reading {}", path.display()))

@@ -20,9 +20,11 @@
 pub mod atomic;
 mod bts;
 mod npy;
+pub mod zarr;
 
 pub use bts::{check_bts, write_bts};
 pub use npy::{read_npy, write_npy};
+pub use zarr::{read_zarr, write_zarr_streaming};
 
 use std::io::Write;
 use std::path::Path;

@@ -1,0 +1,65 @@
+//! A field larger than the memory it may use: streamed to a Zarr store, the synthesis keeps
+//! one block of columns in memory whatever the field's size. Heap use is measured with a
+//! tracking allocator.
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use sylva_wind::io::write_zarr_streaming;
+use sylva_wind::synth::streaming_memory_estimate;
+use sylva_wind::{Grid, Method, SynthParams, WindParams};
+
+struct Tracking;
+static LIVE: AtomicUsize = AtomicUsize::new(0);
+static PEAK: AtomicUsize = AtomicUsize::new(0);
+
+// SAFETY: forwards to the system allocator, only keeping count of live bytes.
+unsafe impl GlobalAlloc for Tracking {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        let live = LIVE.fetch_add(layout.size(), Ordering::Relaxed) + layout.size();
+        PEAK.fetch_max(live, Ordering::Relaxed);
+        // SAFETY: same contract as the caller's.
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        LIVE.fetch_sub(layout.size(), Ordering::Relaxed);
+        // SAFETY: same contract as the caller's.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Tracking = Tracking;
+
+#[test]
+fn a_field_four_times_the_memory_budget_streams_within_it() {
+    let budget = 40usize << 20;
+    // 512 × 32 points × 3 components × 1024 frames of f32: 201 MB, 4.8× the budget.
+    let grid = Grid::regular(512, 32, 4.0, &[20.0], 1024, 0.1);
+    let output = grid.points() * 3 * grid.frames * 4;
+    assert!(output > 4 * budget);
+    assert!(streaming_memory_estimate(&grid) < budget as f64);
+    let dir = std::env::temp_dir().join(format!("sylva-stream-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let store = dir.join("big.zarr");
+    let before = LIVE.load(Ordering::Relaxed);
+    PEAK.store(before, Ordering::Relaxed);
+    let sp = SynthParams { seed: 4, method: Method::Separable };
+    write_zarr_streaming(&WindParams::default(), &grid, sp, &store, &|_| {}).expect("stream");
+    let peak = PEAK.load(Ordering::Relaxed) - before;
+    let written: u64 = walk(&store);
+    let _ = std::fs::remove_dir_all(&dir);
+    assert!(written >= output as u64, "wrote {written} bytes of {output}");
+    assert!(peak < budget, "peak heap {peak} bytes over the {budget}-byte budget");
+}
+
+fn walk(p: &std::path::Path) -> u64 {
+    std::fs::read_dir(p)
+        .expect("list")
+        .flatten()
+        .map(|e| {
+            let q = e.path();
+            if q.is_dir() { walk(&q) } else { e.metadata().map(|m| m.len()).unwrap_or(0) }
+        })
+        .sum()
+}
