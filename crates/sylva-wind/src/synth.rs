@@ -874,6 +874,10 @@ pub(crate) fn synthesize_into(
     Ok(worst)
 }
 
+/// Receives each finished block of [`synthesize_streaming`]: (component, first column x0,
+/// columns, records laid out (column, point p = iz·ny + iy, frame)).
+pub type ColumnSink<'a> = dyn FnMut(Component, usize, usize, &[f32]) -> Result<(), WindError> + 'a;
+
 /// Peak working memory of [`synthesize_streaming`], bytes: the staged block of
 /// [`EMIT_COLUMNS`] columns of f32 records, two coefficient columns and the per-line factors
 /// — independent of nx, so of the output's size.
@@ -894,7 +898,7 @@ pub fn synthesize_streaming(
     params: &WindParams,
     grid: &Grid,
     synth: SynthParams,
-    emit: &mut dyn FnMut(Component, usize, usize, &[f32]) -> Result<(), WindError>,
+    emit: &mut ColumnSink<'_>,
     progress: &(dyn Fn(f64) + Sync),
 ) -> Result<(), WindError> {
     check_config(params, grid, synth)?;
