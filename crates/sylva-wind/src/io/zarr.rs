@@ -97,18 +97,26 @@ pub fn write_zarr_streaming(
     // (frame, z·y, 32 columns), through a small buffer of frames.
     const TILE: usize = 16;
     let mut buf: Vec<u8> = Vec::with_capacity(TILE * np * EMIT_COLUMNS * 4);
+    let mut tile: Vec<f32> = Vec::with_capacity(TILE * np * EMIT_COLUMNS);
     let mut emit = |comp: Component, x0: usize, cols: usize, rec: &[f32]| {
         let path = tmp.join(chunk_key(comp.index(), x0 / EMIT_COLUMNS));
         let mut f = AtomicFile::create(&path).map_err(|e| WindError::io(&path, e))?;
         for t0 in (0..m).step_by(TILE) {
-            buf.clear();
-            for t in t0..(t0 + TILE).min(m) {
+            let tn = (t0 + TILE).min(m) - t0;
+            // Read each record's run of `tn` frames (contiguous), scatter into the tile.
+            tile.clear();
+            tile.resize(tn * np * EMIT_COLUMNS, 0.0);
+            for b in 0..cols {
                 for p in 0..np {
-                    for b in 0..EMIT_COLUMNS {
-                        let v = if b < cols { rec[(b * np + p) * m + t] } else { 0.0 };
-                        buf.extend_from_slice(&v.to_le_bytes());
+                    let run = &rec[(b * np + p) * m + t0..(b * np + p) * m + t0 + tn];
+                    for (dt, v) in run.iter().enumerate() {
+                        tile[(dt * np + p) * EMIT_COLUMNS + b] = *v;
                     }
                 }
+            }
+            buf.clear();
+            for v in &tile {
+                buf.extend_from_slice(&v.to_le_bytes());
             }
             f.write_all(&buf).map_err(|e| WindError::io(&path, e))?;
         }
