@@ -207,3 +207,43 @@ fn any_species_inside_the_ranges_grows_a_valid_tree_or_is_refused() {
     }
     assert!(grown > 0 && refused > 0, "grown {grown}, refused {refused}: both outcomes occur");
 }
+
+#[test]
+fn any_wind_parameters_inside_the_ranges_give_finite_fields() {
+    use sylva_wind::{
+        CoherenceSpeed, Grid, Method, Profile, SpectrumModel, SynthParams, WindField,
+    };
+    let mut rng = Rng(91);
+    let mut pick = |lo: f64, hi: f64| lo + rng.unit() * (hi - lo);
+    for i in 0..(iterations() / 30).max(10) {
+        let mut p = sylva_wind::WindParams::default();
+        p.u_star = pick(1e-3, 20.0);
+        p.profile = if pick(0.0, 1.0) < 0.5 {
+            Profile::Log { z0: pick(1e-3, 10.0), d: pick(0.0, 100.0) }
+        } else {
+            Profile::Power {
+                u_ref: pick(1e-3, 100.0),
+                z_ref: pick(0.1, 200.0),
+                alpha: pick(0.0, 1.0),
+            }
+        };
+        p.spectrum = [SpectrumModel::Paper, SpectrumModel::Kaimal, SpectrumModel::VonKarman]
+            [(pick(0.0, 3.0) as usize).min(2)];
+        for c in &mut p.coherence {
+            (c.cx, c.cy, c.cz) = (pick(0.0, 30.0), pick(0.0, 30.0), pick(0.0, 30.0));
+        }
+        p.coherence_speed =
+            if pick(0.0, 1.0) < 0.5 { CoherenceSpeed::Reference } else { CoherenceSpeed::PairMean };
+        p.direction_deg = pick(-720.0, 720.0);
+        p.advection = pick(0.0, 1.0) < 0.5;
+        p.validate().expect("drawn inside the ranges");
+        let z0 = pick(1.0, 80.0);
+        let grid =
+            Grid::regular(6, 5, pick(0.1, 50.0), &[z0, z0 + pick(0.5, 30.0)], 64, pick(0.01, 1.0));
+        let sp = SynthParams { seed: i as u64, method: Method::fastest(&p, &grid) };
+        let f = WindField::generate(&p, &grid, sp, &|_| {})
+            .unwrap_or_else(|e| panic!("draw {i}: {e}\n{p:?}"));
+        assert!(f.data.iter().all(|v| v.is_finite()), "draw {i}: non-finite sample\n{p:?}");
+        assert!(f.coherence_error.is_finite());
+    }
+}

@@ -144,6 +144,7 @@ pub fn read_npy(path: &Path) -> Result<WindField, WindError> {
         reason: format!("{}: line {}: {e}", sp.display(), e.line()),
     })?;
     side.grid.validate().map_err(|e| WindError::format(0, format!("{}: {e}", sp.display())))?;
+    side.params.validate().map_err(|e| WindError::format(0, format!("{}: {e}", sp.display())))?;
     if bytes.len() < 10 || &bytes[..6] != b"\x93NUMPY" {
         return Err(WindError::format(0, "not a .npy file (bad magic)"));
     }

@@ -226,6 +226,7 @@ pub fn read_zarr(dir: &Path) -> Result<WindField, WindError> {
     let attrs: ZarrAttributes = serde_json::from_value(group["attributes"]["sylva"].clone())
         .map_err(|e| bad(format!("the group's attributes.sylva: {e}")))?;
     attrs.grid.validate().map_err(|e| bad(e.to_string()))?;
+    attrs.params.validate().map_err(|e| bad(e.to_string()))?;
     let g = &attrs.grid;
     let (nz, ny, nx, m) = (g.nz(), g.ny(), g.nx(), g.frames);
     let want_shape = serde_json::json!([m, 3, nz, ny, nx]);
