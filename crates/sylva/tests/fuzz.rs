@@ -216,9 +216,8 @@ fn any_wind_parameters_inside_the_ranges_give_finite_fields() {
     let mut rng = Rng(91);
     let mut pick = |lo: f64, hi: f64| lo + rng.unit() * (hi - lo);
     for i in 0..(iterations() / 30).max(10) {
-        let mut p = sylva_wind::WindParams::default();
-        p.u_star = pick(1e-3, 20.0);
-        p.profile = if pick(0.0, 1.0) < 0.5 {
+        let u_star = pick(1e-3, 20.0);
+        let profile = if pick(0.0, 1.0) < 0.5 {
             Profile::Log { z0: pick(1e-3, 10.0), d: pick(0.0, 100.0) }
         } else {
             Profile::Power {
@@ -227,15 +226,24 @@ fn any_wind_parameters_inside_the_ranges_give_finite_fields() {
                 alpha: pick(0.0, 1.0),
             }
         };
-        p.spectrum = [SpectrumModel::Paper, SpectrumModel::Kaimal, SpectrumModel::VonKarman]
+        let spectrum = [SpectrumModel::Paper, SpectrumModel::Kaimal, SpectrumModel::VonKarman]
             [(pick(0.0, 3.0) as usize).min(2)];
-        for c in &mut p.coherence {
+        let mut coherence = sylva_wind::params::PAPER_COHERENCE;
+        for c in &mut coherence {
             (c.cx, c.cy, c.cz) = (pick(0.0, 30.0), pick(0.0, 30.0), pick(0.0, 30.0));
         }
-        p.coherence_speed =
+        let coherence_speed =
             if pick(0.0, 1.0) < 0.5 { CoherenceSpeed::Reference } else { CoherenceSpeed::PairMean };
-        p.direction_deg = pick(-720.0, 720.0);
-        p.advection = pick(0.0, 1.0) < 0.5;
+        let p = sylva_wind::WindParams {
+            u_star,
+            profile,
+            spectrum,
+            coherence,
+            coherence_speed,
+            direction_deg: pick(-720.0, 720.0),
+            advection: pick(0.0, 1.0) < 0.5,
+            ..sylva_wind::WindParams::default()
+        };
         p.validate().expect("drawn inside the ranges");
         let z0 = pick(1.0, 80.0);
         let grid =
