@@ -8,8 +8,8 @@
 //! `SYLVA_FUZZ_ITERS` (default 300) executions per target; set it higher for a long run.
 //!
 //! The property test draws species with every parameter uniform in its documented range:
-//! each must either grow a tree whose skeleton passes validation or be refused by the
-//! `MaxJoints` guard.
+//! each must either grow a tree whose skeleton passes validation (and every fourth one a
+//! model and a well-formed `.glb`) or be refused by the `MaxJoints` guard.
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
@@ -199,6 +199,22 @@ fn any_species_inside_the_ranges_grows_a_valid_tree_or_is_refused() {
                 grown += 1;
                 assert!(tree.skeleton.joints().len() <= 20_000);
                 assert!(tree.stats.height.is_finite() && tree.stats.height > 0.0, "draw {i}");
+                // Every fourth grown tree goes on to its full model and glTF export.
+                if grown % 4 == 1 {
+                    let glb = catch_unwind(AssertUnwindSafe(|| {
+                        let model = sp.model(i as u64, sylva_tree::mesh::LOD_LEVELS)?;
+                        Ok::<_, SkeletonError>(model.to_glb(&Default::default()))
+                    }));
+                    match glb {
+                        Ok(Ok(b)) => {
+                            assert_eq!(&b[..4], b"glTF", "draw {i}");
+                            let len = u32::from_le_bytes([b[8], b[9], b[10], b[11]]) as usize;
+                            assert_eq!(len, b.len(), "draw {i}: GLB length field");
+                        }
+                        Ok(Err(e)) => panic!("draw {i}: model failed: {e}\n{sp}"),
+                        Err(_) => panic!("draw {i}: model or export panicked\n{sp}"),
+                    }
+                }
             }
             Ok(Err(SkeletonError::TooManyJoints { .. })) => refused += 1,
             Ok(Err(e)) => panic!("draw {i}: in-range species failed otherwise: {e}\n{sp}"),
