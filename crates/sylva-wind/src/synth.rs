@@ -720,9 +720,12 @@ fn synth_component<'a, T: Sample>(
     Ok(coherence_error)
 }
 
-/// In-place lower Cholesky factor of the symmetric matrix whose lower triangle is in `a`
-/// (row-major n×n). Returns the failing row if the matrix is not positive definite.
+/// In-place lower Cholesky factor of a symmetric positive semidefinite matrix (lower
+/// triangle of `a`, row-major n × n), for the dense method and the embedding's blocks. A pivot within 1e-12 of the largest diagonal entry of
+/// zero marks a dependent row: its column is set to zero (the factor of a singular matrix).
+/// A pivot below −1e-9 of it means the matrix is not semidefinite: the row is returned.
 fn cholesky_lower(a: &mut [f64], n: usize) -> Result<(), usize> {
+    let scale = (0..n).map(|i| a[i * n + i]).fold(0.0, f64::max);
     for i in 0..n {
         for j in 0..=i {
             let (ri, rj) = (i * n, j * n);
@@ -731,12 +734,13 @@ fn cholesky_lower(a: &mut [f64], n: usize) -> Result<(), usize> {
                 sum -= a[ri + k] * a[rj + k];
             }
             if i == j {
-                if sum <= 0.0 || !sum.is_finite() {
+                if sum < -1e-9 * scale || !sum.is_finite() {
                     return Err(i);
                 }
-                a[ri + i] = sum.sqrt();
+                a[ri + i] = if sum > 1e-12 * scale { sum.sqrt() } else { 0.0 };
             } else {
-                a[ri + j] = sum / a[rj + j];
+                let d = a[rj + j];
+                a[ri + j] = if d > 0.0 { sum / d } else { 0.0 };
             }
         }
     }
@@ -844,6 +848,11 @@ pub fn synthesize_component_f64(
     Ok(out)
 }
 
+/// What each height's records of `comp` get added: Ū(z) for `u`, nothing for `v` and `w`.
+fn mean_added(params: &WindParams, grid: &Grid, comp: Component) -> Vec<f64> {
+    grid.zs.iter().map(|&z| if comp == Component::U { params.mean_speed(z) } else { 0.0 }).collect()
+}
+
 /// Synthesise all three components into a frame-major f32 buffer laid out
 /// (frame, component, z, y, x) holding full velocities (Ū(z) added to `u`). Returns the
 /// largest bound on the coherence error over the components (0 when exact).
@@ -858,11 +867,7 @@ pub(crate) fn synthesize_into(
     let n = grid.points();
     let mut worst: f64 = 0.0;
     for comp in Component::ALL {
-        let add = grid
-            .zs
-            .iter()
-            .map(|&z| if comp == Component::U { params.mean_speed(z) } else { 0.0 })
-            .collect();
+        let add = mean_added(params, grid, comp);
         let layout = OutLayout { frame_stride: 3 * n, offset: comp.index() * n, add };
         let c = comp.index() as f64;
         let sink = Sink::Buffer(OutPtr(out.as_mut_ptr(), out.len()));
@@ -910,12 +915,7 @@ pub fn synthesize_streaming(
         )));
     }
     for comp in Component::ALL {
-        let add = grid
-            .zs
-            .iter()
-            .map(|&z| if comp == Component::U { params.mean_speed(z) } else { 0.0 })
-            .collect();
-        let layout = OutLayout { frame_stride: 0, offset: 0, add };
+        let layout = OutLayout { frame_stride: 0, offset: 0, add: mean_added(params, grid, comp) };
         let c = comp.index() as f64;
         let mut each = |x0: usize, cols: usize, rec: &[f32]| emit(comp, x0, cols, rec);
         synth_component(params, grid, synth, comp, Sink::Stream(&mut each), &layout, &|f| {

@@ -36,7 +36,7 @@ use std::sync::Arc;
 
 use rustfft::{Fft, FftPlanner};
 
-use super::C64;
+use super::{C64, cholesky_lower};
 use crate::error::WindError;
 use crate::grid::Grid;
 use crate::params::{CoherenceSpeed, Component, WindParams};
@@ -224,7 +224,7 @@ impl Embedding {
                 // A lower factor (Cholesky) where the block is semidefinite, else the square
                 // root of its nearest semidefinite matrix (full).
                 let mut full = false;
-                if semidefinite_cholesky(&mut s.m, nz).is_err() {
+                if cholesky_lower(&mut s.m, nz).is_err() {
                     for h in 0..nz {
                         for k in 0..=h {
                             let q = pair(h, k);
@@ -337,33 +337,6 @@ fn nearest_semidefinite_root(a: &mut [f64], e: &mut [f64], n: usize) -> f64 {
         }
     }
     removed
-}
-
-/// In-place lower Cholesky factor of a symmetric positive semidefinite matrix (lower
-/// triangle of `a`, row-major n × n). A pivot within 1e-12 of the largest diagonal entry of
-/// zero marks a dependent row: its column is set to zero (the factor of a singular matrix).
-/// A pivot below −1e-9 of it means the matrix is not semidefinite: the row is returned.
-fn semidefinite_cholesky(a: &mut [f64], n: usize) -> Result<(), usize> {
-    let scale = (0..n).map(|i| a[i * n + i]).fold(0.0, f64::max);
-    for i in 0..n {
-        for j in 0..=i {
-            let (ri, rj) = (i * n, j * n);
-            let mut sum = a[ri + j];
-            for k in 0..j {
-                sum -= a[ri + k] * a[rj + k];
-            }
-            if i == j {
-                if sum < -1e-9 * scale || !sum.is_finite() {
-                    return Err(i);
-                }
-                a[ri + i] = if sum > 1e-12 * scale { sum.sqrt() } else { 0.0 };
-            } else {
-                let d = a[rj + j];
-                a[ri + j] = if d > 0.0 { sum / d } else { 0.0 };
-            }
-        }
-    }
-    Ok(())
 }
 
 #[cfg(test)]
@@ -512,9 +485,9 @@ mod tests {
     fn semidefinite_cholesky_zeroes_dependent_rows_and_refuses_indefinite_ones() {
         // Rank one: the second row repeats the first.
         let mut a = vec![4.0, 0.0, 4.0, 4.0];
-        semidefinite_cholesky(&mut a, 2).expect("semidefinite");
+        cholesky_lower(&mut a, 2).expect("semidefinite");
         assert_eq!((a[0], a[2], a[3]), (2.0, 2.0, 0.0));
         let mut bad = vec![1.0, 0.0, 2.0, 1.0];
-        assert_eq!(semidefinite_cholesky(&mut bad, 2), Err(1));
+        assert_eq!(cholesky_lower(&mut bad, 2), Err(1));
     }
 }
