@@ -57,6 +57,11 @@ impl Grid {
     pub fn points(&self) -> usize {
         self.nx() * self.ny() * self.nz()
     }
+    /// Middle of the x range, m: the origin of the advection phase.
+    pub fn x_mid(&self) -> f64 {
+        0.5 * (self.xs[0] + self.xs[self.xs.len() - 1])
+    }
+
     /// Loop period in s.
     pub fn period(&self) -> f64 {
         self.frames as f64 * self.dt

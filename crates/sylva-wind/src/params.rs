@@ -128,6 +128,16 @@ pub enum CoherenceSpeed {
     PairMean,
 }
 
+impl CoherenceSpeed {
+    /// Name as on the command line and in file metadata: `reference` or `pair-mean`.
+    pub fn name(self) -> &'static str {
+        match self {
+            CoherenceSpeed::Reference => "reference",
+            CoherenceSpeed::PairMean => "pair-mean",
+        }
+    }
+}
+
 /// Everything that defines the statistics of a wind field.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]

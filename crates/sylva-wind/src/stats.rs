@@ -421,7 +421,7 @@ pub fn ensemble_stats_at(fields: &[WindField], segment: Option<usize>, iz: usize
     let df = 1.0 / (m as f64 * g.dt);
     let per_bin = m as f64 / seg as f64;
     let nfields = fields.len() as f64;
-    let x_mid = 0.5 * (g.xs[0] + g.xs[g.nx() - 1]);
+    let x_mid = g.x_mid();
     let band_rows = |meas: &[f64],
                      model: &[f64],
                      keep: &dyn Fn(f64) -> bool,

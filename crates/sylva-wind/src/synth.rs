@@ -326,7 +326,7 @@ impl Lines {
         }
         let u_ref = reference_speed(params, grid);
         let speeds = grid.zs.iter().map(|&z| params.mean_speed(z)).collect();
-        let x_mid = 0.5 * (grid.xs[0] + grid.xs[grid.nx() - 1]);
+        let x_mid = grid.x_mid();
         Lines { nc, omega, keys, scale, u_ref, speeds, x_mid, sqrt_dw: dw.sqrt() }
     }
 

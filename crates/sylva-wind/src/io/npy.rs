@@ -111,13 +111,10 @@ pub fn write_npy(field: &WindField, path: &Path) -> Result<(), WindError> {
         u_star: field.params.u_star,
         heights: g.zs.clone(),
         mean_speeds: g.zs.iter().map(|&z| field.params.mean_speed(z)).collect(),
-        coherence_model: match field.params.coherence_speed {
-            CoherenceSpeed::Reference => "reference".into(),
-            CoherenceSpeed::PairMean => "pair-mean".into(),
-        },
+        coherence_model: field.params.coherence_speed.name().into(),
         coherence_speed: (field.params.coherence_speed == CoherenceSpeed::Reference)
             .then(|| synth::reference_speed(&field.params, g)),
-        advection_origin_x: field.params.advection.then(|| 0.5 * (g.xs[0] + g.xs[g.nx() - 1])),
+        advection_origin_x: field.params.advection.then(|| g.x_mid()),
         coherence_error: field.coherence_error,
         spacing: [Grid::regular_spacing(&g.xs), Grid::regular_spacing(&g.ys)],
         dt: g.dt,

@@ -27,7 +27,7 @@ use super::atomic::AtomicFile;
 use crate::error::WindError;
 use crate::field::WindField;
 use crate::grid::Grid;
-use crate::params::{CoherenceSpeed, Component, WindParams};
+use crate::params::{Component, WindParams};
 use crate::synth::{self, EMIT_COLUMNS, SynthParams};
 
 /// What `attributes.sylva` of a store records.
@@ -80,8 +80,7 @@ pub fn write_zarr_streaming(
         dir.with_file_name(format!(".{}.partial-{}", name.to_string_lossy(), std::process::id()));
     let _ = std::fs::remove_dir_all(&tmp);
     let mut guard = PartialDir(Some(tmp.clone()));
-    let (nz, ny, nx, m) = (grid.nz(), grid.ny(), grid.nx(), grid.frames);
-    let np = nz * ny;
+    let (np, m) = (grid.nz() * grid.ny(), grid.frames);
     for c in 0..3 {
         let d = tmp.join("wind/c/0").join(c.to_string()).join("0/0");
         std::fs::create_dir_all(&d).map_err(|e| WindError::io(&d, e))?;
@@ -123,7 +122,6 @@ pub fn write_zarr_streaming(
         f.commit().map_err(|e| WindError::io(&path, e))
     };
     synth::synthesize_streaming(params, grid, synth_params, &mut emit, progress)?;
-    debug_assert!(nx.div_ceil(EMIT_COLUMNS) > 0);
     // Into place: the previous store (if any) goes only once the new one is complete.
     let old = dir.with_file_name(format!(".{}.old-{}", name.to_string_lossy(), std::process::id()));
     if dir.exists() {
@@ -175,11 +173,8 @@ fn metadata(
         params: params.clone(),
         synth,
         mean_speeds: grid.zs.iter().map(|&z| params.mean_speed(z)).collect(),
-        coherence_model: match params.coherence_speed {
-            CoherenceSpeed::Reference => "reference".into(),
-            CoherenceSpeed::PairMean => "pair-mean".into(),
-        },
-        advection_origin_x: params.advection.then(|| 0.5 * (grid.xs[0] + grid.xs[grid.nx() - 1])),
+        coherence_model: params.coherence_speed.name().into(),
+        advection_origin_x: params.advection.then(|| grid.x_mid()),
     };
     let group = serde_json::json!({
         "zarr_format": 3,
