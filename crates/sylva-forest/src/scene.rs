@@ -75,7 +75,8 @@ fn fov() -> f32 {
 pub struct SceneSpec {
     /// Scene name.
     pub name: String,
-    /// Seed of the layout, the trees and the wind.
+    /// Seed of the layout, the trees and the wind (0 … 2⁶³ − 1: TOML integers are signed
+    /// 64-bit).
     #[serde(default)]
     pub seed: u64,
     /// Number of trees (1 … 1 000 000).

@@ -1,29 +1,12 @@
 //! DESIGN: "the per-frame step cannot fail and does not allocate in steady state". A
 //! counting global allocator watches `Forest::step` and `Forest::frame` once warmed up.
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
-
 use sylva_forest::{Forest, FrameData, SceneSpec};
 
-struct Counting;
-static ALLOCS: AtomicUsize = AtomicUsize::new(0);
-
-// SAFETY: forwards to the system allocator, only counting calls.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCS.fetch_add(1, Ordering::Relaxed);
-        // SAFETY: same contract as the caller's.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: same contract as the caller's.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-}
+use sylva_testkit::{CountingAllocator, allocations};
 
 #[global_allocator]
-static GLOBAL: Counting = Counting;
+static GLOBAL: CountingAllocator = CountingAllocator;
 
 #[test]
 fn steady_state_frames_do_not_allocate() {
@@ -37,12 +20,12 @@ fn steady_state_frames_do_not_allocate() {
             forest.step(1.0 / 30.0);
             forest.frame(&camera, 1.5, &mut frame);
         }
-        let before = ALLOCS.load(Ordering::Relaxed);
+        let before = allocations();
         for _ in 0..10 {
             forest.step(1.0 / 30.0);
             forest.frame(&camera, 1.5, &mut frame);
         }
-        let n = ALLOCS.load(Ordering::Relaxed) - before;
+        let n = allocations() - before;
         assert_eq!(n, 0, "{n} allocations in 10 steady-state frames");
     });
     assert!(frame.stats.drawn > 0);

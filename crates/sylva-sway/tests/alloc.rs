@@ -1,30 +1,13 @@
 //! The per-frame step allocates nothing once running (DESIGN: "the per-frame step does not
 //! allocate in steady state"). A counting global allocator watches a single-threaded step.
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
-
 use sylva_sway::{SwayBatch, SwayParams, SwaySpecies};
 use sylva_tree::{Joint, NO_PARENT, Skeleton};
 
-struct Counting;
-static ALLOCS: AtomicUsize = AtomicUsize::new(0);
-
-// SAFETY: forwards to the system allocator, only counting calls.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCS.fetch_add(1, Ordering::Relaxed);
-        // SAFETY: same contract as the caller's.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: same contract as the caller's.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-}
+use sylva_testkit::{CountingAllocator, allocations};
 
 #[global_allocator]
-static GLOBAL: Counting = Counting;
+static GLOBAL: CountingAllocator = CountingAllocator;
 
 #[test]
 fn steady_state_steps_do_not_allocate() {
@@ -48,11 +31,11 @@ fn steady_state_steps_do_not_allocate() {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().expect("pool");
     pool.install(|| {
         b.step(1.0 / 60.0, &wind); // first step at this dt builds the transition table
-        let before = ALLOCS.load(Ordering::Relaxed);
+        let before = allocations();
         for _ in 0..100 {
             b.step(1.0 / 60.0, &wind);
         }
-        let after = ALLOCS.load(Ordering::Relaxed);
+        let after = allocations();
         assert_eq!(after - before, 0, "{} allocations in 100 steps", after - before);
     });
 }

@@ -2,40 +2,12 @@
 //! `MaxJoints` guard refuses them before memory goes, and stops growth that splits push past
 //! it. Peak heap use is measured with a tracking allocator.
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
-
 use sylva_tree::{SkeletonError, Species};
 
-struct Tracking;
-static LIVE: AtomicUsize = AtomicUsize::new(0);
-static PEAK: AtomicUsize = AtomicUsize::new(0);
-
-// SAFETY: forwards to the system allocator, only keeping count of live bytes.
-unsafe impl GlobalAlloc for Tracking {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        let live = LIVE.fetch_add(layout.size(), Ordering::Relaxed) + layout.size();
-        PEAK.fetch_max(live, Ordering::Relaxed);
-        // SAFETY: same contract as the caller's.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        LIVE.fetch_sub(layout.size(), Ordering::Relaxed);
-        // SAFETY: same contract as the caller's.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-}
+use sylva_testkit::{CountingAllocator, peak_during};
 
 #[global_allocator]
-static GLOBAL: Tracking = Tracking;
-
-/// Peak heap growth (bytes above what was live before) while `f` runs.
-fn peak_during<T>(f: impl FnOnce() -> T) -> (T, usize) {
-    let before = LIVE.load(Ordering::Relaxed);
-    PEAK.store(before, Ordering::Relaxed);
-    let out = f();
-    (out, PEAK.load(Ordering::Relaxed).saturating_sub(before))
-}
+static GLOBAL: CountingAllocator = CountingAllocator;
 
 #[test]
 fn exploding_branch_counts_are_refused_before_growing() {

@@ -2,34 +2,14 @@
 //! one block of columns in memory whatever the field's size. Heap use is measured with a
 //! tracking allocator.
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
-
 use sylva_wind::io::write_zarr_streaming;
 use sylva_wind::synth::streaming_memory_estimate;
 use sylva_wind::{Grid, Method, SynthParams, WindParams};
 
-struct Tracking;
-static LIVE: AtomicUsize = AtomicUsize::new(0);
-static PEAK: AtomicUsize = AtomicUsize::new(0);
-
-// SAFETY: forwards to the system allocator, only keeping count of live bytes.
-unsafe impl GlobalAlloc for Tracking {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        let live = LIVE.fetch_add(layout.size(), Ordering::Relaxed) + layout.size();
-        PEAK.fetch_max(live, Ordering::Relaxed);
-        // SAFETY: same contract as the caller's.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        LIVE.fetch_sub(layout.size(), Ordering::Relaxed);
-        // SAFETY: same contract as the caller's.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-}
+use sylva_testkit::{CountingAllocator, peak_during};
 
 #[global_allocator]
-static GLOBAL: Tracking = Tracking;
+static GLOBAL: CountingAllocator = CountingAllocator;
 
 #[test]
 fn a_field_four_times_the_memory_budget_streams_within_it() {
@@ -42,11 +22,10 @@ fn a_field_four_times_the_memory_budget_streams_within_it() {
     let dir = std::env::temp_dir().join(format!("sylva-stream-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
     let store = dir.join("big.zarr");
-    let before = LIVE.load(Ordering::Relaxed);
-    PEAK.store(before, Ordering::Relaxed);
     let sp = SynthParams { seed: 4, method: Method::Separable };
-    write_zarr_streaming(&WindParams::default(), &grid, sp, &store, &|_| {}).expect("stream");
-    let peak = PEAK.load(Ordering::Relaxed) - before;
+    let (written, peak) =
+        peak_during(|| write_zarr_streaming(&WindParams::default(), &grid, sp, &store, &|_| {}));
+    written.expect("stream");
     let written: u64 = walk(&store);
     let _ = std::fs::remove_dir_all(&dir);
     assert!(written >= output as u64, "wrote {written} bytes of {output}");

@@ -22,6 +22,10 @@ pub enum WindCommand {
     Stats(StatsArgs),
     /// Plot a field's spectra against eq. 4 and its co-coherence against eq. 5 (PNG).
     Plot(PlotArgs),
+    /// What a wind file holds: its grid, time axis and, per height, the mean speed and σ of
+    /// each component. Reads .swf, .npy (with sidecar), .zarr and TurbSim .bts (TurbSim's
+    /// own files included).
+    Info(InfoArgs),
     /// The wind field on built-in defaults: generate, check against the model and plot,
     /// into `out/`.
     Demo(DemoArgs),
@@ -254,6 +258,12 @@ pub struct GenerateArgs {
 }
 
 #[derive(Debug, Args)]
+pub struct InfoArgs {
+    /// The file (.swf, .npy, .zarr or .bts).
+    file: PathBuf,
+}
+
+#[derive(Debug, Args)]
 pub struct StatsArgs {
     /// Field files (.swf, .npy with its .json sidecar, or a .zarr store). Several files of one grid and
     /// model (different seeds) are pooled: the estimates average over them and their
@@ -327,6 +337,7 @@ pub fn run(cmd: WindCommand) -> anyhow::Result<()> {
             println!("wrote {}", a.out.display());
             Ok(())
         }
+        WindCommand::Info(a) => info(&a.file),
         WindCommand::Stats(a) => {
             let fields = a.files.iter().map(|f| read(f)).collect::<anyhow::Result<Vec<_>>>()?;
             for (f, path) in fields.iter().zip(&a.files).skip(1) {
@@ -549,11 +560,86 @@ fn write(field: &WindField, path: &Path, format: FormatArg, x_index: usize) -> a
 
 fn read(path: &Path) -> anyhow::Result<WindField> {
     let field = match path.extension().and_then(|e| e.to_str()) {
+        Some("bts") => bail!(
+            "{}: a .bts file holds one y–z plane and not the wind model it came from; \
+             `sylva wind info` reads it",
+            path.display()
+        ),
         Some("npy") => io::read_npy(path),
         Some("zarr") => io::read_zarr(path),
         _ => io::read_swf(path),
     };
     field.with_context(|| format!("reading {}", path.display()))
+}
+
+/// Mean and standard deviation of `values`.
+fn mean_sigma(values: impl Iterator<Item = f64> + Clone) -> (f64, f64) {
+    let n = values.clone().count().max(1) as f64;
+    let mean = values.clone().sum::<f64>() / n;
+    (mean, (values.map(|v| (v - mean).powi(2)).sum::<f64>() / n).sqrt())
+}
+
+fn info(path: &Path) -> anyhow::Result<()> {
+    // Per height: (z, [(mean, σ) of u, v, w]).
+    let mut rows: Vec<(f64, [(f64, f64); 3])> = Vec::new();
+    if path.extension().and_then(|e| e.to_str()) == Some("bts") {
+        let b = io::read_bts(path).with_context(|| format!("reading {}", path.display()))?;
+        println!(
+            "TurbSim .bts ({}): {} heights × {} points across, dz {} m, dy {} m, {} tower \
+             points; {} steps of {} s; hub {} m at {:.3} m/s",
+            if b.periodic { "periodic" } else { "not periodic" },
+            b.nz,
+            b.ny,
+            b.dz,
+            b.dy,
+            b.tower_points,
+            b.frames,
+            b.dt,
+            b.hub_height,
+            b.hub_speed
+        );
+        println!("description: {}", b.description.trim());
+        for (iz, z) in b.zs().into_iter().enumerate() {
+            let comp = |c| {
+                mean_sigma(
+                    (0..b.frames)
+                        .flat_map(move |t| (0..b.ny).map(move |iy| (t, iy)))
+                        .map(|(t, iy)| b.at(t, c, iz, iy) as f64),
+                )
+            };
+            rows.push((z, [comp(0), comp(1), comp(2)]));
+        }
+    } else {
+        let f = read(path)?;
+        let g = &f.grid;
+        println!(
+            "{} × {} points × {} heights {:?} m; {} frames of {} s (a {} s loop); seed {}, {} \
+             method, U* {} m/s",
+            g.nx(),
+            g.ny(),
+            g.nz(),
+            g.zs,
+            g.frames,
+            g.dt,
+            g.period(),
+            f.synth.seed,
+            f.synth.method.name(),
+            f.params.u_star
+        );
+        for (iz, &z) in g.zs.iter().enumerate() {
+            let comp = |c| {
+                let points = (0..g.ny()).flat_map(move |iy| (0..g.nx()).map(move |ix| (iy, ix)));
+                let all = (0..g.frames).flat_map(move |t| points.clone().map(move |p| (t, p)));
+                mean_sigma(all.map(|(t, (iy, ix))| f.data[f.index(t, c, iz, iy, ix)] as f64))
+            };
+            rows.push((z, [comp(0), comp(1), comp(2)]));
+        }
+    }
+    println!("{:>9}{:>10}{:>9}{:>9}{:>9}", "z m", "mean u", "σ u", "σ v", "σ w");
+    for (z, c) in rows {
+        println!("{z:>9.2}{:>10.3}{:>9.3}{:>9.3}{:>9.3}", c[0].0, c[0].1, c[1].1, c[2].1);
+    }
+    Ok(())
 }
 
 fn print_stats(field: &WindField, s: &FieldStats) {

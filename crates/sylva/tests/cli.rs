@@ -55,6 +55,51 @@ fn generate_then_stats_and_a_cut_file_is_refused() {
     assert!(!text.contains("panicked"), "{text}");
 }
 
+/// `wind info` reports the same plane from the .swf and from its .bts export: the mean u
+/// and σ of each component at each height agree within the .bts quantisation.
+#[test]
+fn wind_info_reads_swf_and_bts_alike() {
+    let (swf, bts) = (temp("info.swf"), temp("info.bts"));
+    for out in [&swf, &bts] {
+        let o = out.to_str().expect("utf-8 path");
+        let (ok, text) = sylva(&[
+            "wind",
+            "generate",
+            "--nx",
+            "1",
+            "--ny",
+            "6",
+            "--heights",
+            "10,20",
+            "--frames",
+            "64",
+            "--out",
+            o,
+        ]);
+        assert!(ok, "{text}");
+    }
+    let table = |path: &std::path::Path| -> Vec<Vec<f64>> {
+        let (ok, text) = sylva(&["wind", "info", path.to_str().expect("utf-8 path")]);
+        assert!(ok, "{text}");
+        text.lines()
+            .filter_map(|l| l.split_whitespace().map(|w| w.parse::<f64>().ok()).collect())
+            .filter(|r: &Vec<f64>| r.len() == 5)
+            .collect()
+    };
+    let (a, b) = (table(&swf), table(&bts));
+    assert_eq!(a.len(), 2, "two heights: {a:?}");
+    assert_eq!(a.len(), b.len());
+    for (ra, rb) in a.iter().zip(&b) {
+        assert_eq!(ra[0], rb[0], "heights");
+        for k in 1..5 {
+            assert!((ra[k] - rb[k]).abs() <= 2e-3, "{ra:?} vs {rb:?}");
+        }
+    }
+    // stats needs the model, which a .bts does not carry: a clear refusal.
+    let (ok, text) = sylva(&["wind", "stats", bts.to_str().expect("utf-8 path")]);
+    assert!(!ok && text.contains("wind info"), "{text}");
+}
+
 #[test]
 fn tree_and_sway_commands_work_and_refuse_bad_species_files() {
     let (ok, text) = sylva(&["tree", "list"]);

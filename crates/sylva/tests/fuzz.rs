@@ -4,12 +4,13 @@
 //! damage (bit flips, byte overwrites with boundary values, insertions, deletions,
 //! truncation, duplicated runs), then reads it back. A reader must return (Ok or a clear
 //! error); a panic is a defect. Without coverage guidance this finds fewer bugs per
-//! execution than cargo-fuzz, but it runs on the stable toolchain in CI. The CI run uses
+//! execution than the coverage-guided targets in `fuzz/` (libFuzzer, `fuzz/run`), but it
+//! needs no instrumented build and runs inside `cargo test`. The CI run uses
 //! `SYLVA_FUZZ_ITERS` (default 300) executions per target; set it higher for a long run.
+//! Inputs that once crashed a reader are kept in `fuzz/seeds/` and replayed here.
 //!
-//! The property test draws species with every parameter uniform in its documented range:
-//! each must either grow a tree whose skeleton passes validation (and every fourth one a
-//! model and a well-formed `.glb`) or be refused by the `MaxJoints` guard.
+//! The property tests (species, wind, scenes inside their documented ranges) live beside
+//! each crate, in `tests/properties.rs`, on proptest.
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
@@ -25,9 +26,6 @@ impl Rng {
     }
     fn below(&mut self, n: usize) -> usize {
         (self.next() % n.max(1) as u64) as usize
-    }
-    fn unit(&mut self) -> f64 {
-        (self.next() >> 11) as f64 / (1u64 << 53) as f64
     }
 }
 
@@ -144,6 +142,49 @@ fn fuzz_zarr_metadata_and_chunks() {
 }
 
 #[test]
+fn fuzz_bts() {
+    let path = temp("seed.bts");
+    sylva_wind::io::write_bts(&small_field(), 1, &path).expect("write");
+    let bytes = std::fs::read(&path).expect("read");
+    fuzz("bts", 6, &bytes, &|b| {
+        if let Ok(f) = sylva_wind::io::parse_bts(b) {
+            assert!(f.grid.iter().all(|v| v.is_finite()));
+        }
+    });
+}
+
+/// Every input in `fuzz/seeds/` (valid files and the crashes libFuzzer found, kept there)
+/// goes through its reader again: a regression test for each crash.
+#[test]
+fn fuzz_seeds_and_past_crashes_are_read_without_panicking() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fuzz/seeds");
+    let mut read = 0;
+    for (dir, target) in [
+        ("swf", &(|b: &[u8]| drop(sylva_wind::io::parse_swf(b))) as &dyn Fn(&[u8])),
+        ("bts", &|b| drop(sylva_wind::io::parse_bts(b))),
+        ("species", &|b| {
+            if let Ok(mut sp) =
+                sylva_tree::Species::from_toml("seed.toml", &String::from_utf8_lossy(b))
+            {
+                sp.max_joints = sp.max_joints.min(20_000);
+                let _ = sp.generate(1);
+            }
+        }),
+        ("scene", &|b| {
+            drop(sylva_forest::SceneSpec::from_toml("seed.toml", &String::from_utf8_lossy(b)))
+        }),
+    ] {
+        for entry in std::fs::read_dir(root.join(dir)).expect("seed folder").flatten() {
+            let bytes = std::fs::read(entry.path()).expect("seed");
+            let outcome = catch_unwind(AssertUnwindSafe(|| target(&bytes)));
+            assert!(outcome.is_ok(), "{} panicked", entry.path().display());
+            read += 1;
+        }
+    }
+    assert!(read >= 10, "only {read} seed files found");
+}
+
+#[test]
 fn fuzz_species_toml() {
     let (_, text) = sylva_tree::PRESETS[0];
     fuzz("species", 4, text.as_bytes(), &|b| {
@@ -164,110 +205,4 @@ fn fuzz_scene_toml() {
     fuzz("scene", 5, text.as_bytes(), &|b| {
         let _ = sylva_forest::SceneSpec::from_toml("mutant.toml", &String::from_utf8_lossy(b));
     });
-}
-
-#[test]
-fn any_species_inside_the_ranges_grows_a_valid_tree_or_is_refused() {
-    use sylva_tree::species::Scope;
-    use sylva_tree::{PARAMS, SkeletonError, Species};
-    let mut rng = Rng(77);
-    let n = (iterations() / 10).max(20);
-    let (mut grown, mut refused) = (0, 0);
-    for i in 0..n {
-        let mut sp = Species::defaults("random");
-        for p in PARAMS {
-            let draw = |rng: &mut Rng| {
-                let v = p.min as f64 + rng.unit() * (p.max - p.min) as f64;
-                (if p.integer { v.floor() } else { v }) as f32
-            };
-            match p.scope {
-                Scope::Global => {
-                    let v = draw(&mut rng);
-                    sp.set(None, p.name, v)
-                }
-                Scope::Level => (0..4).for_each(|l| {
-                    let v = draw(&mut rng);
-                    sp.set(Some(l), p.name, v)
-                }),
-            }
-        }
-        // Keep each draw quick: a guard of 20 000 joints (the property is the same at any).
-        sp.max_joints = 20_000;
-        let out = catch_unwind(AssertUnwindSafe(|| sp.generate(i as u64)));
-        match out {
-            Ok(Ok(tree)) => {
-                grown += 1;
-                assert!(tree.skeleton.joints().len() <= 20_000);
-                assert!(tree.stats.height.is_finite() && tree.stats.height > 0.0, "draw {i}");
-                // Every fourth grown tree goes on to its full model and glTF export.
-                if grown % 4 == 1 {
-                    let glb = catch_unwind(AssertUnwindSafe(|| {
-                        let model = sp.model(i as u64, sylva_tree::mesh::LOD_LEVELS)?;
-                        Ok::<_, SkeletonError>(model.to_glb(&Default::default()))
-                    }));
-                    match glb {
-                        Ok(Ok(b)) => {
-                            assert_eq!(&b[..4], b"glTF", "draw {i}");
-                            let len = u32::from_le_bytes([b[8], b[9], b[10], b[11]]) as usize;
-                            assert_eq!(len, b.len(), "draw {i}: GLB length field");
-                        }
-                        Ok(Err(e)) => panic!("draw {i}: model failed: {e}\n{sp}"),
-                        Err(_) => panic!("draw {i}: model or export panicked\n{sp}"),
-                    }
-                }
-            }
-            Ok(Err(SkeletonError::TooManyJoints { .. })) => refused += 1,
-            Ok(Err(e)) => panic!("draw {i}: in-range species failed otherwise: {e}\n{sp}"),
-            Err(_) => panic!("draw {i}: generation panicked\n{sp}"),
-        }
-    }
-    assert!(grown > 0 && refused > 0, "grown {grown}, refused {refused}: both outcomes occur");
-}
-
-#[test]
-fn any_wind_parameters_inside_the_ranges_give_finite_fields() {
-    use sylva_wind::{
-        CoherenceSpeed, Grid, Method, Profile, SpectrumModel, SynthParams, WindField,
-    };
-    let mut rng = Rng(91);
-    let mut pick = |lo: f64, hi: f64| lo + rng.unit() * (hi - lo);
-    for i in 0..(iterations() / 30).max(10) {
-        let u_star = pick(1e-3, 20.0);
-        let profile = if pick(0.0, 1.0) < 0.5 {
-            Profile::Log { z0: pick(1e-3, 10.0), d: pick(0.0, 100.0) }
-        } else {
-            Profile::Power {
-                u_ref: pick(1e-3, 100.0),
-                z_ref: pick(0.1, 200.0),
-                alpha: pick(0.0, 1.0),
-            }
-        };
-        let spectrum = [SpectrumModel::Paper, SpectrumModel::Kaimal, SpectrumModel::VonKarman]
-            [(pick(0.0, 3.0) as usize).min(2)];
-        let mut coherence = sylva_wind::params::PAPER_COHERENCE;
-        for c in &mut coherence {
-            (c.cx, c.cy, c.cz) = (pick(0.0, 30.0), pick(0.0, 30.0), pick(0.0, 30.0));
-        }
-        let coherence_speed =
-            if pick(0.0, 1.0) < 0.5 { CoherenceSpeed::Reference } else { CoherenceSpeed::PairMean };
-        let p = sylva_wind::WindParams {
-            u_star,
-            profile,
-            spectrum,
-            coherence,
-            coherence_speed,
-            direction_deg: pick(-720.0, 720.0),
-            advection: pick(0.0, 1.0) < 0.5,
-            ..sylva_wind::WindParams::default()
-        };
-        p.validate().expect("drawn inside the ranges");
-        let z0 = pick(1.0, 80.0);
-        let grid =
-            Grid::regular(6, 5, pick(0.1, 50.0), &[z0, z0 + pick(0.5, 30.0)], 64, pick(0.01, 1.0));
-        let sp = SynthParams { seed: i as u64, method: Method::fastest(&p, &grid) };
-        let f = WindField::generate(&p, &grid, sp, &|_| {})
-            .unwrap_or_else(|e| panic!("draw {i}: {e}\n{p:?}"));
-        assert!(f.data.iter().all(|v| v.is_finite()), "draw {i}: non-finite sample\n{p:?}");
-        assert!(f.coherence_error.is_finite());
-    }
 }

@@ -22,8 +22,8 @@ mod bts;
 mod npy;
 pub mod zarr;
 
-pub use bts::{check_bts, write_bts};
-pub use npy::{read_npy, write_npy};
+pub use bts::{BtsField, check_bts, parse_bts, read_bts, write_bts};
+pub use npy::{parse_npy, read_npy, write_npy};
 pub use zarr::{read_zarr, write_zarr_streaming};
 
 use std::io::Write;

@@ -136,12 +136,21 @@ pub fn read_npy(path: &Path) -> Result<WindField, WindError> {
     let bytes = std::fs::read(path).map_err(|e| WindError::io(path, e))?;
     let sp = sidecar_path(path);
     let side_text = std::fs::read_to_string(&sp).map_err(|e| WindError::io(&sp, e))?;
-    let side: NpySidecar = serde_json::from_str(&side_text).map_err(|e| WindError::Format {
+    parse_npy(&bytes, &side_text, &sp.display().to_string())
+}
+
+/// Parse an `.npy` array and the text of its sidecar (named `sidecar_name` in errors).
+pub fn parse_npy(
+    bytes: &[u8],
+    side_text: &str,
+    sidecar_name: &str,
+) -> Result<WindField, WindError> {
+    let side: NpySidecar = serde_json::from_str(side_text).map_err(|e| WindError::Format {
         offset: 0,
-        reason: format!("{}: line {}: {e}", sp.display(), e.line()),
+        reason: format!("{sidecar_name}: line {}: {e}", e.line()),
     })?;
-    side.grid.validate().map_err(|e| WindError::format(0, format!("{}: {e}", sp.display())))?;
-    side.params.validate().map_err(|e| WindError::format(0, format!("{}: {e}", sp.display())))?;
+    side.grid.validate().map_err(|e| WindError::format(0, format!("{sidecar_name}: {e}")))?;
+    side.params.validate().map_err(|e| WindError::format(0, format!("{sidecar_name}: {e}")))?;
     if bytes.len() < 10 || &bytes[..6] != b"\x93NUMPY" {
         return Err(WindError::format(0, "not a .npy file (bad magic)"));
     }

@@ -1,0 +1,74 @@
+//! Test support shared by Sylva's crates (a dev-dependency only; it imports no Sylva crate).
+//!
+//! - [`CountingAllocator`]: a global allocator that forwards to the system's and counts
+//!   allocation calls, live bytes and the peak, for tests of "does not allocate" and "stays
+//!   within a memory budget". A test binary installs it with
+//!   `#[global_allocator] static A: CountingAllocator = CountingAllocator;`.
+//! - [`runner`]: a proptest runner with a fixed seed, so property tests draw the same cases
+//!   on every run and machine, and shrink a failure to a minimal case.
+#![warn(missing_docs)]
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use proptest::test_runner::{Config, RngAlgorithm, RngSeed, TestRunner};
+
+static CALLS: AtomicUsize = AtomicUsize::new(0);
+static LIVE: AtomicUsize = AtomicUsize::new(0);
+static PEAK: AtomicUsize = AtomicUsize::new(0);
+
+/// The system allocator, counting calls, live bytes and the peak of live bytes.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct CountingAllocator;
+
+// SAFETY: every method forwards to the system allocator with the caller's arguments; the
+// counters are atomics and never touch the memory handed out.
+unsafe impl GlobalAlloc for CountingAllocator {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        CALLS.fetch_add(1, Ordering::Relaxed);
+        let live = LIVE.fetch_add(layout.size(), Ordering::Relaxed) + layout.size();
+        PEAK.fetch_max(live, Ordering::Relaxed);
+        // SAFETY: the caller upholds `GlobalAlloc::alloc`'s contract, which is System's.
+        unsafe { System.alloc(layout) }
+    }
+
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        LIVE.fetch_sub(layout.size(), Ordering::Relaxed);
+        // SAFETY: `ptr` came from `alloc` above, i.e. from System, with this layout.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+}
+
+/// Allocation calls so far (all threads) while [`CountingAllocator`] is the global allocator.
+pub fn allocations() -> usize {
+    CALLS.load(Ordering::Relaxed)
+}
+
+/// Bytes allocated and not yet freed.
+pub fn live_bytes() -> usize {
+    LIVE.load(Ordering::Relaxed)
+}
+
+/// Run `f` and return its result with the peak heap growth while it ran: the most bytes live
+/// at once above what was live before it started. Not meaningful if other threads of the
+/// test binary allocate at the same time (run such tests with one test thread or alone).
+pub fn peak_during<T>(f: impl FnOnce() -> T) -> (T, usize) {
+    let before = LIVE.load(Ordering::Relaxed);
+    PEAK.store(before, Ordering::Relaxed);
+    let out = f();
+    (out, PEAK.load(Ordering::Relaxed).saturating_sub(before))
+}
+
+/// A proptest runner drawing `default_cases` cases (or `PROPTEST_CASES` when set) from a
+/// ChaCha stream with the fixed `seed`; failures are shrunk but not persisted to files.
+pub fn runner(default_cases: u32, seed: u64) -> TestRunner {
+    let cases =
+        std::env::var("PROPTEST_CASES").ok().and_then(|s| s.parse().ok()).unwrap_or(default_cases);
+    TestRunner::new(Config {
+        cases,
+        rng_algorithm: RngAlgorithm::ChaCha,
+        rng_seed: RngSeed::Fixed(seed),
+        failure_persistence: None,
+        ..Config::default()
+    })
+}
