@@ -67,7 +67,8 @@ pub enum ForestError {
     /// The simulation state would not fit the documented memory cap.
     #[error(
         "the simulation would need {} MB of animation state, over the {} MB cap: lower \
-         `sim_joint_budget`, keep the wind-field LOD on (instance groups), or use fewer trees",
+         `sim_joint_budget`, keep the wind-field LOD on (instance groups), use fewer trees, or \
+         raise the cap deliberately (scene `max_state_mb`, or --max-memory)",
         bytes / 1_000_000, limit / 1_000_000
     )]
     TooLarge {
@@ -78,8 +79,9 @@ pub enum ForestError {
     },
 }
 
-/// Cap on the animation state of a forest (angles, rates, blend weights, loads and palettes
-/// of every simulated joint), bytes: 6 GB.
+/// Default cap on the animation state of a forest (angles, rates, blend weights, loads and
+/// palettes of every simulated joint), bytes: 6 GB. A scene sets its own with
+/// `max_state_mb`.
 pub const MAX_STATE_BYTES: usize = 6_000_000_000;
 
 /// One tree drawn this frame, as the vertex shaders read it (44 bytes; sylva-render maps
@@ -391,8 +393,9 @@ impl Forest {
             };
             // Animation state and palettes take 92 bytes per joint and instance.
             state_bytes += n_groups.div_ceil(LANES) * LANES * joints * 92;
-            if state_bytes > MAX_STATE_BYTES {
-                return Err(ForestError::TooLarge { bytes: state_bytes, limit: MAX_STATE_BYTES });
+            let limit = spec.max_state_mb.saturating_mul(1_000_000);
+            if state_bytes > limit {
+                return Err(ForestError::TooLarge { bytes: state_bytes, limit });
             }
             let height = model.tree.stats.height;
             let mut groups = Vec::with_capacity(n_groups);

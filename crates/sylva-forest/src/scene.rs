@@ -105,6 +105,11 @@ pub struct SceneSpec {
     /// species beyond what fits share simulations (instance groups). Default 1 000 000.
     #[serde(default = "budget")]
     pub sim_joint_budget: usize,
+    /// Cap on the forest's animation state, MB (1 … 1 000 000; default 6000): a scene whose
+    /// simulation would need more is refused before anything is allocated. Raise it
+    /// deliberately for a machine with the memory.
+    #[serde(default = "state_mb")]
+    pub max_state_mb: usize,
     /// Viewpoint; default: from the forest's south-west edge, looking across it.
     #[serde(default)]
     pub camera: Option<CameraSpec>,
@@ -244,6 +249,10 @@ fn budget() -> usize {
     1_000_000
 }
 
+fn state_mb() -> usize {
+    crate::driver::MAX_STATE_BYTES / 1_000_000
+}
+
 const SMALL: &str = include_str!("../scenes/small.toml");
 const SCENE_A: &str = include_str!("../scenes/A.toml");
 const SCENE_B: &str = include_str!("../scenes/B.toml");
@@ -325,6 +334,9 @@ impl SceneSpec {
         }
         if self.sim_joint_budget == 0 {
             return Err(bad("sim_joint_budget", "0".into(), "≥ 1"));
+        }
+        if !(1..=1_000_000).contains(&self.max_state_mb) {
+            return Err(bad("max_state_mb", self.max_state_mb.to_string(), "1 … 1000000 MB"));
         }
         let l = &self.lighting;
         let colours = [l.sun_colour, l.ambient_sky, l.ambient_ground, l.sky_zenith, l.sky_horizon];

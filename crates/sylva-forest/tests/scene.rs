@@ -154,3 +154,23 @@ fn table3_scenes_and_camera_paths_are_deterministic() {
         .expect_err("far level");
     assert!(e.to_string().contains("lod.far_level"), "{e}");
 }
+
+/// The animation-state cap is the scene's to set: the same scene builds under the default
+/// cap and is refused, naming the figure and the cap, under a smaller one; a cap outside
+/// 1 … 1 000 000 MB is refused naming the field.
+#[test]
+fn the_animation_state_cap_is_the_scenes_and_refuses_before_building() {
+    let mut spec = SceneSpec::builtin("small").expect("small");
+    spec.lod.wind = false; // every tree simulated on its own: 5 trees, a few MB of state
+    assert!(Forest::new(&spec).is_ok());
+    spec.max_state_mb = 1;
+    let e = Forest::new(&spec).expect_err("over a 1 MB cap");
+    let text = e.to_string();
+    assert!(text.contains("over the 1 MB cap") && text.contains("max_state_mb"), "{text}");
+    let e = SceneSpec::from_toml(
+        "x.toml",
+        "name = \"x\"\ntrees = 3\nspecies = [{ name = \"quaking_aspen\" }]\nmax_state_mb = 0\n",
+    )
+    .expect_err("zero cap");
+    assert!(e.to_string().contains("`max_state_mb`"), "{e}");
+}

@@ -101,6 +101,14 @@ fn demo(a: DemoArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Memory the kernel reports as available (MemAvailable), bytes; `None` where unknown.
+pub fn available_memory() -> Option<f64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024.0)
+}
+
 fn main() -> std::process::ExitCode {
     // Piping into `head` must end the program quietly, as for any Unix tool.
     #[cfg(unix)]

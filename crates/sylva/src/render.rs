@@ -45,7 +45,8 @@ pub struct RenderArgs {
     pub lod: LodArgs,
 }
 
-/// The LOD switches of `render`, `view` and `bench` (each overrides the scene's `[lod]`).
+/// The LOD switches of `render`, `view` and `bench` (each overrides the scene's `[lod]`), and
+/// the memory cap of the forest's animation state.
 #[derive(Debug, Clone, Default, clap::Args)]
 pub struct LodArgs {
     /// Geometry LOD off: every tree at full detail (no coarser meshes, no impostors).
@@ -60,10 +61,15 @@ pub struct LodArgs {
     /// First LOD level drawn as an impostor (1 … 6; the scene's, default 3).
     #[arg(long)]
     pub far_level: Option<u32>,
+    /// Memory the forest's animation state may take, GB (replaces the scene's
+    /// `max_state_mb`). Without it the cap is the scene's, and at most three quarters of
+    /// the memory this machine has free.
+    #[arg(long, value_parser = crate::finite::<f64>)]
+    pub max_memory: Option<f64>,
 }
 
 impl LodArgs {
-    /// Apply to `spec` (validated: `far_level` in 1 … 6).
+    /// Apply to `spec` (validated: `far_level` in 1 … 6, `max_memory` in (0, 1000] GB).
     pub fn apply(&self, spec: &mut SceneSpec) -> anyhow::Result<()> {
         if let Some(f) = self.far_level {
             if !(1..=6).contains(&f) {
@@ -71,11 +77,32 @@ impl LodArgs {
             }
             spec.lod.far_level = f;
         }
+        apply_max_memory(spec, self.max_memory)?;
         spec.lod.geometry &= !self.no_geometry_lod;
         spec.lod.animation &= !self.no_animation_lod;
         spec.lod.wind &= !self.no_wind_lod;
         Ok(())
     }
+}
+
+/// Set the cap on `spec`'s animation state from `--max-memory` (GB, in (0, 1000]); without
+/// it, lower the scene's cap to three quarters of the memory this machine has free.
+pub fn apply_max_memory(spec: &mut SceneSpec, max_memory: Option<f64>) -> anyhow::Result<()> {
+    match max_memory {
+        Some(gb) => {
+            if !(gb > 0.0 && gb <= 1000.0) {
+                bail!("--max-memory {gb}: a memory budget must be in (0, 1000] GB");
+            }
+            spec.max_state_mb = ((gb * 1000.0) as usize).max(1);
+        }
+        None => {
+            if let Some(free) = crate::available_memory() {
+                let mb = (0.75 * free / 1e6) as usize;
+                spec.max_state_mb = spec.max_state_mb.min(mb.max(1));
+            }
+        }
+    }
+    Ok(())
 }
 
 pub fn parse_size(s: &str) -> anyhow::Result<(u32, u32)> {

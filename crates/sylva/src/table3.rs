@@ -50,6 +50,10 @@ pub struct Table3Bench {
     /// Geometry-LOD threshold h₀ (default: the scene's).
     #[arg(value_parser = crate::finite::<f32>, long)]
     lod_fraction: Option<f32>,
+    /// Memory the animation state may take, GB (default: the scene's cap, at most three
+    /// quarters of the free memory): raise it to run the wind-field LOD off on C and D.
+    #[arg(value_parser = crate::finite::<f64>, long)]
+    max_memory: Option<f64>,
     /// Frames of the popping measurement (scene `small`, calm, along its fly-in; 0: skip).
     #[arg(long, default_value_t = 40)]
     popping_frames: usize,
@@ -115,6 +119,7 @@ fn run_config(
         anyhow::ensure!(h0 > 0.0 && h0 <= 100.0, "--lod-fraction {h0}: must be in (0, 100]");
         spec.lod.fraction = h0;
     }
+    crate::render::apply_max_memory(&mut spec, a.max_memory)?;
     let mut forest = match Forest::new(&spec) {
         Ok(f) => f,
         Err(e) => return Ok(Cell { note: format!("not run: {e}"), ..Cell::default() }),

@@ -425,7 +425,7 @@ fn preflight(
     // unless the user set the budget.
     let budget = match max_bytes {
         Some(b) => Some((b, "the --max-memory budget".to_string())),
-        None => available_memory().map(|a| {
+        None => crate::available_memory().map(|a| {
             (0.75 * a, format!("three quarters of the {:.1} GB this machine has free", a / 1e9))
         }),
     };
@@ -463,14 +463,6 @@ fn preflight(
         }
     }
     Ok(())
-}
-
-/// Memory the kernel reports as available (MemAvailable), bytes; `None` where unknown.
-fn available_memory() -> Option<f64> {
-    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb * 1024.0)
 }
 
 fn format_of(path: &Path) -> anyhow::Result<FormatArg> {

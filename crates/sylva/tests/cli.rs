@@ -100,6 +100,28 @@ fn wind_info_reads_swf_and_bts_alike() {
     assert!(!ok && text.contains("wind info"), "{text}");
 }
 
+/// `--max-memory` sets the forest's animation-state cap: below what the scene needs, the
+/// render is refused before the simulation is built, naming the cap and how to raise it.
+#[test]
+fn render_refuses_a_forest_over_its_memory_cap() {
+    let out = temp("capped");
+    let o = out.to_str().expect("utf-8 path");
+    let (ok, text) = sylva(&[
+        "render",
+        "--scene",
+        "small",
+        "--no-wind-lod",
+        "--max-memory",
+        "0.0001",
+        "--out",
+        o,
+    ]);
+    assert!(!ok, "{text}");
+    assert!(text.contains("over the 1 MB cap") && text.contains("--max-memory"), "{text}");
+    let (ok, text) = sylva(&["render", "--scene", "small", "--max-memory", "nan", "--out", o]);
+    assert!(!ok && text.contains("--max-memory"), "{text}");
+}
+
 #[test]
 fn tree_and_sway_commands_work_and_refuse_bad_species_files() {
     let (ok, text) = sylva(&["tree", "list"]);
