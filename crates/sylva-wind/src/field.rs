@@ -49,6 +49,26 @@ pub struct Captured {
     pub fraction: [f64; 3],
 }
 
+/// A zeroed buffer for a field on `grid`, probed fallibly first: a field larger than the
+/// machine is an error naming its size, not an allocation abort. (The probe only reserves
+/// address space; the buffer itself is then allocated zeroed, page by page as it is written.)
+pub(crate) fn alloc_field(grid: &Grid) -> Result<Vec<f32>, WindError> {
+    let len = grid.points() * 3 * grid.frames;
+    let mut probe: Vec<f32> = Vec::new();
+    probe.try_reserve_exact(len).map_err(|_| {
+        WindError::Unsupported(format!(
+            "the field needs {:.2} GB of memory ({} points × 3 components × {} frames of f32), \
+             which this machine cannot allocate; use fewer points or frames, or stream it to a \
+             Zarr store",
+            len as f64 * 4.0 / 1e9,
+            grid.points(),
+            grid.frames
+        ))
+    })?;
+    drop(probe);
+    Ok(vec![0.0f32; len])
+}
+
 impl WindField {
     /// Synthesise a field. `progress` receives the fraction done (0 … 1).
     pub fn generate(
@@ -58,23 +78,7 @@ impl WindField {
         progress: &(dyn Fn(f64) + Sync),
     ) -> Result<WindField, WindError> {
         synth::check_config(params, grid, synth)?;
-        // Probed fallibly first: a field larger than the machine is an error naming its
-        // size, not an allocation abort. (The probe only reserves address space; the field
-        // itself is then allocated zeroed, page by page as the synthesis writes it.)
-        let len = grid.points() * 3 * grid.frames;
-        let mut probe: Vec<f32> = Vec::new();
-        probe.try_reserve_exact(len).map_err(|_| {
-            WindError::Unsupported(format!(
-                "the field needs {:.2} GB of memory ({} points × 3 components × {} frames of \
-                 f32), which this machine cannot allocate; use fewer points or frames, or \
-                 stream it to a Zarr store",
-                len as f64 * 4.0 / 1e9,
-                grid.points(),
-                grid.frames
-            ))
-        })?;
-        drop(probe);
-        let mut data = vec![0.0f32; len];
+        let mut data = alloc_field(grid)?;
         advise_huge_pages(&mut data);
         let coherence_error = synth::synthesize_into(params, grid, synth, &mut data, progress)?;
         Ok(WindField { grid: grid.clone(), params: params.clone(), synth, data, coherence_error })

@@ -240,7 +240,8 @@ pub fn read_zarr(dir: &Path) -> Result<WindField, WindError> {
     }
     let np = nz * ny;
     let n = g.points();
-    let mut data = vec![0.0f32; 3 * n * m];
+    // A store larger than this machine's memory is refused by size, not aborted on.
+    let mut data = crate::field::alloc_field(g)?;
     let per_chunk = m * np * EMIT_COLUMNS * 4;
     let mut bytes = Vec::with_capacity(per_chunk);
     for c in 0..3 {
@@ -312,5 +313,42 @@ mod tests {
         super::super::atomic::write_atomic(&chunk, &bytes[..bytes.len() - 4]).expect("cut");
         let e = read_zarr(&store).expect_err("cut chunk").to_string();
         assert!(e.contains("wind/c/0/1/0/0/2") && e.contains("bytes"), "{e}");
+    }
+
+    /// Metadata that claims a field far larger than the store (and than this machine's
+    /// memory), consistent in every key: refused with an error, never an allocation abort.
+    #[test]
+    fn a_store_claiming_an_enormous_field_is_refused_not_aborted() {
+        let dir = std::env::temp_dir().join(format!("sylva-zarr-big-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        let store = dir.join("w.zarr");
+        let grid = Grid::regular(40, 4, 3.0, &[20.0], 16, 0.1);
+        let sp = SynthParams { seed: 1, method: Method::Separable };
+        write_zarr_streaming(&WindParams::default(), &grid, sp, &store, &|_| {}).expect("store");
+        // 100 000 × 10 000 points × 3 × 12 frames: 3.6·10¹⁰ values (144 GB), inside the
+        // grid's cap of 4·10¹⁰.
+        let edit = |rel: &str, f: &dyn Fn(&mut serde_json::Value)| {
+            let p = store.join(rel);
+            let mut v: serde_json::Value =
+                serde_json::from_str(&std::fs::read_to_string(&p).expect("read")).expect("json");
+            f(&mut v);
+            crate::io::atomic::write_atomic(&p, v.to_string().as_bytes()).expect("write");
+        };
+        let (nx, ny, frames) = (100_000usize, 10_000usize, 12usize);
+        edit("zarr.json", &|v| {
+            let g = &mut v["attributes"]["sylva"]["grid"];
+            g["xs"] = (0..nx).map(|i| i as f64).collect::<Vec<_>>().into();
+            g["ys"] = (0..ny).map(|i| i as f64).collect::<Vec<_>>().into();
+            g["frames"] = frames.into();
+        });
+        edit("wind/zarr.json", &|v| {
+            v["shape"] = serde_json::json!([frames, 3, 1, ny, nx]);
+            v["chunk_grid"]["configuration"]["chunk_shape"] =
+                serde_json::json!([frames, 1, 1, ny, EMIT_COLUMNS]);
+        });
+        let e = read_zarr(&store).expect_err("enormous field").to_string();
+        // Refused by size where the machine cannot allocate it, else by the first chunk.
+        assert!(e.contains("GB of memory") || e.contains("chunk holds"), "{e}");
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }
