@@ -319,4 +319,28 @@ fn resource_guards_refuse_before_work_with_what_to_change() {
     ]);
     assert!(!ok && text.contains("--max-memory budget") && text.contains("0.12 GB"), "{text}");
     assert!(!out.exists());
+    // 1500 × 1500 points × 4096 frames: 110.6 GB of output, 111.5 GB of working memory, with
+    // no budget set, against this machine's free memory (on a machine with that much free it
+    // would simply run).
+    let free_gb = std::fs::read_to_string("/proc/meminfo").ok().and_then(|m| {
+        let line = m.lines().find(|l| l.starts_with("MemAvailable:"))?.to_string();
+        line.split_whitespace().nth(1)?.parse::<f64>().ok().map(|kb| kb * 1024.0 / 1e9)
+    });
+    if free_gb.is_some_and(|gb| gb < 140.0) {
+        let t0 = std::time::Instant::now();
+        let (ok, text) = sylva(&[
+            "wind",
+            "generate",
+            "--nx",
+            "1500",
+            "--ny",
+            "1500",
+            "--frames",
+            "4096",
+            "--out",
+            out.to_str().expect("utf-8"),
+        ]);
+        assert!(!ok && text.contains("111.48 GB") && text.contains("free"), "{text}");
+        assert!(t0.elapsed().as_secs_f64() < 5.0, "refused up front, took {:?}", t0.elapsed());
+    }
 }
