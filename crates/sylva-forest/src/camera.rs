@@ -1,6 +1,8 @@
 //! A perspective camera: world z up, right-handed; clip depth 0 … 1 (wgpu's convention).
 //! Matrices are column-major `[[f32; 4]; 4]` (`m[column][row]`), as WGSL reads them.
 
+use sylva_core::v3::{cross, dot, norm, sub};
+
 /// A 4×4 matrix, column-major.
 pub type Mat4 = [[f32; 4]; 4];
 
@@ -17,20 +19,6 @@ pub struct Camera {
     pub near: f32,
     /// Far clip distance, m.
     pub far: f32,
-}
-
-fn sub(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-fn dot(a: [f32; 3], b: [f32; 3]) -> f32 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-fn cross(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-}
-fn norm(a: [f32; 3]) -> [f32; 3] {
-    let n = dot(a, a).sqrt().max(1e-20);
-    [a[0] / n, a[1] / n, a[2] / n]
 }
 
 /// a · b.

@@ -4,6 +4,7 @@
 use std::f32::consts::{PI, TAU};
 
 use serde::{Deserialize, Serialize};
+use sylva_core::SplitMix64 as Rng;
 use thiserror::Error;
 
 use crate::camera::Camera;
@@ -395,24 +396,6 @@ impl SceneSpec {
     }
 }
 
-/// Deterministic generator: SplitMix64.
-#[derive(Debug, Clone)]
-pub(crate) struct Rng(pub(crate) u64);
-
-impl Rng {
-    pub(crate) fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-    /// Uniform in [0, 1).
-    pub(crate) fn unit(&mut self) -> f32 {
-        (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32
-    }
-}
-
 /// Gentle terrain: a sum of three seeded sinusoidal hill fields.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Terrain {
@@ -426,7 +409,7 @@ pub struct Terrain {
 impl Terrain {
     /// The terrain of `spec`.
     pub fn new(spec: &SceneSpec) -> Terrain {
-        let mut rng = Rng(spec.seed ^ 0x7e44_a1b0);
+        let mut rng = Rng::new(spec.seed ^ 0x7e44_a1b0);
         let mut phases = [[0.0; 3]; 3];
         for p in &mut phases {
             *p = [rng.unit() * TAU, rng.unit() * TAU, rng.unit() * PI];
@@ -528,7 +511,7 @@ fn poisson_disk(rng: &mut Rng, side: f32, r: f32) -> Vec<[f32; 2]> {
 /// The layout of `spec`: `trees` placements, the ones nearest the centre of a Poisson-disk
 /// sample, each with a species drawn by weight, a yaw and a scale.
 pub fn layout(spec: &SceneSpec, terrain: &Terrain) -> Vec<Placement> {
-    let mut rng = Rng(spec.seed ^ 0x0001_a700_u64);
+    let mut rng = Rng::new(spec.seed ^ 0x0001_a700_u64);
     let mut side = spec.side();
     let mut pts = poisson_disk(&mut rng, side, spec.spacing);
     while pts.len() < spec.trees {

@@ -31,6 +31,8 @@
 //! for any thread count. After the first step at a given dt nothing is allocated.
 
 use rayon::prelude::*;
+use sylva_core::simd_kernel;
+use sylva_core::v3::{cross, dot};
 
 use crate::species::{SwaySpecies, Transition};
 
@@ -45,13 +47,6 @@ pub const LANES: usize = 16;
 /// A value per lane of a group.
 pub type Lanes = [f32; LANES];
 
-fn cross(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-}
-
-fn dot(a: [f32; 3], b: [f32; 3]) -> f32 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
 const ZERO: Lanes = [0.0; LANES];
 
 /// Lumped static drag of held joints: [D, c] of their wood, then of their leaves.
@@ -356,54 +351,19 @@ struct Group<'a> {
     held: Option<&'a [Lump]>,
 }
 
-/// Step one group, vectorised with the widest instruction set the CPU has.
-fn step_group(
-    sp: &SwaySpecies,
-    tr: &[Transition],
-    aero: &[f32],
-    blend: f32,
-    bud: &[u32; LANES],
-    u: &[Lanes; 3],
-    st: &mut Group<'_>,
-) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        #[target_feature(enable = "avx512f,avx512dq,avx512vl,avx2")]
-        fn wide(
-            sp: &SwaySpecies,
-            tr: &[Transition],
-            aero: &[f32],
-            b: f32,
-            bud: &[u32; LANES],
-            u: &[Lanes; 3],
-            st: &mut Group<'_>,
-        ) {
-            step_group_impl(sp, tr, aero, b, bud, u, st)
-        }
-        #[target_feature(enable = "avx2")]
-        fn avx2(
-            sp: &SwaySpecies,
-            tr: &[Transition],
-            aero: &[f32],
-            b: f32,
-            bud: &[u32; LANES],
-            u: &[Lanes; 3],
-            st: &mut Group<'_>,
-        ) {
-            step_group_impl(sp, tr, aero, b, bud, u, st)
-        }
-        if std::arch::is_x86_feature_detected!("avx512dq")
-            && std::arch::is_x86_feature_detected!("avx512vl")
-        {
-            // SAFETY: the CPU has these AVX-512 subsets, checked just above.
-            return unsafe { wide(sp, tr, aero, blend, bud, u, st) };
-        }
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU has AVX2, checked just above.
-            return unsafe { avx2(sp, tr, aero, blend, bud, u, st) };
-        }
+simd_kernel! {
+    /// Step one group, vectorised with the widest instruction set the CPU has.
+    fn step_group(
+        sp: &SwaySpecies,
+        tr: &[Transition],
+        aero: &[f32],
+        blend: f32,
+        bud: &[u32; LANES],
+        u: &[Lanes; 3],
+        st: &mut Group<'_>,
+    ) {
+        step_group_impl(sp, tr, aero, blend, bud, u, st)
     }
-    step_group_impl(sp, tr, aero, blend, bud, u, st)
 }
 
 #[inline(always)]

@@ -25,9 +25,11 @@
 
 use std::f32::consts::PI;
 
+use sylva_core::SplitMix64 as Rng;
+use sylva_core::v3::{V3, add, cross, dot, norm, rotate, scale};
+
 use crate::skeleton::{Joint, NO_PARENT, Skeleton, SkeletonError};
 use crate::species::Species;
-use crate::v3::{V3, add, cross, dot, norm, rotate, scale};
 
 /// Density of green wood, kg/m³ (green hardwoods ≈ 700–1000; USDA Wood Handbook).
 pub const WOOD_DENSITY: f32 = 800.0;
@@ -35,24 +37,6 @@ pub const WOOD_DENSITY: f32 = 800.0;
 pub const LEAF_MASS_PER_AREA: f32 = 0.15;
 /// Area of a leaf of length 1 and width 1 for WP95's default (elliptic) outline: π/4.
 const LEAF_SHAPE_AREA: f32 = PI / 4.0;
-
-/// Deterministic generator: SplitMix64.
-#[derive(Debug, Clone)]
-struct Rng(u64);
-
-impl Rng {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-    /// Uniform in [−1, 1).
-    fn sym(&mut self) -> f32 {
-        (self.next_u64() >> 40) as f32 / (1u64 << 23) as f32 - 1.0
-    }
-}
 
 /// WP95's crown shape ratio for `shape` at relative position `r` ∈ [0, 1].
 pub fn shape_ratio(shape: u32, r: f32) -> f32 {
@@ -165,7 +149,7 @@ impl Species {
                 how: "nBranches and nCurveRes allow up to this many",
             });
         }
-        let mut rng = Rng(seed ^ 0x5175_a000_0000_0000);
+        let mut rng = Rng::new(seed ^ 0x5175_a000_0000_0000);
         let sp = self;
         let tree_scale = bounded_scale(sp.scale, sp.scale_v, rng.sym());
         let l0 = &sp.level[0];

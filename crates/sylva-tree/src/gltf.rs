@@ -19,10 +19,11 @@
 
 use std::fmt::Write as _;
 
+use sylva_core::v3::{V3, cross, dot, norm, scale, sub};
+
 use crate::mesh::{LeafCluster, TreeModel};
 use crate::skeleton::{NO_PARENT, Skeleton};
 use crate::texture::Image;
-use crate::v3::{V3, cross, dot, norm, scale, sub};
 
 /// Most joints glTF's 16-bit `JOINTS_0` can index.
 pub const MAX_GLTF_JOINTS: usize = 65_535;

@@ -17,7 +17,6 @@ pub mod order;
 pub mod skeleton;
 pub mod species;
 pub mod texture;
-mod v3;
 
 pub use generate::{Tree, TreeStats, shape_ratio};
 pub use mesh::{BranchMesh, LeafCluster, TreeLod, TreeModel};

@@ -35,11 +35,12 @@
 
 use std::f32::consts::{PI, TAU};
 
+use sylva_core::v3::{V3, add, cross, dot, norm, scale, sub};
+
 use crate::generate::Tree;
 use crate::skeleton::{NO_PARENT, Skeleton, SkeletonError};
 use crate::species::Species;
 use crate::texture::{Image, LeafAtlas, bark, leaf_atlas, unit};
-use crate::v3::{V3, add, cross, dot, norm, scale, sub};
 
 /// Ring sides per stem level at LOD 0 (trunk, branches, sub-branches, twigs).
 pub const SIDES: [u32; 4] = [14, 8, 5, 4];

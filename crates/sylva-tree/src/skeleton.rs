@@ -9,6 +9,7 @@
 //!
 //! Units: metres, kilograms, square metres. Tree space: z up, the trunk base at the origin.
 
+use sylva_core::v3::{cross, norm};
 use thiserror::Error;
 
 /// Marks the root joint's parent.
@@ -45,7 +46,7 @@ impl Joint {
     pub fn frame(&self) -> [[f32; 3]; 3] {
         let z = self.axis;
         let up = if z[2].abs() > 0.999 { [1.0, 0.0, 0.0] } else { [0.0, 0.0, 1.0] };
-        let x = normalize(cross(up, z));
+        let x = norm(cross(up, z));
         let y = cross(z, x);
         [x, y, z]
     }
@@ -58,15 +59,6 @@ impl Joint {
             self.origin[2] + self.axis[2] * self.length,
         ]
     }
-}
-
-fn cross(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-}
-
-fn normalize(a: [f32; 3]) -> [f32; 3] {
-    let n = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt().max(1e-30);
-    [a[0] / n, a[1] / n, a[2] / n]
 }
 
 /// A skeleton that failed validation.

@@ -16,6 +16,8 @@
 
 use std::f32::consts::PI;
 
+use sylva_core::rng::{GOLDEN, mix64};
+
 use crate::species::Species;
 
 /// An RGBA8 image.
@@ -70,10 +72,7 @@ type Twig = ([f32; 2], [f32; 2], f32);
 pub const ATLAS_CELLS: u32 = 2;
 
 fn hash(seed: u64, x: u64) -> u64 {
-    let mut z = seed ^ x.wrapping_mul(0x9e37_79b9_7f4a_7c15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    z ^ (z >> 31)
+    mix64(seed ^ x.wrapping_mul(GOLDEN))
 }
 
 /// A hash of (seed, x), uniform in [0, 1).

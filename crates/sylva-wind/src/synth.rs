@@ -49,6 +49,8 @@ use rayon::prelude::*;
 use realfft::RealFftPlanner;
 use realfft::num_complex::Complex;
 use serde::{Deserialize, Serialize};
+use sylva_core::rng::{GOLDEN, mix64};
+use sylva_core::simd_kernel;
 
 use crate::error::WindError;
 use crate::grid::Grid;
@@ -138,16 +140,6 @@ impl Sample for f64 {
     }
 }
 
-/// SplitMix64 finaliser (Steele, Lea & Flood 2014): a bijective 64-bit mixer.
-#[inline]
-fn mix64(mut z: u64) -> u64 {
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    z ^ (z >> 31)
-}
-
-const GOLDEN: u64 = 0x9e37_79b9_7f4a_7c15;
-
 /// Key of the phase stream of one (seed, component, frequency line).
 #[inline]
 fn line_key(seed: u64, comp: Component, j: usize) -> u64 {
@@ -191,43 +183,6 @@ fn phasor(key: u64, k: u64) -> C64 {
     let neg_re = ((q ^ (q >> 1)) & 1) << 63;
     let neg_im = ((q >> 1) & 1) << 63;
     C64::new(f64::from_bits(a ^ (neg_re & SIGN)), f64::from_bits(b ^ (neg_im & SIGN)))
-}
-
-/// Defines a kernel three times — AVX-512, AVX2 and baseline — from one body, and picks the
-/// widest the CPU has at run time. The body uses plain IEEE adds and multiplies (Rust never
-/// fuses them), so every variant gives the same bits: only the speed differs.
-macro_rules! simd_kernel {
-    ($(#[$m:meta])* fn $name:ident($($a:ident: $t:ty),* $(,)?) $body:block) => {
-        $(#[$m])*
-        fn $name($($a: $t),*) {
-            #[inline(always)]
-            fn imp($($a: $t),*) $body
-            #[cfg(target_arch = "x86_64")]
-            #[target_feature(enable = "avx512f,avx512dq,avx512vl,avx2")]
-            fn wide($($a: $t),*) {
-                imp($($a),*)
-            }
-            #[cfg(target_arch = "x86_64")]
-            #[target_feature(enable = "avx2")]
-            fn avx2($($a: $t),*) {
-                imp($($a),*)
-            }
-            #[cfg(target_arch = "x86_64")]
-            {
-                if std::arch::is_x86_feature_detected!("avx512dq")
-                    && std::arch::is_x86_feature_detected!("avx512vl")
-                {
-                    // SAFETY: the CPU has these AVX-512 subsets, checked just above.
-                    return unsafe { wide($($a),*) };
-                }
-                if std::arch::is_x86_feature_detected!("avx2") {
-                    // SAFETY: the CPU has AVX2, checked just above.
-                    return unsafe { avx2($($a),*) };
-                }
-            }
-            imp($($a),*)
-        }
-    };
 }
 
 simd_kernel! {
@@ -383,16 +338,18 @@ impl<T: Copy> OutPtr<T> {
 
 /// A raw view of a coefficient buffer whose tasks own disjoint line ranges of every row.
 #[derive(Clone, Copy)]
-struct RowsPtr(*mut C64);
+struct RowsPtr(*mut C64, usize);
 // SAFETY: tasks only form slices of disjoint index ranges (see the call sites), and the
 // buffer outlives the parallel scope.
 unsafe impl Sync for RowsPtr {}
+// SAFETY: as for Sync: the pointer only moves to tasks that use disjoint ranges.
 unsafe impl Send for RowsPtr {}
 impl RowsPtr {
     /// # Safety
     /// `[at, at + len)` lies in the buffer and no other live slice overlaps it mutably.
     #[allow(clippy::mut_from_ref)]
     unsafe fn slice<'a>(self, at: usize, len: usize) -> &'a mut [C64] {
+        debug_assert!(at + len <= self.1, "rows [{at}, {}) past the buffer's {}", at + len, self.1);
         // SAFETY: guaranteed by the caller.
         unsafe { std::slice::from_raw_parts_mut(self.0.add(at), len) }
     }
@@ -567,7 +524,10 @@ fn synth_component<'a, T: Sample>(
                 // √Δω·√S0(z) times this column's advection factor, per (height, line): one
                 // complex factor applied at emission.
                 lines.column_factors(params.advection, grid.xs[ix], true, &mut fac);
-                let (xs_ptr, col_ptr) = (RowsPtr(xstate.as_mut_ptr()), RowsPtr(col.as_mut_ptr()));
+                let (xs_ptr, col_ptr) = (
+                    RowsPtr(xstate.as_mut_ptr(), xstate.len()),
+                    RowsPtr(col.as_mut_ptr(), col.len()),
+                );
                 ranges.par_iter().for_each(|r| {
                     let at = |p: usize| p * nc + r.start;
                     fn part<'v>(v: &'v [f64], r: &std::ops::Range<usize>) -> &'v [f64] {

@@ -14,20 +14,7 @@
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
-/// SplitMix64: a seeded stream for the mutations.
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
-    }
-}
+use sylva_core::SplitMix64 as Rng;
 
 fn iterations() -> usize {
     std::env::var("SYLVA_FUZZ_ITERS").ok().and_then(|s| s.parse().ok()).unwrap_or(300)
@@ -45,7 +32,7 @@ fn mutate(rng: &mut Rng, input: &[u8]) -> Vec<u8> {
             }
             2 => {
                 let n = 1 + rng.below(8);
-                let bytes: Vec<u8> = (0..n).map(|_| rng.next() as u8).collect();
+                let bytes: Vec<u8> = (0..n).map(|_| rng.next_u64() as u8).collect();
                 v.splice(at.min(v.len())..at.min(v.len()), bytes);
             }
             3 if !v.is_empty() => {
