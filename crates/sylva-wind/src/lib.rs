@@ -24,7 +24,6 @@ pub mod field;
 pub mod grid;
 pub mod io;
 pub mod params;
-pub mod plot;
 pub mod spectrum;
 pub mod stats;
 pub mod synth;

@@ -6,6 +6,7 @@
 
 mod bench;
 mod gallery;
+mod plot;
 mod render;
 mod table3;
 mod tree;

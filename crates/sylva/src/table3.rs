@@ -494,7 +494,7 @@ fn write_outputs(
     let series = CONFIGS
         .iter()
         .enumerate()
-        .map(|(row, (label, ..))| sylva_wind::plot::Series {
+        .map(|(row, (label, ..))| crate::plot::Series {
             label: label.to_uppercase(),
             color: colours[row],
             points: results
@@ -507,7 +507,7 @@ fn write_outputs(
     let paper = CONFIGS
         .iter()
         .enumerate()
-        .map(|(row, (label, ..))| sylva_wind::plot::Series {
+        .map(|(row, (label, ..))| crate::plot::Series {
             label: label.to_uppercase(),
             color: colours[row],
             points: [1000.0, 3000.0, 10000.0, 50000.0]
@@ -519,22 +519,26 @@ fn write_outputs(
         })
         .collect();
     let panels = [
-        sylva_wind::plot::Panel {
-            title: "FPS HERE VS TREES".into(),
+        crate::plot::Panel {
+            title: "FPS HERE".into(),
+            x_label: "TREES".into(),
+            y_label: "FRAMES PER SECOND".into(),
             log_x: true,
             log_y: true,
             y_range: None,
             series,
         },
-        sylva_wind::plot::Panel {
+        crate::plot::Panel {
             title: "FPS IN THE PAPER".into(),
+            x_label: "TREES".into(),
+            y_label: "FRAMES PER SECOND".into(),
             log_x: true,
             log_y: true,
             y_range: None,
             series: paper,
         },
     ];
-    sylva_wind::plot::write_png(&a.out.join("table3.png"), &panels)?;
+    crate::plot::write_png(&a.out.join("table3.png"), &panels)?;
     println!("{md}");
     println!("wrote {}/table3.md, table3.csv, table3.png", a.out.display());
     Ok(())

@@ -6,7 +6,9 @@ use std::time::Instant;
 use anyhow::{Context, bail};
 use clap::{Args, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
-use sylva_wind::stats::{FieldStats, ensemble_stats_at, field_stats, write_plots};
+use sylva_wind::stats::{FieldStats, ensemble_stats_at, field_stats};
+
+use crate::plot::write_stats_plots;
 use sylva_wind::synth::{cholesky_estimate, memory_estimate};
 use sylva_wind::{
     CoherenceSpeed, Grid, Method, Preset, Profile, SpectrumModel, SynthParams, WindField,
@@ -374,7 +376,7 @@ pub fn run(cmd: WindCommand) -> anyhow::Result<()> {
             let dir =
                 a.out.unwrap_or_else(|| a.file.parent().map(Path::to_path_buf).unwrap_or_default());
             std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
-            for p in write_plots(&field_stats(&field, a.segment), &dir)? {
+            for p in write_stats_plots(&field_stats(&field, a.segment), &dir)? {
                 println!("wrote {}", p.display());
             }
             Ok(())
@@ -397,7 +399,7 @@ pub fn demo(a: DemoArgs) -> anyhow::Result<()> {
     write(&field, &path, FormatArg::Swf, 0)?;
     let stats = field_stats(&field, None);
     print_stats(&field, &stats);
-    let plots = write_plots(&stats, &a.out)?;
+    let plots = write_stats_plots(&stats, &a.out)?;
     println!("\nwrote {}", path.display());
     for p in plots {
         println!("wrote {}", p.display());

@@ -1,10 +1,14 @@
-//! A small PNG line-plot writer for the statistics (spectra vs eq. 4, co-coherence vs
-//! eq. 5): panels with log or linear axes, decade ticks, labelled with a built-in 3×5 pixel
-//! font drawn at 2× scale. No font files, no system libraries.
+//! A small PNG line-plot writer for the command line's figures (a field's spectra against
+//! eq. 4 and co-coherence against eq. 5, the Table 3 chart): panels with log or linear axes,
+//! decade ticks, axis labels, a legend, in a built-in 3×5 pixel font drawn at 2× scale. No
+//! font files and no system libraries: a plotting crate would need a font shipped with the
+//! program or found on the system.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-use crate::error::WindError;
+use anyhow::Context as _;
+use sylva_wind::io::atomic::AtomicFile;
+use sylva_wind::stats::FieldStats;
 
 /// One polyline of a panel.
 #[derive(Debug, Clone)]
@@ -24,6 +28,10 @@ pub struct Series {
 pub struct Panel {
     /// Title above the panel.
     pub title: String,
+    /// Label under the x axis.
+    pub x_label: String,
+    /// Label along the y axis (drawn upward).
+    pub y_label: String,
     /// Log-scaled x axis.
     pub log_x: bool,
     /// Log-scaled y axis.
@@ -36,7 +44,7 @@ pub struct Panel {
 
 const W: usize = 420;
 const H: usize = 340;
-const MARGIN: (usize, usize, usize, usize) = (56, 12, 30, 40); // left, right, top, bottom
+const MARGIN: (usize, usize, usize, usize) = (70, 12, 30, 44); // left, right, top, bottom
 
 /// 3×5 glyphs, rows top to bottom, 3 bits each (MSB left).
 fn glyph(c: char) -> [u8; 5] {
@@ -110,6 +118,26 @@ impl Canvas {
             let (x, y) = (a.0 + (b.0 - a.0) * t, a.1 + (b.1 - a.1) * t);
             self.set(x.round() as i64, y.round() as i64, c);
             self.set(x.round() as i64, y.round() as i64 + 1, c);
+        }
+    }
+
+    /// Text reading upward (glyphs turned a quarter counter-clockwise), its first letter's
+    /// lower-left corner at (x, y).
+    fn text_up(&mut self, x: i64, y: i64, s: &str, c: [u8; 3]) {
+        for (k, ch) in s.chars().enumerate() {
+            for (row, bits) in glyph(ch).iter().enumerate() {
+                for col in 0..3 {
+                    if bits & (4 >> col) != 0 {
+                        for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                            self.set(
+                                x + 2 * row as i64 + dx,
+                                y - 8 * k as i64 - 2 * col as i64 - 1 + dy,
+                                c,
+                            );
+                        }
+                    }
+                }
+            }
         }
     }
 
@@ -195,8 +223,13 @@ fn draw_panel(cv: &mut Canvas, ox: usize, p: &Panel) {
     for v in ticks(ya, yb, p.log_y) {
         let (_, py) = map(if p.log_x { 10f64.powf(xa) } else { xa }, v);
         cv.line((x0, py), (x1, py), grey);
-        cv.text(ox as i64 + 4, py as i64 - 5, &fmt_tick(v), black);
+        cv.text(ox as i64 + 18, py as i64 - 5, &fmt_tick(v), black);
     }
+    // Axis labels: x centred under the tick labels, y upward along the left edge.
+    let xl = 8 * p.x_label.chars().count() as i64;
+    cv.text(((x0 + x1) / 2.0) as i64 - xl / 2, y1 as i64 + 24, &p.x_label, black);
+    let yl = 8 * p.y_label.chars().count() as i64;
+    cv.text_up(ox as i64 + 4, ((y0 + y1) / 2.0) as i64 + yl / 2, &p.y_label, black);
     for (a, b) in
         [((x0, y0), (x1, y0)), ((x0, y1), (x1, y1)), ((x0, y0), (x0, y1)), ((x1, y0), (x1, y1))]
     {
@@ -234,22 +267,93 @@ fn draw_panel(cv: &mut Canvas, ox: usize, p: &Panel) {
     }
 }
 
-/// Write panels side by side into a PNG.
-pub fn write_png(path: &Path, panels: &[Panel]) -> Result<(), WindError> {
+/// Write panels side by side into a PNG (atomically: the previous file stays whole until
+/// the new one is).
+pub fn write_png(path: &Path, panels: &[Panel]) -> anyhow::Result<()> {
     let mut cv =
         Canvas { w: W * panels.len().max(1), h: H, px: vec![255; 3 * W * panels.len().max(1) * H] };
     for (i, p) in panels.iter().enumerate() {
         draw_panel(&mut cv, i * W, p);
     }
     let mut file =
-        crate::io::atomic::AtomicFile::create(path).map_err(|e| WindError::io(path, e))?;
+        AtomicFile::create(path).with_context(|| format!("creating {}", path.display()))?;
     let mut enc = png::Encoder::new(&mut file, cv.w as u32, cv.h as u32);
     enc.set_color(png::ColorType::Rgb);
     enc.set_depth(png::BitDepth::Eight);
-    let mut wr = enc.write_header().map_err(|e| WindError::Export(e.to_string()))?;
-    wr.write_image_data(&cv.px).map_err(|e| WindError::Export(e.to_string()))?;
-    wr.finish().map_err(|e| WindError::Export(e.to_string()))?;
-    file.commit().map_err(|e| WindError::io(path, e))
+    let mut wr = enc.write_header()?;
+    wr.write_image_data(&cv.px)?;
+    wr.finish()?;
+    file.commit().with_context(|| format!("writing {}", path.display()))
+}
+
+/// Write `spectra.png` (Welch bands vs eq. 4, per component) and `coherence.png`
+/// (pooled co-coherence vs eq. 5 at one-step separations along x and y) into `dir`, from
+/// the statistics `sylva_wind::stats` computes.
+pub fn write_stats_plots(stats: &FieldStats, dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
+    const MEASURED: [u8; 3] = [200, 40, 40];
+    const MODEL: [u8; 3] = [30, 60, 200];
+    let spectra: Vec<Panel> = stats
+        .components
+        .iter()
+        .map(|c| Panel {
+            title: format!("{} SPECTRUM AT {:.0} M", c.component, stats.height),
+            x_label: "FREQUENCY (HZ)".into(),
+            y_label: "S (M2/S2/HZ)".into(),
+            log_x: true,
+            log_y: true,
+            y_range: None,
+            series: vec![
+                Series {
+                    label: "EQ. 4".into(),
+                    color: MODEL,
+                    points: c.spectrum.iter().map(|b| (b.f, b.model)).collect(),
+                    markers: false,
+                },
+                Series {
+                    label: "MEASURED".into(),
+                    color: MEASURED,
+                    points: c.spectrum.iter().map(|b| (b.f, b.measured)).collect(),
+                    markers: true,
+                },
+            ],
+        })
+        .collect();
+    let colours = [[30, 60, 200], [20, 150, 60]];
+    let coherence: Vec<Panel> = stats
+        .components
+        .iter()
+        .map(|c| {
+            let mut series = Vec::new();
+            for (row, col) in c.coherence.iter().filter(|r| r.steps == 1).zip(colours) {
+                let name = format!("D{} {:.1}M", row.axis, row.metres).to_uppercase();
+                series.push(Series {
+                    label: format!("EQ.5 {name}"),
+                    color: col,
+                    points: row.bands.iter().map(|b| (b.f, b.model)).collect(),
+                    markers: false,
+                });
+                series.push(Series {
+                    label: String::new(),
+                    color: col,
+                    points: row.bands.iter().map(|b| (b.f, b.measured)).collect(),
+                    markers: true,
+                });
+            }
+            Panel {
+                title: format!("{} CO-COHERENCE AT {:.0} M", c.component, stats.height),
+                x_label: "FREQUENCY (HZ)".into(),
+                y_label: "CO-COHERENCE".into(),
+                log_x: true,
+                log_y: false,
+                y_range: Some((-0.2, 1.0)),
+                series,
+            }
+        })
+        .collect();
+    let (a, b) = (dir.join("spectra.png"), dir.join("coherence.png"));
+    write_png(&a, &spectra)?;
+    write_png(&b, &coherence)?;
+    Ok(vec![a, b])
 }
 
 #[cfg(test)]
@@ -264,6 +368,8 @@ mod tests {
         let red = [220, 0, 0];
         let panel = Panel {
             title: "TEST".into(),
+            x_label: "X".into(),
+            y_label: "Y".into(),
             log_x: true,
             log_y: true,
             y_range: None,
