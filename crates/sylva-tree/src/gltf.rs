@@ -17,13 +17,24 @@
 //! their nearest exported ancestor. Leaf cards, which the renderer turns part way towards
 //! the viewer, are exported as their fixed oriented quads (facing out of the crown).
 
-use std::fmt::Write as _;
-
+use serde::Serialize;
+use serde_json::json;
 use sylva_core::v3::{V3, cross, dot, norm, scale, sub};
 
 use crate::mesh::{LeafCluster, TreeModel};
 use crate::skeleton::{NO_PARENT, Skeleton};
 use crate::texture::Image;
+
+// OpenGL enumerants that glTF 2.0 uses by number (glTF 2.0 specification, §5).
+const ARRAY_BUFFER: u32 = 34_962;
+const ELEMENT_ARRAY_BUFFER: u32 = 34_963;
+const UNSIGNED_SHORT: u32 = 5_123;
+const UNSIGNED_INT: u32 = 5_125;
+const FLOAT: u32 = 5_126;
+const LINEAR: u32 = 9_729;
+const LINEAR_MIPMAP_LINEAR: u32 = 9_987;
+const REPEAT: u32 = 10_497;
+const CLAMP_TO_EDGE: u32 = 33_071;
 
 /// Most joints glTF's 16-bit `JOINTS_0` can index.
 pub const MAX_GLTF_JOINTS: usize = 65_535;
@@ -82,13 +93,119 @@ fn frame(sk: &Skeleton, j: usize) -> [V3; 3] {
     [x, y, z]
 }
 
+/// A `bufferViews` entry.
+#[derive(Serialize)]
+#[serde(rename_all = "camelCase")]
+struct BufferView {
+    buffer: usize,
+    byte_offset: usize,
+    byte_length: usize,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    target: Option<u32>,
+}
+
+/// An `accessors` entry.
+#[derive(Serialize)]
+#[serde(rename_all = "camelCase")]
+struct Accessor {
+    buffer_view: usize,
+    component_type: u32,
+    count: usize,
+    #[serde(rename = "type")]
+    ty: &'static str,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    min: Option<V3>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    max: Option<V3>,
+}
+
+/// A `nodes` entry: a joint (translation, rotation, children) or a mesh with its skin.
+#[derive(Serialize)]
+struct Node {
+    name: String,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    translation: Option<V3>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    rotation: Option<[f32; 4]>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    children: Vec<usize>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    mesh: Option<usize>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    skin: Option<usize>,
+}
+
+/// A `skins` entry.
+#[derive(Serialize)]
+#[serde(rename_all = "camelCase")]
+struct Skin {
+    inverse_bind_matrices: usize,
+    skeleton: usize,
+    joints: Vec<usize>,
+}
+
+/// The attributes of a skinned, textured primitive.
+#[derive(Serialize)]
+struct Attributes {
+    #[serde(rename = "POSITION")]
+    position: usize,
+    #[serde(rename = "NORMAL")]
+    normal: usize,
+    #[serde(rename = "TEXCOORD_0")]
+    texcoord: usize,
+    #[serde(rename = "JOINTS_0")]
+    joints: usize,
+    #[serde(rename = "WEIGHTS_0")]
+    weights: usize,
+}
+
+/// A mesh primitive (triangles).
+#[derive(Serialize)]
+struct Primitive {
+    attributes: Attributes,
+    indices: usize,
+    material: usize,
+}
+
+/// A `meshes` entry.
+#[derive(Serialize)]
+struct Mesh {
+    name: String,
+    primitives: Vec<Primitive>,
+}
+
+/// A `scenes` entry.
+#[derive(Serialize)]
+struct Scene {
+    name: String,
+    nodes: Vec<usize>,
+}
+
+/// The glTF JSON chunk. Typed where the values are computed (f32 fields keep their
+/// shortest decimal form), literal JSON for the fixed materials, samplers and textures.
+#[derive(Serialize)]
+#[serde(rename_all = "camelCase")]
+struct Gltf {
+    asset: serde_json::Value,
+    scene: usize,
+    scenes: Vec<Scene>,
+    nodes: Vec<Node>,
+    meshes: Vec<Mesh>,
+    skins: Vec<Skin>,
+    materials: serde_json::Value,
+    samplers: serde_json::Value,
+    images: serde_json::Value,
+    textures: serde_json::Value,
+    accessors: Vec<Accessor>,
+    buffer_views: Vec<BufferView>,
+    buffers: serde_json::Value,
+}
+
 /// Binary buffer under construction, with one view per accessor.
 struct Bin {
     data: Vec<u8>,
-    views: String,
-    accessors: String,
-    n_views: usize,
-    n_accessors: usize,
+    views: Vec<BufferView>,
+    accessors: Vec<Accessor>,
 }
 
 impl Bin {
@@ -96,22 +213,10 @@ impl Bin {
         while !self.data.len().is_multiple_of(4) {
             self.data.push(0);
         }
-        let offset = self.data.len();
+        let byte_offset = self.data.len();
         self.data.extend_from_slice(bytes);
-        if self.n_views > 0 {
-            self.views.push(',');
-        }
-        let _ = write!(
-            self.views,
-            "{{\"buffer\":0,\"byteOffset\":{offset},\"byteLength\":{}",
-            bytes.len()
-        );
-        if let Some(t) = target {
-            let _ = write!(self.views, ",\"target\":{t}");
-        }
-        self.views.push('}');
-        self.n_views += 1;
-        self.n_views - 1
+        self.views.push(BufferView { buffer: 0, byte_offset, byte_length: bytes.len(), target });
+        self.views.len() - 1
     }
 
     /// Accessor over `bytes`: component type, count, type name, optional min/max.
@@ -119,29 +224,61 @@ impl Bin {
         &mut self,
         bytes: &[u8],
         target: Option<u32>,
-        component: u32,
+        component_type: u32,
         count: usize,
-        ty: &str,
+        ty: &'static str,
         bounds: Option<(V3, V3)>,
     ) -> usize {
-        let view = self.view(bytes, target);
-        if self.n_accessors > 0 {
-            self.accessors.push(',');
-        }
-        let _ = write!(
-            self.accessors,
-            "{{\"bufferView\":{view},\"componentType\":{component},\"count\":{count},\"type\":\"{ty}\""
+        let buffer_view = self.view(bytes, target);
+        self.accessors.push(Accessor {
+            buffer_view,
+            component_type,
+            count,
+            ty,
+            min: bounds.map(|b| b.0),
+            max: bounds.map(|b| b.1),
+        });
+        self.accessors.len() - 1
+    }
+
+    /// A skinned, textured primitive from vertex data: positions (with bounds), normals,
+    /// texture coordinates, joint indices (four u16 per vertex, as bytes), weights, indices.
+    #[allow(clippy::too_many_arguments)]
+    fn primitive(
+        &mut self,
+        positions: &[V3],
+        normals: &[V3],
+        uvs: &[[f32; 2]],
+        joints: &[u8],
+        weights: &[[f32; 4]],
+        indices: &[u32],
+        material: usize,
+    ) -> Primitive {
+        let v = Some(ARRAY_BUFFER);
+        let attributes = Attributes {
+            position: self.accessor(
+                &f32_bytes(positions),
+                v,
+                FLOAT,
+                positions.len(),
+                "VEC3",
+                Some(bounds(positions)),
+            ),
+            normal: self.accessor(&f32_bytes(normals), v, FLOAT, normals.len(), "VEC3", None),
+            texcoord: self.accessor(&f32_bytes(uvs), v, FLOAT, uvs.len(), "VEC2", None),
+            joints: self.accessor(joints, v, UNSIGNED_SHORT, joints.len() / 8, "VEC4", None),
+            weights: self.accessor(&f32_bytes(weights), v, FLOAT, weights.len(), "VEC4", None),
+        };
+        let ib: Vec<u8> = indices.iter().flat_map(|i| i.to_le_bytes()).collect();
+        let indices = self.accessor(
+            &ib,
+            Some(ELEMENT_ARRAY_BUFFER),
+            UNSIGNED_INT,
+            indices.len(),
+            "SCALAR",
+            None,
         );
-        if let Some((lo, hi)) = bounds {
-            let _ = write!(
-                self.accessors,
-                ",\"min\":[{},{},{}],\"max\":[{},{},{}]",
-                lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]
-            );
-        }
-        self.accessors.push('}');
-        self.n_accessors += 1;
-        self.n_accessors - 1
+        Primitive { attributes, indices, material }
     }
 }
 
@@ -175,24 +312,6 @@ fn png(img: &Image) -> Vec<u8> {
     out
 }
 
-/// Escape a string for JSON.
-fn json_str(s: &str) -> String {
-    let mut o = String::with_capacity(s.len() + 2);
-    o.push('"');
-    for ch in s.chars() {
-        match ch {
-            '"' => o.push_str("\\\""),
-            '\\' => o.push_str("\\\\"),
-            c if (c as u32) < 0x20 => {
-                let _ = write!(o, "\\u{:04x}", c as u32);
-            }
-            c => o.push(c),
-        }
-    }
-    o.push('"');
-    o
-}
-
 /// The leaf quad of a cluster: four corners and its normal (out of the crown).
 fn leaf_quad(c: &LeafCluster) -> ([V3; 4], V3) {
     let (u, v) = c.axes();
@@ -219,16 +338,9 @@ impl TreeModel {
         let mut order: Vec<usize> = (0..n).collect();
         order.sort_by(|&a, &b| sk.carried_mass(b).total_cmp(&sk.carried_mass(a)).then(a.cmp(&b)));
         let limit = opts.max_joints.clamp(1, MAX_GLTF_JOINTS);
-        let mut bin = Bin {
-            data: Vec::new(),
-            views: String::new(),
-            accessors: String::new(),
-            n_views: 0,
-            n_accessors: 0,
-        };
-        let mut nodes = String::new();
-        let mut n_nodes = 0usize;
-        let mut skins = String::new();
+        let mut bin = Bin { data: Vec::new(), views: Vec::new(), accessors: Vec::new() };
+        let mut nodes: Vec<Node> = Vec::new();
+        let mut skins: Vec<Skin> = Vec::new();
         // Textures: image 0 bark, image 1 leaves.
         let bark_view = bin.view(&png(&self.bark), None);
         let leaf_view = bin.view(&png(&self.leaves.image), None);
@@ -237,8 +349,8 @@ impl TreeModel {
         } else {
             opts.lods.iter().copied().filter(|&l| l < self.lods.len()).collect()
         };
-        let mut meshes = String::new();
-        let mut scenes = String::new();
+        let mut meshes: Vec<Mesh> = Vec::new();
+        let mut scenes: Vec<Scene> = Vec::new();
         let cells = self.leaves.cells.max(1);
         for (k, &l) in lods.iter().enumerate() {
             let lod = &self.lods[l];
@@ -272,30 +384,10 @@ impl TreeModel {
                     keep[j] = false;
                 }
             }
-            let base = n_nodes;
-            let (index, count) =
-                self.joint_nodes(&keep, &frames, base, &mut nodes, &mut bin, &mut skins);
-            n_nodes += count;
+            let base = nodes.len();
+            let index = self.joint_nodes(&keep, &frames, &mut nodes, &mut bin, &mut skins);
             let mut prims = Vec::new();
             if !b.indices.is_empty() {
-                let pos = bin.accessor(
-                    &f32_bytes(&b.positions),
-                    Some(34962),
-                    5126,
-                    b.positions.len(),
-                    "VEC3",
-                    Some(bounds(&b.positions)),
-                );
-                let nor = bin.accessor(
-                    &f32_bytes(&b.normals),
-                    Some(34962),
-                    5126,
-                    b.normals.len(),
-                    "VEC3",
-                    None,
-                );
-                let uv =
-                    bin.accessor(&f32_bytes(&b.uvs), Some(34962), 5126, b.uvs.len(), "VEC2", None);
                 // Joints folded into the same exported joint add their weights; unused
                 // slots are joint 0 with weight 0, as the specification asks.
                 let mut jb = Vec::with_capacity(8 * b.joints.len());
@@ -323,12 +415,14 @@ impl TreeModel {
                     }
                     wv.push(ws4);
                 }
-                let jnt = bin.accessor(&jb, Some(34962), 5123, b.joints.len(), "VEC4", None);
-                let wts = bin.accessor(&f32_bytes(&wv), Some(34962), 5126, wv.len(), "VEC4", None);
-                let ib: Vec<u8> = b.indices.iter().flat_map(|i| i.to_le_bytes()).collect();
-                let idx = bin.accessor(&ib, Some(34963), 5125, b.indices.len(), "SCALAR", None);
-                prims.push(format!(
-                    "{{\"attributes\":{{\"POSITION\":{pos},\"NORMAL\":{nor},\"TEXCOORD_0\":{uv},\"JOINTS_0\":{jnt},\"WEIGHTS_0\":{wts}}},\"indices\":{idx},\"material\":0}}"
+                prims.push(bin.primitive(
+                    &b.positions,
+                    &b.normals,
+                    &b.uvs,
+                    &jb,
+                    &wv,
+                    &b.indices,
+                    0,
                 ));
             }
             if !lod.clusters.is_empty() {
@@ -361,66 +455,74 @@ impl TreeModel {
                         first + 3,
                     ]);
                 }
-                let pos = bin.accessor(
-                    &f32_bytes(&p),
-                    Some(34962),
-                    5126,
-                    p.len(),
-                    "VEC3",
-                    Some(bounds(&p)),
-                );
-                let nor =
-                    bin.accessor(&f32_bytes(&nrm), Some(34962), 5126, nrm.len(), "VEC3", None);
-                let tex = bin.accessor(&f32_bytes(&uv), Some(34962), 5126, uv.len(), "VEC2", None);
-                let jnt = bin.accessor(&jb, Some(34962), 5123, p.len(), "VEC4", None);
-                let wts = bin.accessor(&f32_bytes(&w), Some(34962), 5126, w.len(), "VEC4", None);
-                let ib: Vec<u8> = ids.iter().flat_map(|i| i.to_le_bytes()).collect();
-                let idx = bin.accessor(&ib, Some(34963), 5125, ids.len(), "SCALAR", None);
-                prims.push(format!(
-                    "{{\"attributes\":{{\"POSITION\":{pos},\"NORMAL\":{nor},\"TEXCOORD_0\":{tex},\"JOINTS_0\":{jnt},\"WEIGHTS_0\":{wts}}},\"indices\":{idx},\"material\":1}}"
-                ));
+                prims.push(bin.primitive(&p, &nrm, &uv, &jb, &w, &ids, 1));
             }
-            if k > 0 {
-                meshes.push(',');
-                scenes.push(',');
-            }
-            let _ = write!(meshes, "{{\"name\":\"lod{l}\",\"primitives\":[{}]}}", prims.join(","));
-            let node = n_nodes;
-            n_nodes += 1;
-            let _ = write!(
-                nodes,
-                ",{{\"name\":{},\"mesh\":{k},\"skin\":{k}}}",
-                json_str(&format!("{} lod{l}", opts.name))
-            );
-            let _ = write!(scenes, "{{\"name\":\"lod{l}\",\"nodes\":[{base},{node}]}}");
+            meshes.push(Mesh { name: format!("lod{l}"), primitives: prims });
+            nodes.push(Node {
+                name: format!("{} lod{l}", opts.name),
+                translation: None,
+                rotation: None,
+                children: Vec::new(),
+                mesh: Some(k),
+                skin: Some(k),
+            });
+            scenes.push(Scene { name: format!("lod{l}"), nodes: vec![base, nodes.len() - 1] });
         }
-        let json = format!(
-            concat!(
-                "{{\"asset\":{{\"version\":\"2.0\",\"generator\":\"sylva\"}},",
-                "\"scene\":0,\"scenes\":[{scenes}],\"nodes\":[{nodes}],\"meshes\":[{meshes}],",
-                "\"skins\":[{skins}],",
-                "\"materials\":[",
-                "{{\"name\":\"bark\",\"pbrMetallicRoughness\":{{\"baseColorTexture\":{{\"index\":0}},\"metallicFactor\":0,\"roughnessFactor\":0.9}}}},",
-                "{{\"name\":\"leaves\",\"pbrMetallicRoughness\":{{\"baseColorTexture\":{{\"index\":1}},\"metallicFactor\":0,\"roughnessFactor\":0.7}},",
-                "\"alphaMode\":\"MASK\",\"alphaCutoff\":0.5,\"doubleSided\":true}}],",
-                "\"samplers\":[{{\"magFilter\":9729,\"minFilter\":9987,\"wrapS\":10497,\"wrapT\":10497}},",
-                "{{\"magFilter\":9729,\"minFilter\":9987,\"wrapS\":33071,\"wrapT\":33071}}],",
-                "\"images\":[{{\"bufferView\":{bark_view},\"mimeType\":\"image/png\"}},{{\"bufferView\":{leaf_view},\"mimeType\":\"image/png\"}}],",
-                "\"textures\":[{{\"sampler\":0,\"source\":0}},{{\"sampler\":1,\"source\":1}}],",
-                "\"accessors\":[{accessors}],\"bufferViews\":[{views}],",
-                "\"buffers\":[{{\"byteLength\":{len}}}]}}"
-            ),
-            scenes = scenes,
-            nodes = nodes,
-            meshes = meshes,
-            skins = skins,
-            bark_view = bark_view,
-            leaf_view = leaf_view,
-            accessors = bin.accessors,
-            views = bin.views,
-            len = bin.data.len().next_multiple_of(4),
-        );
-        let mut json = json.into_bytes();
+        let len = bin.data.len().next_multiple_of(4);
+        let gltf = Gltf {
+            asset: json!({ "version": "2.0", "generator": "sylva" }),
+            scene: 0,
+            scenes,
+            nodes,
+            meshes,
+            skins,
+            materials: json!([
+                {
+                    "name": "bark",
+                    "pbrMetallicRoughness": {
+                        "baseColorTexture": { "index": 0 },
+                        "metallicFactor": 0,
+                        "roughnessFactor": 0.9
+                    }
+                },
+                {
+                    "name": "leaves",
+                    "pbrMetallicRoughness": {
+                        "baseColorTexture": { "index": 1 },
+                        "metallicFactor": 0,
+                        "roughnessFactor": 0.7
+                    },
+                    "alphaMode": "MASK",
+                    "alphaCutoff": 0.5,
+                    "doubleSided": true
+                }
+            ]),
+            samplers: json!([
+                {
+                    "magFilter": LINEAR,
+                    "minFilter": LINEAR_MIPMAP_LINEAR,
+                    "wrapS": REPEAT,
+                    "wrapT": REPEAT
+                },
+                {
+                    "magFilter": LINEAR,
+                    "minFilter": LINEAR_MIPMAP_LINEAR,
+                    "wrapS": CLAMP_TO_EDGE,
+                    "wrapT": CLAMP_TO_EDGE
+                }
+            ]),
+            images: json!([
+                { "bufferView": bark_view, "mimeType": "image/png" },
+                { "bufferView": leaf_view, "mimeType": "image/png" }
+            ]),
+            textures: json!([{ "sampler": 0, "source": 0 }, { "sampler": 1, "source": 1 }]),
+            accessors: bin.accessors,
+            buffer_views: bin.views,
+            buffers: json!([{ "byteLength": len }]),
+        };
+        // Serialising plain structs and numbers cannot fail.
+        let json = serde_json::to_vec(&gltf).unwrap_or_default();
+        let mut json = json;
         while !json.len().is_multiple_of(4) {
             json.push(b' ');
         }
@@ -442,18 +544,18 @@ impl TreeModel {
         out
     }
 
-    /// Emit the joint nodes of the joints marked in `keep` (parents first) as nodes `base`
-    /// onwards, their inverse bind matrices and a skin over them. Returns, per skeleton
-    /// joint, its exported index (or its nearest exported ancestor's), and the node count.
+    /// Append the joint nodes of the joints marked in `keep` (parents first) to `nodes`,
+    /// their inverse bind matrices and a skin over them. Returns, per skeleton joint, its
+    /// exported index (or its nearest exported ancestor's).
     fn joint_nodes(
         &self,
         keep: &[bool],
         frames: &[[V3; 3]],
-        base: usize,
-        nodes: &mut String,
+        nodes: &mut Vec<Node>,
         bin: &mut Bin,
-        skins: &mut String,
-    ) -> (Vec<u16>, usize) {
+        skins: &mut Vec<Skin>,
+    ) -> Vec<u16> {
+        let base = nodes.len();
         let js = self.tree.skeleton.joints();
         let n = js.len();
         let mut index = vec![0u16; n];
@@ -481,20 +583,14 @@ impl TreeModel {
                 let local = [to_local(pf, f[0]), to_local(pf, f[1]), to_local(pf, f[2])];
                 (to_local(pf, sub(js[j].origin, js[p].origin)), quaternion(&local))
             };
-            if base + i > 0 {
-                nodes.push(',');
-            }
-            let _ = write!(
-                nodes,
-                "{{\"name\":\"joint{j}\",\"translation\":[{},{},{}],\"rotation\":[{},{},{},{}]",
-                t[0], t[1], t[2], r[0], r[1], r[2], r[3]
-            );
-            if !children[i].is_empty() {
-                let list: Vec<String> =
-                    children[i].iter().map(|c| (base + c).to_string()).collect();
-                let _ = write!(nodes, ",\"children\":[{}]", list.join(","));
-            }
-            nodes.push('}');
+            nodes.push(Node {
+                name: format!("joint{j}"),
+                translation: Some(t),
+                rotation: Some(r),
+                children: children[i].iter().map(|c| base + c).collect(),
+                mesh: None,
+                skin: None,
+            });
             // Inverse bind: [Rᵀ | −Rᵀ o], column-major.
             let o = js[j].origin;
             ibm.push([
@@ -516,16 +612,13 @@ impl TreeModel {
                 1.0,
             ]);
         }
-        let acc = bin.accessor(&f32_bytes(&ibm), None, 5126, ibm.len(), "MAT4", None);
-        let list: Vec<String> = (0..exported.len()).map(|i| (base + i).to_string()).collect();
-        if !skins.is_empty() {
-            skins.push(',');
-        }
-        let _ = write!(
-            skins,
-            "{{\"inverseBindMatrices\":{acc},\"skeleton\":{base},\"joints\":[{}]}}",
-            list.join(",")
-        );
-        (index, exported.len())
+        let inverse_bind_matrices =
+            bin.accessor(&f32_bytes(&ibm), None, FLOAT, ibm.len(), "MAT4", None);
+        skins.push(Skin {
+            inverse_bind_matrices,
+            skeleton: base,
+            joints: (base..base + exported.len()).collect(),
+        });
+        index
     }
 }
