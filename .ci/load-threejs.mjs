@@ -1,12 +1,14 @@
 // Load .glb files with three.js's GLTFLoader under Node and report what it built: skinned
-// meshes, bones, triangles. Node has no image decoder, so images are stubbed (the check is
-// that three.js parses the scenes, skins, meshes and materials). Exit 1 on any failure.
+// meshes, bones, triangles, and where the tree stands: its bones and its skinned vertices
+// must rise along +Y (glTF's up) from the ground. Node has no image decoder, so images are
+// stubbed. Exit 1 on any failure.
 import { readFileSync } from "node:fs";
 globalThis.self = globalThis;
 if (typeof globalThis.navigator === "undefined") globalThis.navigator = { userAgent: "node" };
 globalThis.createImageBitmap = async () => ({ width: 1, height: 1, close() {} });
 globalThis.fetch = async () => ({ ok: true, status: 200, blob: async () => new Blob([]) });
 const { GLTFLoader } = await import("three/examples/jsm/loaders/GLTFLoader.js");
+const { Box3, Vector3 } = await import("three");
 
 let failed = false;
 for (const file of process.argv.slice(2)) {
@@ -15,16 +17,33 @@ for (const file of process.argv.slice(2)) {
   try {
     const gltf = await new GLTFLoader().parseAsync(ab, "");
     let skinned = 0, bones = 0, tris = 0, masked = 0;
+    gltf.scene.updateMatrixWorld(true);
+    // Extents of the bones and of the skinned vertices (posed by their bones), world space.
+    const boneBox = new Box3(), meshBox = new Box3(), p = new Vector3();
     gltf.scene.traverse((o) => {
       if (o.isSkinnedMesh) {
         skinned++;
         tris += o.geometry.index.count / 3;
         if (o.material.alphaTest > 0) masked++;
+        o.skeleton.update();
+        o.computeBoundingBox();
+        meshBox.union(o.boundingBox.clone().applyMatrix4(o.matrixWorld));
       }
-      if (o.isBone) bones++;
+      if (o.isBone) {
+        bones++;
+        boneBox.expandByPoint(o.getWorldPosition(p));
+      }
     });
-    console.log(`${file}: ${gltf.scenes.length} scenes; scene 0: ${skinned} skinned meshes (${masked} alpha-masked), ${bones} bones, ${tris} triangles`);
-    if (skinned === 0 || bones === 0 || tris === 0) failed = true;
+    const up = (b) => {
+      const s = b.getSize(new Vector3());
+      // From the ground (y ≈ 0) upward, and taller than 0.8 × its width: a tree on its side
+      // (Z up read as Y up) spans y symmetrically about 0 and fails both.
+      return b.min.y > -0.05 * s.y && s.y > 0.8 * Math.max(s.x, s.z);
+    };
+    const fmt = (b) => `x ${b.min.x.toFixed(1)}…${b.max.x.toFixed(1)}, y ${b.min.y.toFixed(1)}…${b.max.y.toFixed(1)}, z ${b.min.z.toFixed(1)}…${b.max.z.toFixed(1)} m`;
+    const upright = up(boneBox) && up(meshBox);
+    console.log(`${file}: ${gltf.scenes.length} scenes; scene 0: ${skinned} skinned meshes (${masked} alpha-masked), ${bones} bones, ${tris} triangles; bones ${fmt(boneBox)}; mesh ${fmt(meshBox)}; ${upright ? "upright along +Y" : "NOT upright along +Y"}`);
+    if (skinned === 0 || bones === 0 || tris === 0 || !upright) failed = true;
   } catch (e) {
     console.log(`${file}: three.js failed: ${e}`);
     failed = true;

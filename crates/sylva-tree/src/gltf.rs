@@ -4,13 +4,14 @@
 //! Layout of the file:
 //! - one node per exported joint, parents first, each with its rest frame (translation and
 //!   rotation relative to its parent; the frame's z runs along the segment) — the joint
-//!   hierarchy an animator poses;
+//!   hierarchy an animator poses — under a root node that turns Sylva's +Z up into glTF's
+//!   +Y up (a rotation of −90° about x), so the tree stands upright in every client;
 //! - one skin over those nodes, with inverse bind matrices (the inverse of each joint's
 //!   rest world transform);
 //! - per exported LOD, one mesh of two primitives (bark: `TEXCOORD_0`, `NORMAL`, `JOINTS_0`,
 //!   `WEIGHTS_0`; leaves: one double-sided quad per cluster, `alphaMode: MASK`, weighted to
 //!   its hanging joint) on a root node with the skin; each LOD is its own scene (scene 0 is
-//!   the first exported level), all sharing the joints.
+//!   the first exported level) with its own joints.
 //!
 //! glTF stores joint indices as unsigned 16-bit numbers, so at most 65 535 joints are
 //! exported: beyond `max_joints`, the lightest joints (least carried mass) are folded into
@@ -35,6 +36,11 @@ const LINEAR: u32 = 9_729;
 const LINEAR_MIPMAP_LINEAR: u32 = 9_987;
 const REPEAT: u32 = 10_497;
 const CLAMP_TO_EDGE: u32 = 33_071;
+
+/// Rotation (x, y, z, w) of −90° about x: Sylva's +Z up becomes glTF's +Y up (and Sylva's +Y,
+/// north, becomes glTF's −Z).
+const Z_UP_TO_Y_UP: [f32; 4] =
+    [-std::f32::consts::FRAC_1_SQRT_2, 0.0, 0.0, std::f32::consts::FRAC_1_SQRT_2];
 
 /// Most joints glTF's 16-bit `JOINTS_0` can index.
 pub const MAX_GLTF_JOINTS: usize = 65_535;
@@ -458,6 +464,18 @@ impl TreeModel {
                 prims.push(bin.primitive(&p, &nrm, &uv, &jb, &w, &ids, 1));
             }
             meshes.push(Mesh { name: format!("lod{l}"), primitives: prims });
+            // glTF is +Y up, Sylva +Z up: the joints hang under a node turning Z up into Y up.
+            // The skinned mesh node stays a root with no transform (glTF ignores it), so its
+            // vertices follow the joints, turned with them.
+            nodes.push(Node {
+                name: format!("{} lod{l} Y-up", opts.name),
+                translation: None,
+                rotation: Some(Z_UP_TO_Y_UP),
+                children: vec![base],
+                mesh: None,
+                skin: None,
+            });
+            let up = nodes.len() - 1;
             nodes.push(Node {
                 name: format!("{} lod{l}", opts.name),
                 translation: None,
@@ -466,7 +484,7 @@ impl TreeModel {
                 mesh: Some(k),
                 skin: Some(k),
             });
-            scenes.push(Scene { name: format!("lod{l}"), nodes: vec![base, nodes.len() - 1] });
+            scenes.push(Scene { name: format!("lod{l}"), nodes: vec![up, nodes.len() - 1] });
         }
         let len = bin.data.len().next_multiple_of(4);
         let gltf = Gltf {

@@ -59,3 +59,72 @@ fn joint_budget_folds_light_joints_into_ancestors() {
     let json = std::str::from_utf8(&bytes[20..20 + json_len]).expect("json");
     assert_eq!(json.matches("\"name\":\"joint").count(), 100);
 }
+
+/// Quaternion (x, y, z, w) applied to v.
+fn rotate(q: [f64; 4], v: [f64; 3]) -> [f64; 3] {
+    let (x, y, z, w) = (q[0], q[1], q[2], q[3]);
+    let t = [2.0 * (y * v[2] - z * v[1]), 2.0 * (z * v[0] - x * v[2]), 2.0 * (x * v[1] - y * v[0])];
+    [
+        v[0] + w * t[0] + (y * t[2] - z * t[1]),
+        v[1] + w * t[1] + (z * t[0] - x * t[2]),
+        v[2] + w * t[2] + (x * t[1] - y * t[0]),
+    ]
+}
+
+/// glTF is +Y up: walking scene 0's node tree as a client does (translation, then rotation,
+/// parent by parent), the joints span the tree's height along +Y, from the ground upward,
+/// and much less across.
+#[test]
+fn the_exported_tree_stands_along_plus_y() {
+    let model = Species::preset("douglas_fir").expect("preset").model(1, LOD_LEVELS).expect("tree");
+    let bytes = model.to_glb(&GltfOptions::default());
+    let json_len = u32_at(&bytes, 12);
+    let gltf: serde_json::Value =
+        serde_json::from_slice(&bytes[20..20 + json_len]).expect("JSON chunk");
+    let nodes = gltf["nodes"].as_array().expect("nodes");
+    let f = |v: &serde_json::Value, n: usize| -> Vec<f64> {
+        (0..n).map(|k| v.get(k).and_then(|x| x.as_f64()).unwrap_or(0.0)).collect()
+    };
+    // World position and rotation of every node reachable from scene 0.
+    let mut joints = Vec::new();
+    let mut stack: Vec<(usize, [f64; 3], [f64; 4])> = gltf["scenes"][0]["nodes"]
+        .as_array()
+        .expect("scene nodes")
+        .iter()
+        .map(|n| (n.as_u64().expect("index") as usize, [0.0; 3], [0.0, 0.0, 0.0, 1.0]))
+        .collect();
+    while let Some((i, pos, rot)) = stack.pop() {
+        let node = &nodes[i];
+        let t = node.get("translation").map(|t| f(t, 3)).unwrap_or(vec![0.0; 3]);
+        let r = node.get("rotation").map(|r| f(r, 4)).unwrap_or(vec![0.0, 0.0, 0.0, 1.0]);
+        let moved = rotate(rot, [t[0], t[1], t[2]]);
+        let world = [pos[0] + moved[0], pos[1] + moved[1], pos[2] + moved[2]];
+        // rot · r (Hamilton product)
+        let (a, b) = (rot, [r[0], r[1], r[2], r[3]]);
+        let q = [
+            a[3] * b[0] + a[0] * b[3] + a[1] * b[2] - a[2] * b[1],
+            a[3] * b[1] - a[0] * b[2] + a[1] * b[3] + a[2] * b[0],
+            a[3] * b[2] + a[0] * b[1] - a[1] * b[0] + a[2] * b[3],
+            a[3] * b[3] - a[0] * b[0] - a[1] * b[1] - a[2] * b[2],
+        ];
+        if node["name"].as_str().is_some_and(|n| n.starts_with("joint")) {
+            joints.push(world);
+        }
+        for c in node.get("children").and_then(|c| c.as_array()).into_iter().flatten() {
+            stack.push((c.as_u64().expect("child") as usize, world, q));
+        }
+    }
+    assert!(joints.len() > 100, "{} joints reached from scene 0", joints.len());
+    let span = |k: usize| {
+        let lo = joints.iter().map(|p| p[k]).fold(f64::INFINITY, f64::min);
+        let hi = joints.iter().map(|p| p[k]).fold(f64::NEG_INFINITY, f64::max);
+        (lo, hi)
+    };
+    let (y0, y1) = span(1);
+    let height = model.tree.stats.height as f64;
+    assert!(y0.abs() < 0.05 * height && y1 > 0.8 * height, "y from {y0} to {y1}, tree {height} m");
+    for k in [0, 2] {
+        let (lo, hi) = span(k);
+        assert!(hi - lo < 0.7 * (y1 - y0), "axis {k} spans {lo} … {hi}");
+    }
+}
