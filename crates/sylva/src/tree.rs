@@ -63,9 +63,11 @@ pub struct GenerateArgs {
     /// Seed of the random variations.
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Level of detail to export (0 = full detail); omit for all levels, one glTF scene each.
-    #[arg(long)]
-    lod: Option<usize>,
+    /// Level of detail to export: a number (0 = full detail), or `all` for one file per
+    /// level (`NAME.lod0.glb`, `NAME.lod1.glb`, … beside --out), since editors import every
+    /// scene of a file at once.
+    #[arg(long, default_value = "0")]
+    lod: String,
     /// Most joints to export, 1 … 65535 (glTF's 16-bit joint indices); lighter joints fold
     /// into their nearest exported ancestor. The default suits editors: Blender's importer
     /// takes about a minute for 4096 bones and far longer for the willow's 80 000.
@@ -149,35 +151,43 @@ pub fn run_tree(cmd: TreeCommand) -> anyhow::Result<()> {
                 );
             }
             let model = sp.model(a.seed, sylva_tree::mesh::LOD_LEVELS)?;
-            if let Some(l) = a.lod
-                && l >= model.lods.len()
-            {
-                bail!("--lod {l}: levels are 0 … {}", model.lods.len() - 1);
-            }
-            let opts = sylva_tree::gltf::GltfOptions {
-                lods: a.lod.map(|l| vec![l]).unwrap_or_default(),
-                max_joints: a.max_joints,
-                name: sp.name.clone(),
+            let last = model.lods.len() - 1;
+            // (level, file) pairs.
+            let files: Vec<(usize, PathBuf)> = if a.lod == "all" {
+                let stem = a.out.file_stem().and_then(|s| s.to_str()).unwrap_or("tree");
+                (0..=last)
+                    .map(|l| (l, a.out.with_file_name(format!("{stem}.lod{l}.glb"))))
+                    .collect()
+            } else {
+                let l: usize =
+                    a.lod.parse().ok().filter(|&l| l <= last).with_context(|| {
+                        format!("--lod {}: a level 0 … {last}, or `all`", a.lod)
+                    })?;
+                vec![(l, a.out.clone())]
             };
-            let bytes = model.to_glb(&opts);
             if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
                 std::fs::create_dir_all(dir)
                     .with_context(|| format!("creating {}", dir.display()))?;
             }
-            sylva_wind::io::atomic::write_atomic(&a.out, &bytes)
-                .with_context(|| format!("writing {}", a.out.display()))?;
-            let tris: usize = match a.lod {
-                Some(l) => model.lods[l].triangles(),
-                None => model.lods.iter().map(|l| l.triangles()).sum(),
-            };
-            println!(
-                "wrote {} ({:.1} MB, skeleton of {} joints, {} triangles{})",
-                a.out.display(),
-                bytes.len() as f64 / 1e6,
-                model.tree.skeleton.len(),
-                tris,
-                if a.lod.is_none() { ", all LODs" } else { "" }
-            );
+            for (l, path) in files {
+                let opts = sylva_tree::gltf::GltfOptions {
+                    lods: vec![l],
+                    max_joints: a.max_joints,
+                    name: sp.name.clone(),
+                };
+                let bytes = model.to_glb(&opts);
+                sylva_wind::io::atomic::write_atomic(&path, &bytes)
+                    .with_context(|| format!("writing {}", path.display()))?;
+                println!(
+                    "wrote {} (LOD {l}: {:.1} MB, skeleton of {} joints, at most {} exported, {} \
+                     triangles)",
+                    path.display(),
+                    bytes.len() as f64 / 1e6,
+                    model.tree.skeleton.len(),
+                    a.max_joints,
+                    model.lods[l].triangles()
+                );
+            }
         }
         TreeCommand::Textures(a) => {
             let sp = Species::load(&a.species)?;

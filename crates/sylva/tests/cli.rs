@@ -122,6 +122,29 @@ fn render_refuses_a_forest_over_its_memory_cap() {
     assert!(!ok && text.contains("--max-memory"), "{text}");
 }
 
+/// One glTF file per LOD with `--lod all` (editors import every scene of a file at once),
+/// each a single scene; a level that does not exist is refused naming the range.
+#[test]
+fn tree_generate_writes_a_file_per_lod() {
+    let out = temp("lods/fir.glb");
+    let o = out.to_str().expect("utf-8 path");
+    let (ok, text) =
+        sylva(&["tree", "generate", "--species", "douglas_fir", "--lod", "all", "--out", o]);
+    assert!(ok, "{text}");
+    for l in 0..6 {
+        let f = out.with_file_name(format!("fir.lod{l}.glb"));
+        let b = std::fs::read(&f).unwrap_or_else(|e| panic!("{}: {e}", f.display()));
+        let json_len = u32::from_le_bytes([b[12], b[13], b[14], b[15]]) as usize;
+        let json = std::str::from_utf8(&b[20..20 + json_len]).expect("JSON chunk");
+        assert_eq!(json.matches("\"primitives\"").count(), 1, "LOD {l}: one mesh");
+        assert!(json.contains(&format!("\"name\":\"lod{l}\"")), "LOD {l}");
+    }
+    assert!(!out.exists(), "no all-LOD file under the plain name");
+    let (ok, text) =
+        sylva(&["tree", "generate", "--species", "douglas_fir", "--lod", "6", "--out", o]);
+    assert!(!ok && text.contains("0 … 5"), "{text}");
+}
+
 #[test]
 fn tree_and_sway_commands_work_and_refuse_bad_species_files() {
     let (ok, text) = sylva(&["tree", "list"]);
