@@ -1,5 +1,39 @@
-//! Measuring a sway record the way a field test does: the frequency and damping ratio of a
-//! free decay (a tree bent by a steady load and let go).
+//! Measuring a sway record the way a field test does: bend a tree under a steady wind, let
+//! go ([`bend_and_release`]), and read the frequency and damping ratio of the free decay
+//! ([`free_decay`]).
+
+use sylva_tree::Skeleton;
+
+use crate::batch::{SwayBatch, transform};
+
+/// A bend-and-release test on instance 0 of `batch` (a tree with skeleton `sk`): `hold`
+/// steps of `dt` under the steady wind `load` (world m/s), then `free` steps in still air.
+/// `each` sees every step after it is taken: its index, the wind it had, and the batch
+/// (to record more than the trunk). Returns the trunk top's horizontal displacement from
+/// rest, (x, y) in m, over the free steps: the record [`free_decay`] reads.
+pub fn bend_and_release(
+    batch: &mut SwayBatch,
+    sk: &Skeleton,
+    load: [f32; 3],
+    hold: usize,
+    free: usize,
+    dt: f32,
+    each: &mut dyn FnMut(usize, [f32; 3], &SwayBatch),
+) -> (Vec<f64>, Vec<f64>) {
+    let tip = sk.joints()[sk.trunk_top()].tip();
+    let (mut xs, mut ys) = (Vec::with_capacity(free), Vec::with_capacity(free));
+    for k in 0..hold + free {
+        let wind = if k < hold { load } else { [0.0; 3] };
+        batch.step(dt, &[wind]);
+        each(k, wind, batch);
+        if k >= hold {
+            let p = transform(&batch.palette(0, sk.trunk_top()), tip);
+            xs.push((p[0] - tip[0]) as f64);
+            ys.push((p[1] - tip[1]) as f64);
+        }
+    }
+    (xs, ys)
+}
 
 /// Frequency (Hz) and damping ratio of a free decay sampled every `dt` seconds as the
 /// horizontal displacements `xs`, `ys` of a point (the trunk top).

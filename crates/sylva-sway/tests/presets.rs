@@ -6,28 +6,19 @@
 //! hertz. Measured as a tree would be in the field: bend it under a steady wind, let go,
 //! and count the trunk top's oscillations.
 
-use sylva_sway::{SwayBatch, SwayParams, SwaySpecies, transform};
+use sylva_sway::probe::{bend_and_release, free_decay};
+use sylva_sway::{SwayBatch, SwayParams, SwaySpecies};
 use sylva_tree::{PRESETS, Skeleton, Species};
 
 /// Frequency (Hz) of the trunk top's free oscillation after release from a steady bend:
-/// [`sylva_sway::probe::free_decay`] of the trunk top's motion.
+/// [`bend_and_release`], then [`free_decay`] of the trunk top's motion.
 fn release_frequency(sk: &Skeleton) -> f64 {
     let sp = SwaySpecies::new(sk, SwayParams::default()).expect("valid params");
     let mut b = SwayBatch::new(sp, 1);
-    let top = sk.trunk_top();
-    let tip = sk.joints()[top].tip();
     let dt = 1.0 / 25.0; // exact integrator: any step works
-    for _ in 0..(10.0 / dt) as usize {
-        b.step(dt, &[[8.0, 0.0, 0.0]]);
-    }
-    let mut xs = Vec::new();
-    for _ in 0..(16.0 / dt) as usize {
-        b.step(dt, &[[0.0, 0.0, 0.0]]);
-        let p = transform(&b.palette(0, top), tip);
-        xs.push(((p[0] - tip[0]) as f64, (p[1] - tip[1]) as f64));
-    }
-    let (x, y): (Vec<f64>, Vec<f64>) = xs.into_iter().unzip();
-    sylva_sway::probe::free_decay(&x, &y, dt as f64).0
+    let (hold, free) = ((10.0 / dt) as usize, (16.0 / dt) as usize);
+    let (x, y) = bend_and_release(&mut b, sk, [8.0, 0.0, 0.0], hold, free, dt, &mut |_, _, _| {});
+    free_decay(&x, &y, dt as f64).0
 }
 
 #[test]

@@ -7,6 +7,7 @@ use std::time::Instant;
 
 use anyhow::{Context, bail};
 use clap::{Args, Subcommand};
+use sylva_sway::probe::{bend_and_release, free_decay};
 use sylva_sway::{SwayBatch, SwayParams, SwaySpecies, transform};
 use sylva_tree::{PARAMS, PRESETS, Species, species::Scope};
 use sylva_wind::{Grid, Preset, SynthParams, WindField};
@@ -321,15 +322,9 @@ pub fn run_sway(cmd: SwayCommand) -> anyhow::Result<()> {
         write!(out, ",branch{}_dx,branch{}_dy", k + 1, k + 1)?;
     }
     writeln!(out)?;
-    let release_at = if a.release { (20.0 * a.fps) as usize } else { usize::MAX };
-    let (mut xs, mut ys) = (Vec::new(), Vec::new());
-    for k in 0..steps + if a.release { release_at } else { 0 } {
-        let w = if a.release {
-            if k < release_at { [wind[0][0].max(1.0) + 4.0, 0.0, 0.0] } else { [0.0; 3] }
-        } else {
-            wind[k]
-        };
-        batch.step(dt as f32, &[w]);
+    // One CSV row per step: time, wind, trunk-top and branch-end displacements.
+    let mut failure: Option<std::io::Error> = None;
+    let mut row = |k: usize, w: [f32; 3], batch: &SwayBatch| {
         let disp = |j: usize| {
             let rest = sk.joints()[j].tip();
             let p = transform(&batch.palette(0, j), rest);
@@ -337,16 +332,31 @@ pub fn run_sway(cmd: SwayCommand) -> anyhow::Result<()> {
         };
         let (tx, ty) = disp(top);
         let t = k as f64 * dt;
-        write!(out, "{t:.4},{:.4},{:.4},{:.4},{tx:.5},{ty:.5}", w[0], w[1], w[2])?;
+        let mut line = format!("{t:.4},{:.4},{:.4},{:.4},{tx:.5},{ty:.5}", w[0], w[1], w[2]);
         for &e in &ends {
             let (bx, by) = disp(e);
-            write!(out, ",{bx:.5},{by:.5}")?;
+            line.push_str(&format!(",{bx:.5},{by:.5}"));
         }
-        writeln!(out)?;
-        if k >= release_at {
-            xs.push(tx as f64);
-            ys.push(ty as f64);
+        if failure.is_none()
+            && let Err(e) = writeln!(out, "{line}")
+        {
+            failure = Some(e);
         }
+    };
+    // With --release: 20 s bent under a steady wind 4 m/s above the wind given, then free.
+    let hold = if a.release { (20.0 * a.fps) as usize } else { 0 };
+    let decay = if a.release {
+        let load = [wind[0][0].max(1.0) + 4.0, 0.0, 0.0];
+        Some(bend_and_release(&mut batch, sk, load, hold, steps, dt as f32, &mut row))
+    } else {
+        for (k, w) in wind.iter().enumerate() {
+            batch.step(dt as f32, &[*w]);
+            row(k, *w, &batch);
+        }
+        None
+    };
+    if let Some(e) = failure {
+        return Err(e).with_context(|| format!("writing {}", a.csv.display()));
     }
     out.commit().with_context(|| format!("writing {}", a.csv.display()))?;
     println!(
@@ -355,10 +365,10 @@ pub fn run_sway(cmd: SwayCommand) -> anyhow::Result<()> {
         tree.stats.height,
         sk.len(),
         a.csv.display(),
-        steps + if a.release { release_at } else { 0 }
+        steps + hold
     );
-    if a.release {
-        let (f, zeta) = sylva_sway::probe::free_decay(&xs, &ys, dt);
+    if let Some((xs, ys)) = decay {
+        let (f, zeta) = free_decay(&xs, &ys, dt);
         println!(
             "trunk free decay: frequency {f:.3} Hz, damping ratio {zeta:.3} (structural ζ = {:.3} plus aerodynamic)",
             SwayParams::default().damping_ratio
