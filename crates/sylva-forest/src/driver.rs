@@ -42,12 +42,13 @@ use sylva_sway::{LANES, LeafParams, LeafSway, SwayBatch, SwayParams, SwaySpecies
 
 use sylva_tree::mesh::{LOD_LEVELS, TreeModel};
 use sylva_tree::{LodOrder, Species, lod_order};
-use sylva_wind::{FieldView, Grid, OwnedPyramid, Preset, SynthParams, WindField, WindParams};
+use sylva_wind::{FieldView, Grid, OwnedPyramid, SynthParams, WindField, WindParams};
 use thiserror::Error;
 
 use crate::camera::Camera;
 use crate::scene::{
-    Placement, SceneSpec, Terrain, camera_on_path, default_camera, default_camera_path, layout,
+    Placement, SceneSpec, Terrain, WindSource, camera_on_path, default_camera, default_camera_path,
+    layout,
 };
 
 /// A forest that could not be built.
@@ -770,12 +771,49 @@ pub fn wind_points(spec: &SceneSpec, radius: f32) -> usize {
 /// f32: 113 MB).
 pub const MAX_WIND_POINTS: usize = 96;
 
-/// The scene's wind field: its preset and direction over a grid covering the forest
-/// ([`wind_points`] a side, two heights), looping every 51.2 s.
+/// The scene's wind field ([`WindSource`]): a preset (with the scene's U* when set) in the
+/// scene's direction over a grid covering the forest ([`wind_points`] a side, two heights),
+/// looping every 51.2 s; a steady uniform wind in the scene's direction; or a wind file,
+/// which tiles the forest periodically and keeps its own direction.
 fn wind_field(spec: &SceneSpec, radius: f32) -> Result<WindField, ForestError> {
-    let preset = Preset::from_name(&spec.wind)
-        .ok_or_else(|| ForestError::Wind(format!("no preset `{}`", spec.wind)))?;
-    let params = WindParams { direction_deg: spec.wind_direction_deg as f64, ..preset.params() };
+    let source = spec.wind_source().map_err(|e| ForestError::Wind(e.to_string()))?;
+    let preset = match source {
+        WindSource::Preset(p) => p,
+        WindSource::Steady(speed) => {
+            // Two points a side, two heights, four frames: every sample is the same vector,
+            // along the field's own x, which sampling turns to the scene's direction.
+            let grid = Grid::regular(2, 2, 1000.0, &[8.0, 22.0], 4, 0.1);
+            let per = grid.points();
+            let mut data = vec![0.0f32; per * 3 * grid.frames];
+            for frame in data.chunks_mut(3 * per) {
+                frame[..per].fill(speed as f32);
+            }
+            let params = WindParams {
+                direction_deg: spec.wind_direction_deg as f64,
+                ..WindParams::default()
+            };
+            return Ok(WindField {
+                grid,
+                params,
+                synth: SynthParams::default(),
+                data,
+                coherence_error: 0.0,
+            });
+        }
+        WindSource::File(path) => {
+            let field = match path.extension().and_then(|e| e.to_str()) {
+                Some("npy") => sylva_wind::io::read_npy(&path),
+                Some("zarr") => sylva_wind::io::read_zarr(&path),
+                _ => sylva_wind::io::read_swf(&path),
+            };
+            return field.map_err(|e| ForestError::Wind(format!("{}: {e}", path.display())));
+        }
+    };
+    let mut params =
+        WindParams { direction_deg: spec.wind_direction_deg as f64, ..preset.params() };
+    if let Some(u) = spec.u_star {
+        params.u_star = u;
+    }
     let half = (radius as f64 + 30.0) * std::f64::consts::SQRT_2;
     let n = wind_points(spec, radius);
     let spacing = 2.0 * half / (n - 1) as f64;

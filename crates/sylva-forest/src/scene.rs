@@ -5,6 +5,7 @@ use std::f32::consts::{PI, TAU};
 
 use serde::{Deserialize, Serialize};
 use sylva_core::SplitMix64 as Rng;
+use sylva_wind::Preset;
 use thiserror::Error;
 
 use crate::camera::Camera;
@@ -35,6 +36,65 @@ pub enum SceneError {
     /// No scene of that name.
     #[error("no scene named `{0}` (built in: small, A, B, C, D; or give a .toml file)")]
     Unknown(String),
+}
+
+/// Where a scene's (or a command's) wind comes from, parsed once from the one text form every
+/// command and scene file uses (`--wind`, the scene key `wind`):
+/// - a preset, `calm`, `breeze`, `strong` or `storm`: a synthesised turbulent field;
+/// - a speed in m/s (0 … 100, e.g. `12`): a steady, uniform wind, the same everywhere and
+///   always (for probes and controlled tests);
+/// - a wind file, `.swf`, `.npy` (with its sidecar) or `.zarr`: a field made earlier, by
+///   Sylva or converted; it tiles the forest periodically and keeps its own direction.
+#[derive(Debug, Clone, PartialEq)]
+pub enum WindSource {
+    /// A named wind condition (its U* and profile, see [`Preset`]).
+    Preset(Preset),
+    /// A steady uniform wind of this speed, m/s.
+    Steady(f64),
+    /// A wind field file.
+    File(std::path::PathBuf),
+}
+
+impl WindSource {
+    /// Parse the text form; the error says what is accepted.
+    pub fn parse(s: &str) -> Result<WindSource, String> {
+        let t = s.trim();
+        if let Some(p) = Preset::from_name(t) {
+            return Ok(WindSource::Preset(p));
+        }
+        if let Ok(v) = t.parse::<f64>() {
+            return if v.is_finite() && (0.0..=100.0).contains(&v) {
+                Ok(WindSource::Steady(v))
+            } else {
+                Err(format!("`{s}`: a steady wind speed must be finite, 0 … 100 m/s"))
+            };
+        }
+        let lower = t.to_ascii_lowercase();
+        if [".swf", ".npy", ".zarr"].iter().any(|e| lower.ends_with(e)) {
+            return Ok(WindSource::File(t.into()));
+        }
+        Err(format!(
+            "`{s}`: expected calm, breeze, strong or storm, a steady speed in m/s (0 … 100), \
+             or a wind file (.swf, .npy, .zarr)"
+        ))
+    }
+}
+
+impl std::fmt::Display for WindSource {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            WindSource::Preset(p) => f.write_str(p.name()),
+            WindSource::Steady(v) => write!(f, "{v}"),
+            WindSource::File(p) => write!(f, "{}", p.display()),
+        }
+    }
+}
+
+impl std::str::FromStr for WindSource {
+    type Err = String;
+    fn from_str(s: &str) -> Result<WindSource, String> {
+        WindSource::parse(s)
+    }
 }
 
 /// One species of the mix.
@@ -96,9 +156,15 @@ pub struct SceneSpec {
     /// Terrain: wavelength of the hills, m (> 0). Default 150.
     #[serde(default = "wavelength")]
     pub terrain_wavelength: f32,
-    /// Wind preset: calm, breeze, strong or storm. Default breeze.
+    /// The wind (see [`WindSource`]): a preset (calm, breeze, strong, storm), a steady
+    /// speed in m/s, or a wind file (.swf, .npy, .zarr; a relative path is taken from the
+    /// scene file's folder). Default breeze.
     #[serde(default = "breeze")]
     pub wind: String,
+    /// Friction velocity U*, m/s (0 … 20], replacing the preset's: the turbulence and mean
+    /// speed scale with it. Only with a preset.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub u_star: Option<f64>,
     /// Direction the wind blows towards, degrees counter-clockwise from +x. Default 20.
     #[serde(default = "wind_dir")]
     pub wind_direction_deg: f32,
@@ -286,7 +352,14 @@ impl SceneSpec {
                 file: name_or_path.to_string(),
                 message: format!("cannot read: {e}"),
             })?;
-            return SceneSpec::from_toml(name_or_path, &text);
+            let mut spec = SceneSpec::from_toml(name_or_path, &text)?;
+            if let Ok(WindSource::File(f)) = WindSource::parse(&spec.wind)
+                && f.is_relative()
+                && let Some(dir) = path.parent()
+            {
+                spec.wind = dir.join(f).display().to_string();
+            }
+            return Ok(spec);
         }
         Err(SceneError::Unknown(name_or_path.to_string()))
     }
@@ -327,8 +400,20 @@ impl SceneSpec {
         if !(self.terrain_wavelength > 0.0 && self.terrain_wavelength.is_finite()) {
             return Err(bad("terrain_wavelength", self.terrain_wavelength.to_string(), "> 0 m"));
         }
-        if sylva_wind::Preset::from_name(&self.wind).is_none() {
-            return Err(bad("wind", self.wind.clone(), "calm, breeze, strong or storm"));
+        let source = WindSource::parse(&self.wind).map_err(|_| {
+            bad(
+                "wind",
+                self.wind.clone(),
+                "calm, breeze, strong or storm, a speed 0 … 100 m/s, or a .swf/.npy/.zarr file",
+            )
+        })?;
+        if let Some(u) = self.u_star {
+            if !(u > 0.0 && u <= 20.0) {
+                return Err(bad("u_star", u.to_string(), "(0, 20] m/s"));
+            }
+            if !matches!(source, WindSource::Preset(_)) {
+                return Err(bad("u_star", u.to_string(), "set only with a wind preset"));
+            }
         }
         if !self.wind_direction_deg.is_finite() {
             return Err(bad("wind_direction_deg", self.wind_direction_deg.to_string(), "finite"));
@@ -387,6 +472,20 @@ impl SceneSpec {
             }
         }
         Ok(())
+    }
+
+    /// The wind this scene asks for (validated when the scene was read).
+    pub fn wind_source(&self) -> Result<WindSource, SceneError> {
+        WindSource::parse(&self.wind).map_err(|e| SceneError::Value {
+            file: self.name.clone(),
+            field: "wind",
+            value: self.wind.clone(),
+            expected: if e.contains("0 … 100") {
+                "0 … 100 m/s"
+            } else {
+                "a preset, a speed or a wind file"
+            },
+        })
     }
 
     /// Side of the square the trees are laid out in, m.

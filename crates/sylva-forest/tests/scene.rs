@@ -174,3 +174,61 @@ fn the_animation_state_cap_is_the_scenes_and_refuses_before_building() {
     .expect_err("zero cap");
     assert!(e.to_string().contains("`max_state_mb`"), "{e}");
 }
+
+/// One wind type for scenes and commands: a preset, a steady speed or a wind file, each
+/// reaching the simulation; U* replaces a preset's; bad text names the field.
+#[test]
+fn scene_wind_is_a_preset_a_steady_speed_or_a_file() {
+    use sylva_forest::WindSource;
+    assert_eq!(WindSource::parse("storm"), Ok(WindSource::Preset(sylva_wind::Preset::Storm)));
+    assert_eq!(WindSource::parse(" 12.5 "), Ok(WindSource::Steady(12.5)));
+    assert!(matches!(WindSource::parse("w.zarr"), Ok(WindSource::File(_))));
+    assert!(WindSource::parse("-3").expect_err("negative").contains("0 … 100"));
+    assert!(WindSource::parse("NaN").is_err() && WindSource::parse("gale").is_err());
+    let mean_wind = |spec: &SceneSpec| {
+        let mut forest = Forest::new(spec).expect("forest");
+        let mut f = FrameData::default();
+        forest.step(1.0 / 30.0);
+        forest.frame(&forest.default_camera(), 1.5, &mut f);
+        f.wind
+    };
+    // Steady: the given speed, blowing along the scene's direction.
+    let mut spec = SceneSpec::builtin("small").expect("small");
+    spec.wind = "12".into();
+    spec.wind_direction_deg = 90.0;
+    let w = mean_wind(&spec);
+    assert!(w[0].abs() < 1e-3 && (w[1] - 12.0).abs() < 1e-3 && w[2] == 0.0, "{w:?}");
+    // A preset's U* replaced: the mean speed scales with it (log law: Ū ∝ U*).
+    let mut calm = SceneSpec::builtin("small").expect("small");
+    calm.wind = "breeze".into();
+    let base = mean_wind(&calm);
+    calm.u_star = Some(3.0);
+    let strong = mean_wind(&calm);
+    let speed = |w: [f32; 3]| (w[0] * w[0] + w[1] * w[1]).sqrt();
+    assert!(speed(strong) > 2.0 * speed(base), "{strong:?} vs {base:?}");
+    // A wind file: a steady-looking field written by the wind crate, read back by the scene.
+    let dir = std::env::temp_dir().join(format!("sylva-scene-wind-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let file = dir.join("w.swf");
+    let grid = sylva_wind::Grid::regular(8, 8, 4.0, &[10.0, 20.0], 64, 0.1);
+    let sp = sylva_wind::SynthParams { seed: 3, method: sylva_wind::Method::Separable };
+    let field =
+        sylva_wind::WindField::generate(&sylva_wind::Preset::Strong.params(), &grid, sp, &|_| {})
+            .expect("field");
+    sylva_wind::io::write_swf(&field, &file).expect("write");
+    let mut from_file = SceneSpec::builtin("small").expect("small");
+    from_file.wind = file.display().to_string();
+    let w = mean_wind(&from_file);
+    assert!(speed(w) > 5.0, "a strong field read from the file: {w:?}");
+    from_file.wind = dir.join("missing.swf").display().to_string();
+    let e = Forest::new(&from_file).expect_err("missing file").to_string();
+    assert!(e.contains("missing.swf"), "{e}");
+    // U* only with a preset, named in the error.
+    let e = SceneSpec::from_toml(
+        "x.toml",
+        "name = \"x\"\ntrees = 3\nspecies = [{ name = \"quaking_aspen\" }]\nwind = \"8\"\nu_star = 1.0\n",
+    )
+    .expect_err("u_star with a steady wind");
+    assert!(e.to_string().contains("`u_star`"), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

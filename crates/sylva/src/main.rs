@@ -74,7 +74,12 @@ fn demo(a: DemoArgs) -> anyhow::Result<()> {
         println!(
             "sylva demo: scene A in the viewer (drag to orbit, WASD to move, arrows for wind)"
         );
-        let a = view::ViewArgs { scene: "A".into(), lod_fraction: None, lod: Default::default() };
+        let a = view::ViewArgs {
+            scene: "A".into(),
+            lod_fraction: None,
+            wind: None,
+            lod: Default::default(),
+        };
         match view::view(&a) {
             Ok(()) => return Ok(()),
             Err(e) => eprintln!("viewer unavailable ({e:#}); rendering headless instead"),

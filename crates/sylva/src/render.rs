@@ -5,7 +5,7 @@ use std::time::Instant;
 
 use anyhow::{Context, bail};
 use clap::Args;
-use sylva_forest::{Forest, FrameData, SceneSpec};
+use sylva_forest::{Forest, FrameData, SceneSpec, WindSource};
 use sylva_render::Headless;
 use sylva_wind::io::atomic::AtomicFile;
 
@@ -26,9 +26,10 @@ pub struct RenderArgs {
     /// Output folder: frame_0000.png …, forest.gif (and forest.mp4 with ffmpeg).
     #[arg(long, default_value = "out/render")]
     pub out: PathBuf,
-    /// Wind preset instead of the scene's: calm, breeze, strong, storm.
+    /// Wind instead of the scene's: a preset (calm, breeze, strong, storm), a steady speed
+    /// in m/s, or a wind file (.swf, .npy, .zarr).
     #[arg(long)]
-    pub wind: Option<String>,
+    pub wind: Option<WindSource>,
     /// Geometry-LOD threshold h₀: full detail only for trees taller than this fraction of
     /// the image; one level coarser per factor 3 smaller. Larger is coarser and faster.
     /// Default: the scene's (`[lod] fraction`, 1 unless set).
@@ -179,10 +180,8 @@ pub struct RenderReport {
 pub fn render(a: &RenderArgs) -> anyhow::Result<RenderReport> {
     let mut spec = SceneSpec::load(&a.scene)?;
     if let Some(w) = &a.wind {
-        if sylva_wind::Preset::from_name(w).is_none() {
-            bail!("--wind `{w}`: use calm, breeze, strong or storm");
-        }
-        spec.wind = w.clone();
+        spec.wind = w.to_string();
+        spec.u_star = None;
     }
     if !(a.fps > 0.0 && a.fps <= 1000.0) {
         bail!("--fps {}: must be in (0, 1000]", a.fps);

@@ -7,10 +7,11 @@ use std::time::Instant;
 
 use anyhow::{Context, bail};
 use clap::{Args, Subcommand};
+use sylva_forest::WindSource;
 use sylva_sway::probe::{bend_and_release, free_decay};
 use sylva_sway::{SwayBatch, SwayParams, SwaySpecies, transform};
 use sylva_tree::{PARAMS, PRESETS, Species, species::Scope};
-use sylva_wind::{Grid, Preset, SynthParams, WindField};
+use sylva_wind::{Grid, SynthParams, WindField};
 
 #[derive(Debug, Subcommand)]
 pub enum TreeCommand {
@@ -94,10 +95,10 @@ pub struct ProbeArgs {
     /// Seed of the tree.
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Wind: a preset (calm, breeze, strong, storm: turbulent, from `sylva-wind`) or a
-    /// steady speed in m/s along +x.
+    /// Wind: a preset (calm, breeze, strong, storm: turbulent, from `sylva-wind`), a steady
+    /// speed in m/s along +x, or a wind file (.swf, .npy, .zarr) sampled at the crown.
     #[arg(long, default_value = "breeze")]
-    wind: String,
+    wind: WindSource,
     /// Seconds to simulate.
     #[arg(value_parser = crate::finite::<f64>, long, default_value_t = 60.0)]
     seconds: f64,
@@ -272,36 +273,31 @@ pub fn run_sway(cmd: SwayCommand) -> anyhow::Result<()> {
     let dt = 1.0 / a.fps;
     let steps = (a.seconds * a.fps).ceil() as usize;
     // Wind at the crown per step.
-    let wind: Vec<[f32; 3]> = match a.wind.parse::<f64>() {
-        Ok(speed) if !speed.is_finite() || speed.abs() > 100.0 => {
-            bail!("--wind {}: a speed must be a finite number of m/s within ±100", a.wind)
-        }
-        Ok(speed) => vec![[speed as f32, 0.0, 0.0]; steps],
-        Err(_) => {
-            let preset = Preset::from_name(&a.wind).with_context(|| {
-                format!(
-                    "--wind: `{}` is neither a speed in m/s nor calm|breeze|strong|storm",
-                    a.wind
-                )
-            })?;
+    // Wind at the crown per step: steady, or sampled from a synthesised or read field.
+    let sample = |field: &WindField| -> Vec<[f32; 3]> {
+        let v = field.view();
+        (0..steps)
+            .map(|k| {
+                let s = v.sample(crown, k as f64 * dt);
+                [s[0] as f32, s[1] as f32, s[2] as f32]
+            })
+            .collect()
+    };
+    let wind: Vec<[f32; 3]> = match &a.wind {
+        WindSource::Steady(speed) => vec![[*speed as f32, 0.0, 0.0]; steps],
+        WindSource::Preset(preset) => {
             let frames = ((a.seconds / 0.1).ceil() as usize + 4).next_multiple_of(2).max(64);
             let mut grid = Grid::regular(4, 4, 4.0, &[crown[2].max(1.0)], frames, 0.1);
             grid.xs = vec![-6.0, -2.0, 2.0, 6.0];
             grid.ys = grid.xs.clone();
-            let field = WindField::generate(
+            sample(&WindField::generate(
                 &preset.params(),
                 &grid,
                 SynthParams { seed: a.seed, ..Default::default() },
                 &|_| {},
-            )?;
-            let v = field.view();
-            (0..steps)
-                .map(|k| {
-                    let s = v.sample(crown, k as f64 * dt);
-                    [s[0] as f32, s[1] as f32, s[2] as f32]
-                })
-                .collect()
+            )?)
         }
+        WindSource::File(path) => sample(&crate::wind::read(path)?),
     };
     let sp =
         SwaySpecies::new(sk, SwayParams::for_leaves(sylva_tree::texture::is_needle(&species)))?;

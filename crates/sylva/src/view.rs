@@ -25,6 +25,10 @@ pub struct ViewArgs {
     /// GPU, 3 on a software rasteriser such as lavapipe.
     #[arg(value_parser = crate::finite::<f32>, long)]
     pub lod_fraction: Option<f32>,
+    /// Wind instead of the scene's: a preset (calm, breeze, strong, storm), a steady speed
+    /// in m/s, or a wind file (.swf, .npy, .zarr).
+    #[arg(long)]
+    pub wind: Option<sylva_forest::WindSource>,
     #[command(flatten)]
     pub lod: crate::render::LodArgs,
 }
@@ -266,6 +270,10 @@ impl ApplicationHandler for App {
 pub fn view(a: &ViewArgs) -> anyhow::Result<()> {
     let mut spec = SceneSpec::load(&a.scene)?;
     a.lod.apply(&mut spec)?;
+    if let Some(w) = &a.wind {
+        spec.wind = w.to_string();
+        spec.u_star = None;
+    }
     if let Some(h0) = a.lod_fraction
         && !(h0 > 0.0 && h0.is_finite())
     {

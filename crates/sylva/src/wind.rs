@@ -552,7 +552,7 @@ fn write(field: &WindField, path: &Path, format: FormatArg, x_index: usize) -> a
     Ok(())
 }
 
-fn read(path: &Path) -> anyhow::Result<WindField> {
+pub fn read(path: &Path) -> anyhow::Result<WindField> {
     let field = match path.extension().and_then(|e| e.to_str()) {
         Some("bts") => bail!(
             "{}: a .bts file holds one y–z plane and not the wind model it came from; \

@@ -145,6 +145,45 @@ fn tree_generate_writes_a_file_per_lod() {
     assert!(!ok && text.contains("0 … 5"), "{text}");
 }
 
+/// `--wind` is one type everywhere: the probe takes a preset, a steady speed or a wind file;
+/// text that is none of them is refused naming what is accepted, by `sway probe` and `render`.
+#[test]
+fn wind_flags_take_a_preset_a_speed_or_a_file() {
+    let field = temp("probe-wind.swf");
+    let f = field.to_str().expect("utf-8 path");
+    let (ok, text) = sylva(&["wind", "generate", "--nx", "4", "--ny", "4", "--out", f]);
+    assert!(ok, "{text}");
+    let csv = temp("probe-wind.csv");
+    let c = csv.to_str().expect("utf-8 path");
+    for wind in ["storm", "7.5", f] {
+        let (ok, text) = sylva(&[
+            "sway",
+            "probe",
+            "--species",
+            "quaking_aspen",
+            "--wind",
+            wind,
+            "--seconds",
+            "1",
+            "--csv",
+            c,
+        ]);
+        assert!(ok, "--wind {wind}: {text}");
+        // A steady wind is written as it was given; the others vary.
+        let rows = std::fs::read_to_string(&csv).expect("csv");
+        let first = rows.lines().nth(1).unwrap_or_default().to_string();
+        assert_eq!(wind == "7.5", first.contains(",7.5000,0.0000,0.0000,"), "{wind}: {first}");
+    }
+    for cmd in
+        [vec!["sway", "probe", "--species", "quaking_aspen"], vec!["render", "--scene", "small"]]
+    {
+        let mut args = cmd.clone();
+        args.extend(["--wind", "gale"]);
+        let (ok, text) = sylva(&args);
+        assert!(!ok && text.contains("calm, breeze, strong or storm"), "{cmd:?}: {text}");
+    }
+}
+
 #[test]
 fn tree_and_sway_commands_work_and_refuse_bad_species_files() {
     let (ok, text) = sylva(&["tree", "list"]);
