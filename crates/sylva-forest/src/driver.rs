@@ -422,7 +422,7 @@ impl Forest {
             }
             let sway = SwaySpecies::new(
                 &model.tree.skeleton,
-                SwayParams::for_leaves(model.leaves.needles),
+                spec.sway.apply(SwayParams::for_leaves(model.leaves.needles)),
             )
             .map_err(|e| ForestError::Species {
                 name: spec.species[si].name.clone(),
@@ -451,7 +451,7 @@ impl Forest {
             species,
             trees,
             wind,
-            leaf_params: LeafParams::default(),
+            leaf_params: spec.leaves,
             radius,
             time: 0.0,
             gain: 1.0,

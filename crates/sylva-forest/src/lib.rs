@@ -16,6 +16,6 @@ pub use driver::{
     blend_levels, hysteresis, lod_coordinate,
 };
 pub use scene::{
-    CameraKey, Lighting, LodSpec, Placement, SCENES, SceneError, SceneSpec, Terrain, WindSource,
-    camera_on_path, default_camera_path, layout,
+    CameraKey, Lighting, LodSpec, Placement, SCENES, SceneError, SceneSpec, SwayOverrides, Terrain,
+    WindSource, camera_on_path, default_camera_path, layout,
 };

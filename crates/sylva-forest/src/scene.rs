@@ -5,6 +5,7 @@ use std::f32::consts::{PI, TAU};
 
 use serde::{Deserialize, Serialize};
 use sylva_core::SplitMix64 as Rng;
+use sylva_sway::{LeafParams, SwayParams};
 use sylva_wind::Preset;
 use thiserror::Error;
 
@@ -97,6 +98,56 @@ impl std::str::FromStr for WindSource {
     }
 }
 
+/// A scene's changes to the sway model (a `[sway]` table): each key set replaces that
+/// [`SwayParams`] field for every species; a key left out keeps each species' own value
+/// (conifers, for instance, keep their needle drag).
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SwayOverrides {
+    /// Young's modulus of green wood, Pa.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub youngs_modulus: Option<f32>,
+    /// Density of green wood, kg/m³.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub wood_density: Option<f32>,
+    /// Damping ratio of every joint.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub damping_ratio: Option<f32>,
+    /// Drag coefficient of a branch segment.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub wood_drag: Option<f32>,
+    /// Drag coefficient of leaves per one-sided leaf area.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub leaf_drag: Option<f32>,
+    /// Speed at which leaves have halved their drag, m/s.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub leaf_reconfiguration_speed: Option<f32>,
+    /// Air density, kg/m³.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub air_density: Option<f32>,
+    /// Blend time of the animation LOD, s.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub blend_time: Option<f32>,
+}
+
+impl SwayOverrides {
+    /// `base` with the keys this table sets replaced.
+    pub fn apply(&self, base: SwayParams) -> SwayParams {
+        SwayParams {
+            youngs_modulus: self.youngs_modulus.unwrap_or(base.youngs_modulus),
+            wood_density: self.wood_density.unwrap_or(base.wood_density),
+            damping_ratio: self.damping_ratio.unwrap_or(base.damping_ratio),
+            wood_drag: self.wood_drag.unwrap_or(base.wood_drag),
+            leaf_drag: self.leaf_drag.unwrap_or(base.leaf_drag),
+            leaf_reconfiguration_speed: self
+                .leaf_reconfiguration_speed
+                .unwrap_or(base.leaf_reconfiguration_speed),
+            air_density: self.air_density.unwrap_or(base.air_density),
+            blend_time: self.blend_time.unwrap_or(base.blend_time),
+        }
+    }
+}
+
 /// One species of the mix.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -177,6 +228,14 @@ pub struct SceneSpec {
     /// deliberately for a machine with the memory.
     #[serde(default = "state_mb")]
     pub max_state_mb: usize,
+    /// Changes to the sway model for every species (a `[sway]` table; keys as
+    /// [`SwayParams`]'s fields).
+    #[serde(default)]
+    pub sway: SwayOverrides,
+    /// Leaf flutter constants (a `[leaves]` table; keys as [`LeafParams`]'s fields; every
+    /// key optional).
+    #[serde(default)]
+    pub leaves: LeafParams,
     /// Viewpoint; default: from the forest's south-west edge, looking across it.
     #[serde(default)]
     pub camera: Option<CameraSpec>,
@@ -420,6 +479,14 @@ impl SceneSpec {
         }
         if self.sim_joint_budget == 0 {
             return Err(bad("sim_joint_budget", "0".into(), "≥ 1"));
+        }
+        for base in [SwayParams::for_leaves(false), SwayParams::for_leaves(true)] {
+            if let Err(e) = self.sway.apply(base).validate() {
+                return Err(bad("sway", format!("{} = {}", e.field, e.value), e.expected));
+            }
+        }
+        if let Err(e) = self.leaves.validate() {
+            return Err(bad("leaves", format!("{} = {}", e.field, e.value), e.expected));
         }
         if !(1..=1_000_000).contains(&self.max_state_mb) {
             return Err(bad("max_state_mb", self.max_state_mb.to_string(), "1 … 1000000 MB"));

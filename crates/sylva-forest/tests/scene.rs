@@ -232,3 +232,50 @@ fn scene_wind_is_a_preset_a_steady_speed_or_a_file() {
     assert!(e.to_string().contains("`u_star`"), "{e}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A scene's `[sway]` and `[leaves]` tables reach the simulation: stiffer wood bends less in
+/// the same wind, and a zero flutter amplitude stills the leaves; values out of range are
+/// refused naming the table and the key.
+#[test]
+fn scene_sway_and_leaf_tables_reach_the_simulation() {
+    // Mean |palette − identity| over the drawn trees' palette values after 2 s of storm,
+    // and the largest leaf amplitude.
+    let motion = |spec: &SceneSpec| {
+        let mut forest = Forest::new(spec).expect("forest");
+        let cam = forest.default_camera();
+        let mut f = FrameData::default();
+        for _ in 0..60 {
+            forest.step(1.0 / 30.0);
+            forest.frame(&cam, 1.5, &mut f);
+        }
+        let identity = [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0];
+        let (mut sum, mut n) = (0.0f64, 0usize);
+        for inst in &f.instances {
+            for e in 0..12 {
+                let v = f.palettes[inst.palette as usize + e * inst.palette_stride as usize];
+                sum += (v - identity[e]).abs() as f64;
+                n += 1;
+            }
+        }
+        let leaf = f.instances.iter().map(|i| i.leaf_amplitude).fold(0.0f32, f32::max);
+        (sum / n.max(1) as f64, leaf)
+    };
+    let mut spec = SceneSpec::builtin("small").expect("small");
+    spec.wind = "storm".into();
+    let (bend, leaf) = motion(&spec);
+    spec.sway.youngs_modulus = Some(9e11); // a hundred times stiffer than green wood
+    spec.leaves.amp_max = 0.0;
+    let (stiff_bend, still_leaf) = motion(&spec);
+    assert!(stiff_bend < 0.5 * bend, "stiff {stiff_bend} vs {bend}");
+    assert!(leaf > 0.0 && still_leaf == 0.0, "leaf amplitude {leaf} → {still_leaf}");
+    for (table, needle) in [
+        ("[sway]\ndamping_ratio = 1.5\n", "damping_ratio"),
+        ("[leaves]\nf0 = -1\n", "f0"),
+        ("[sway]\nstiffness = 3\n", "stiffness"),
+    ] {
+        let text =
+            format!("name = \"x\"\ntrees = 3\nspecies = [{{ name = \"quaking_aspen\" }}]\n{table}");
+        let e = SceneSpec::from_toml("x.toml", &text).expect_err(table).to_string();
+        assert!(e.contains(needle), "{table}: {e}");
+    }
+}

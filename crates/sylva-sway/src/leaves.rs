@@ -32,6 +32,24 @@ impl Default for LeafParams {
     }
 }
 
+impl LeafParams {
+    /// Check every field; the error names it and its range.
+    pub fn validate(&self) -> Result<(), crate::SwayParamError> {
+        let fields = [
+            ("f0", self.f0, self.f0 > 0.0 && self.f0 <= 20.0, "in (0, 20] Hz"),
+            ("f1", self.f1, (0.0..=5.0).contains(&self.f1), "in [0, 5] Hz per m/s"),
+            ("amp_max", self.amp_max, (0.0..=1.5).contains(&self.amp_max), "in [0, 1.5] rad"),
+            ("u_half", self.u_half, self.u_half > 0.0 && self.u_half <= 100.0, "in (0, 100] m/s"),
+        ];
+        for (field, value, ok, expected) in fields {
+            if !(ok && value.is_finite()) {
+                return Err(crate::SwayParamError { field, value, expected });
+            }
+        }
+        Ok(())
+    }
+}
+
 /// Flutter state of one tree's leaves, as the vertex shader reads it.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 #[repr(C)]
