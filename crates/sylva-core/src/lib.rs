@@ -2,12 +2,14 @@
 //!
 //! - [`rng`]: SplitMix64, the one seeded generator behind every random choice (layout,
 //!   tree growth, textures), so a seed means the same stream everywhere;
+//! - [`mat4`]: column-major 4×4 product and inverse (camera and renderer);
 //! - [`v3`]: helpers on `[f32; 3]`, the vector type of every public struct (plain, `Pod`,
 //!   serde-friendly, so no conversion at crate boundaries);
 //! - [`simd_kernel!`]: one CPU-feature dispatch — a kernel compiled for AVX-512, AVX2 and
 //!   the baseline from one body, the widest picked at run time.
 #![warn(missing_docs)]
 
+pub mod mat4;
 pub mod rng;
 pub mod simd;
 pub mod v3;

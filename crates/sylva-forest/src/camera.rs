@@ -3,8 +3,7 @@
 
 use sylva_core::v3::{cross, dot, norm, sub};
 
-/// A 4×4 matrix, column-major.
-pub type Mat4 = [[f32; 4]; 4];
+pub use sylva_core::mat4::{Mat4, mul};
 
 /// Where the viewer stands and looks.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -19,17 +18,6 @@ pub struct Camera {
     pub near: f32,
     /// Far clip distance, m.
     pub far: f32,
-}
-
-/// a · b.
-pub fn mul(a: &Mat4, b: &Mat4) -> Mat4 {
-    let mut m = [[0.0; 4]; 4];
-    for c in 0..4 {
-        for r in 0..4 {
-            m[c][r] = (0..4).map(|k| a[k][r] * b[c][k]).sum();
-        }
-    }
-    m
 }
 
 impl Camera {

@@ -72,7 +72,7 @@ impl Globals {
     pub fn new(view_proj: [[f32; 4]; 4], eye: [f32; 3], time: f32, light: &Lighting) -> Globals {
         Globals {
             view_proj,
-            inv_view_proj: invert(&view_proj),
+            inv_view_proj: sylva_core::mat4::invert(&view_proj),
             eye,
             time,
             fog_density: light.fog(0.0),
@@ -230,73 +230,5 @@ pub fn vertex_layout<T>(
         array_stride: size_of::<T>() as u64,
         step_mode: wgpu::VertexStepMode::Vertex,
         attributes,
-    }
-}
-
-/// Inverse of a column-major 4×4 matrix (Gauss–Jordan with partial pivoting, in f64);
-/// the identity for a singular one.
-pub fn invert(m: &[[f32; 4]; 4]) -> [[f32; 4]; 4] {
-    // a[row][col], augmented with the identity.
-    let mut a = [[0.0f64; 8]; 4];
-    for r in 0..4 {
-        for c in 0..4 {
-            a[r][c] = m[c][r] as f64;
-        }
-        a[r][4 + r] = 1.0;
-    }
-    let mut out = [[0.0f32; 4]; 4];
-    for col in 0..4 {
-        let pivot =
-            (col..4).max_by(|&x, &y| a[x][col].abs().total_cmp(&a[y][col].abs())).unwrap_or(col);
-        if a[pivot][col].abs() < 1e-30 {
-            for (i, row) in out.iter_mut().enumerate() {
-                row[i] = 1.0;
-            }
-            return out;
-        }
-        a.swap(col, pivot);
-        let p = a[col][col];
-        for v in &mut a[col] {
-            *v /= p;
-        }
-        for r in 0..4 {
-            if r != col {
-                let f = a[r][col];
-                let pivot_row = a[col];
-                for (v, pv) in a[r].iter_mut().zip(pivot_row) {
-                    *v -= f * pv;
-                }
-            }
-        }
-    }
-    for r in 0..4 {
-        for c in 0..4 {
-            out[c][r] = a[r][4 + c] as f32;
-        }
-    }
-    out
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn inverse_times_matrix_is_identity() {
-        let cam = Camera {
-            eye: [3.0, -20.0, 5.0],
-            target: [0.0, 0.0, 4.0],
-            fov_deg: 50.0,
-            near: 0.5,
-            far: 500.0,
-        };
-        let m = cam.view_projection(1.33);
-        let p = sylva_forest::camera::mul(&invert(&m), &m);
-        for c in 0..4 {
-            for r in 0..4 {
-                let want = if c == r { 1.0 } else { 0.0 };
-                assert!((p[c][r] - want).abs() < 1e-3, "({c},{r}) = {}", p[c][r]);
-            }
-        }
     }
 }
