@@ -12,7 +12,7 @@ use std::fmt;
 use thiserror::Error;
 
 /// Parameters of one recursion level (WP95 "n" parameters).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct LevelParams {
     /// nLength: length of these stems relative to their parent's (level 0: to the tree).
     pub length: f32,
@@ -48,7 +48,7 @@ pub struct LevelParams {
 }
 
 /// A Weber–Penn species.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct Species {
     /// Name (from the file name or the preset).
     pub name: String,
@@ -429,57 +429,10 @@ fn split_key(key: &str) -> (Option<usize>, &str) {
 impl Species {
     /// A species with every parameter at its documented default.
     pub fn defaults(name: &str) -> Species {
-        let lv = LevelParams {
-            length: 0.5,
-            length_v: 0.0,
-            taper: 1.0,
-            seg_splits: 0.0,
-            split_angle: 0.0,
-            split_angle_v: 0.0,
-            curve_res: 3,
-            curve: 0.0,
-            curve_back: 0.0,
-            curve_v: 0.0,
-            down_angle: 45.0,
-            down_angle_v: 0.0,
-            rotate: 140.0,
-            rotate_v: 0.0,
-            branches: 0.0,
-        };
-        let mut s = Species {
-            name: name.into(),
-            shape: 0,
-            base_size: 0.0,
-            scale: 0.0,
-            scale_v: 0.0,
-            z_scale: 0.0,
-            z_scale_v: 0.0,
-            levels: 0,
-            ratio: 0.0,
-            ratio_power: 0.0,
-            lobes: 0,
-            max_joints: 0,
-            lobe_depth: 0.0,
-            flare: 0.0,
-            scale0: 0.0,
-            scale0_v: 0.0,
-            base_splits: 0,
-            leaves: 0.0,
-            leaf_shape: 0,
-            leaf_scale: 0.0,
-            leaf_scale_x: 0.0,
-            attraction_up: 0.0,
-            prune_ratio: 0.0,
-            prune_width: 0.0,
-            prune_width_peak: 0.0,
-            prune_power_low: 0.0,
-            prune_power_high: 0.0,
-            leaf_quality: 0.0,
-            bark_shade: 0.0,
-            bark_roughness: 0.0,
-            leaf_shade: 0.0,
-            level: [lv; 4],
-        };
+        // Every field is a parameter of `PARAMS`, whose defaults fill it (a test checks
+        // that each field is reached): adding a parameter takes its field, its `PARAMS`
+        // entry and its name in `slot`.
+        let mut s = Species { name: name.into(), ..Species::default() };
         for p in PARAMS {
             match p.scope {
                 Scope::Global => s.set(None, p.name, p.default),
@@ -680,6 +633,25 @@ impl Species {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `PARAMS` and `slot` reach every numeric field: setting every parameter (on every
+    /// level) to 1 leaves no field at its zero default, so `defaults` fills them all.
+    #[test]
+    fn every_field_is_a_parameter() {
+        let mut s = Species::default();
+        for p in PARAMS {
+            match p.scope {
+                Scope::Global => s.set(None, p.name, 1.0),
+                Scope::Level => (0..4).for_each(|n| s.set(Some(n), p.name, 1.0)),
+            }
+        }
+        let text = format!("{s:?}").replace(['{', '}', '[', ']'], ",");
+        let zeros: Vec<&str> = text
+            .split(',')
+            .filter(|f| f.trim_end().ends_with(": 0") || f.trim_end().ends_with(": 0.0"))
+            .collect();
+        assert!(zeros.is_empty(), "fields no parameter sets: {zeros:?}");
+    }
 
     #[test]
     fn load_takes_a_preset_name_or_a_file_and_names_what_is_missing() {
