@@ -57,13 +57,8 @@ pub struct RenderBench {
     lod: crate::render::LodArgs,
 }
 
-/// Sapling (Blender's WP95 add-on), reference figures measured on this machine kind:
-/// (preset, seconds, triangles).
-const SAPLING: [(&str, f64, f64); 3] =
-    [("quaking_aspen", 0.025, 6.8e3), ("weeping_willow", 1.7, 217e3), ("douglas_fir", 2.9, 519e3)];
-
 fn tree(a: TreeBench) -> anyhow::Result<()> {
-    use sylva_tree::mesh::{LOD_LEVELS, lod_chain, lod_levels};
+    use sylva_tree::mesh::{LOD_LEVELS, lod_chain};
     use sylva_tree::texture::{bark, leaf_atlas};
     use sylva_tree::{PRESETS, Species};
     println!("machine: {}", machine());
@@ -109,33 +104,6 @@ fn tree(a: TreeBench) -> anyhow::Result<()> {
             median(&mut tex) * 1e3,
             tris.join(" / ")
         );
-        if let Some((_, secs, stris)) = SAPLING.iter().find(|(n, _, _)| n == name) {
-            // The level nearest Sapling's triangle count, generated directly (skeleton,
-            // then that level's mesh and clusters).
-            let k = (0..lods.len())
-                .min_by(|&x, &y| {
-                    let d = |l: usize| (lods[l].triangles() as f64 / stris).ln().abs();
-                    d(x).total_cmp(&d(y))
-                })
-                .unwrap_or(0);
-            let mut times = Vec::new();
-            for _ in 0..runs {
-                let t = Instant::now();
-                let tree = sp.generate(a.seed)?;
-                std::hint::black_box(lod_levels(&tree, &sp, &atlas, a.seed, &[k]));
-                times.push(t.elapsed().as_secs_f64());
-            }
-            let tk = median(&mut times);
-            println!(
-                "{:<22}Sapling {:.0} ms / {:.1}k triangles; sylva LOD {k} directly {:.2} ms / {:.1}k triangles: {:.0}× faster",
-                "",
-                secs * 1e3,
-                stris / 1e3,
-                tk * 1e3,
-                lods[k].triangles() as f64 / 1e3,
-                secs / tk,
-            );
-        }
     }
     Ok(())
 }
