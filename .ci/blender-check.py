@@ -32,7 +32,18 @@ for path in sys.argv[1:]:
             hi = Vector(map(max, hi, w))
         posed.to_mesh_clear()
     size = hi - lo
-    upright = meshes > 0 and lo.z > -0.05 * size.z and size.z > 0.8 * max(size.x, size.y)
+    # Upright along +Z: the bones (trunk base at the origin) rise from the ground, none
+    # below it, and the posed mesh lies mostly above the ground (leaf cards may hang a
+    # little below). A tree on its side spans z about 0 and fails both.
+    heads = [a.matrix_world @ b.head_local for a in armatures for b in a.data.bones]
+    bz = [h.z for h in heads] or [0.0]
+    bone_span = max(bz) - min(bz)
+    upright = (
+        meshes > 0
+        and bone_span > 0
+        and min(bz) > -0.02 * bone_span
+        and (lo.z + hi.z) / 2 > 0.15 * size.z
+    )
     bones = sum(len(a.data.bones) for a in armatures)
     print(
         f"{path}: Blender {bpy.app.version_string} imported {meshes} meshes, {bones} bones in "

@@ -34,14 +34,13 @@ for (const file of process.argv.slice(2)) {
         boneBox.expandByPoint(o.getWorldPosition(p));
       }
     });
-    const up = (b) => {
-      const s = b.getSize(new Vector3());
-      // From the ground (y ≈ 0) upward, and taller than 0.8 × its width: a tree on its side
-      // (Z up read as Y up) spans y symmetrically about 0 and fails both.
-      return b.min.y > -0.05 * s.y && s.y > 0.8 * Math.max(s.x, s.z);
-    };
+    // Upright along +Y: the bones (trunk base at the origin) rise from the ground, none below
+    // it, and the posed mesh lies mostly above the ground (leaf cards may hang a little
+    // below). A tree on its side (Z up read as Y up) spans y about 0 and fails both.
+    const bs = boneBox.getSize(new Vector3()), ms = meshBox.getSize(new Vector3());
+    const meshMid = (meshBox.min.y + meshBox.max.y) / 2;
+    const upright = boneBox.min.y > -0.02 * bs.y && bs.y > 0 && meshMid > 0.15 * ms.y;
     const fmt = (b) => `x ${b.min.x.toFixed(1)}…${b.max.x.toFixed(1)}, y ${b.min.y.toFixed(1)}…${b.max.y.toFixed(1)}, z ${b.min.z.toFixed(1)}…${b.max.z.toFixed(1)} m`;
-    const upright = up(boneBox) && up(meshBox);
     console.log(`${file}: ${gltf.scenes.length} scenes; scene 0: ${skinned} skinned meshes (${masked} alpha-masked), ${bones} bones, ${tris} triangles; bones ${fmt(boneBox)}; mesh ${fmt(meshBox)}; ${upright ? "upright along +Y" : "NOT upright along +Y"}`);
     if (skinned === 0 || bones === 0 || tris === 0 || !upright) failed = true;
   } catch (e) {
