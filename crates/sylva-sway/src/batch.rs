@@ -362,154 +362,141 @@ simd_kernel! {
         u: &[Lanes; 3],
         st: &mut Group<'_>,
     ) {
-        step_group_impl(sp, tr, aero, blend, bud, u, st)
-    }
-}
-
-#[inline(always)]
-fn step_group_impl(
-    sp: &SwaySpecies,
-    tr: &[Transition],
-    aero: &[f32],
-    blend: f32,
-    bud: &[u32; LANES],
-    u: &[Lanes; 3],
-    st: &mut Group<'_>,
-) {
-    let n = st.active.min(st.theta.len());
-    // Leaves reconfigure: their drag is divided by 1 + |u| / U_r.
-    let inv_ur = 1.0 / sp.params.leaf_reconfiguration_speed;
-    // |u| u per lane for the held (rigid) joints' wood, and reconfigured for their leaves.
-    let mut q = [[ZERO; 3]; 2];
-    if st.held.is_some() {
-        for l in 0..LANES {
-            let speed = (u[0][l] * u[0][l] + u[1][l] * u[1][l] + u[2][l] * u[2][l]).sqrt();
-            let leaves = speed / (1.0 + speed * inv_ur);
-            for c in 0..3 {
-                q[0][c][l] = speed * u[c][l];
-                q[1][c][l] = leaves * u[c][l];
-            }
-        }
-    }
-    // (1) Loads, tips inwards: loads[i] = (force on the subtree, moment about joint i). They
-    // start at zero: pass (2) clears each joint's loads once it has used them.
-    for i in (0..n).rev() {
-        let [ax, ay] = sp.axes[i];
-        let arm = sp.arm[i];
-        let (drag, leaf) = (sp.drag[i], sp.leaf_drag[i]);
-        let (ra, w) = (&st.rate[i], &st.weight[i]);
-        let li = &mut st.loads[i];
-        // Simple lane loops, one quantity each, so they vectorise.
-        let mut rel = [ZERO; 3];
-        let g = aero[i];
-        for l in 0..LANES {
-            // The segment's own motion enters the relative wind implicitly (backward Euler on
-            // the linearised drag damping): stable however light the segment and long the
-            // step; explicit use of the rate blows up for leafy twigs at 25 fps.
-            let speed = (u[0][l] * u[0][l] + u[1][l] * u[1][l] + u[2][l] * u[2][l]).sqrt();
-            let implicit = w[l] / (1.0 + g * speed);
-            let (r0, r1) = (implicit * ra[0][l], implicit * ra[1][l]);
-            let om = [r0 * ax[0] + r1 * ay[0], r0 * ax[1] + r1 * ay[1], r0 * ax[2] + r1 * ay[2]];
-            let v = cross(om, arm);
-            rel[0][l] = u[0][l] - v[0];
-            rel[1][l] = u[1][l] - v[1];
-            rel[2][l] = u[2][l] - v[2];
-        }
-        let mut f = [ZERO; 3];
-        for l in 0..LANES {
-            let s = (rel[0][l] * rel[0][l] + rel[1][l] * rel[1][l] + rel[2][l] * rel[2][l]).sqrt();
-            let k = s * (drag + leaf / (1.0 + s * inv_ur));
-            f[0][l] = k * rel[0][l];
-            f[1][l] = k * rel[1][l];
-            f[2][l] = k * rel[2][l];
-        }
-        for l in 0..LANES {
-            li[0][l] += f[0][l];
-            li[1][l] += f[1][l];
-            li[2][l] += f[2][l];
-            li[3][l] += arm[1] * f[2][l] - arm[2] * f[1][l];
-            li[4][l] += arm[2] * f[0][l] - arm[0] * f[2][l];
-            li[5][l] += arm[0] * f[1][l] - arm[1] * f[0][l];
-        }
-        if let Some(held) = st.held {
-            for (part, q) in held[i].iter().zip(&q) {
-                let [d, cx, cy, cz] = *part;
-                for l in 0..LANES {
-                    li[0][l] += d * q[0][l];
-                    li[1][l] += d * q[1][l];
-                    li[2][l] += d * q[2][l];
-                    li[3][l] += cy * q[2][l] - cz * q[1][l];
-                    li[4][l] += cz * q[0][l] - cx * q[2][l];
-                    li[5][l] += cx * q[1][l] - cy * q[0][l];
+        let n = st.active.min(st.theta.len());
+        // Leaves reconfigure: their drag is divided by 1 + |u| / U_r.
+        let inv_ur = 1.0 / sp.params.leaf_reconfiguration_speed;
+        // |u| u per lane for the held (rigid) joints' wood, and reconfigured for their leaves.
+        let mut q = [[ZERO; 3]; 2];
+        if st.held.is_some() {
+            for l in 0..LANES {
+                let speed = (u[0][l] * u[0][l] + u[1][l] * u[1][l] + u[2][l] * u[2][l]).sqrt();
+                let leaves = speed / (1.0 + speed * inv_ur);
+                for c in 0..3 {
+                    q[0][c][l] = speed * u[c][l];
+                    q[1][c][l] = leaves * u[c][l];
                 }
             }
         }
-        let p = sp.parent[i];
-        if p != sylva_tree::NO_PARENT {
-            let p = p as usize;
-            let (o, op) = (sp.origin[i], sp.origin[p]);
-            let r = [o[0] - op[0], o[1] - op[1], o[2] - op[2]];
-            let (lp, li) = {
-                let (a, b) = st.loads.split_at_mut(i);
-                (&mut a[p], &b[0])
-            };
+        // (1) Loads, tips inwards: loads[i] = (force on the subtree, moment about joint i). They
+        // start at zero: pass (2) clears each joint's loads once it has used them.
+        for i in (0..n).rev() {
+            let [ax, ay] = sp.axes[i];
+            let arm = sp.arm[i];
+            let (drag, leaf) = (sp.drag[i], sp.leaf_drag[i]);
+            let (ra, w) = (&st.rate[i], &st.weight[i]);
+            let li = &mut st.loads[i];
+            // Simple lane loops, one quantity each, so they vectorise.
+            let mut rel = [ZERO; 3];
+            let g = aero[i];
             for l in 0..LANES {
-                let fi = [li[0][l], li[1][l], li[2][l]];
-                lp[0][l] += fi[0];
-                lp[1][l] += fi[1];
-                lp[2][l] += fi[2];
-                lp[3][l] += li[3][l] + (r[1] * fi[2] - r[2] * fi[1]);
-                lp[4][l] += li[4][l] + (r[2] * fi[0] - r[0] * fi[2]);
-                lp[5][l] += li[5][l] + (r[0] * fi[1] - r[1] * fi[0]);
+                // The segment's own motion enters the relative wind implicitly (backward Euler on
+                // the linearised drag damping): stable however light the segment and long the
+                // step; explicit use of the rate blows up for leafy twigs at 25 fps.
+                let speed = (u[0][l] * u[0][l] + u[1][l] * u[1][l] + u[2][l] * u[2][l]).sqrt();
+                let implicit = w[l] / (1.0 + g * speed);
+                let (r0, r1) = (implicit * ra[0][l], implicit * ra[1][l]);
+                let om = [r0 * ax[0] + r1 * ay[0], r0 * ax[1] + r1 * ay[1], r0 * ax[2] + r1 * ay[2]];
+                let v = cross(om, arm);
+                rel[0][l] = u[0][l] - v[0];
+                rel[1][l] = u[1][l] - v[1];
+                rel[2][l] = u[2][l] - v[2];
+            }
+            let mut f = [ZERO; 3];
+            for l in 0..LANES {
+                let s = (rel[0][l] * rel[0][l] + rel[1][l] * rel[1][l] + rel[2][l] * rel[2][l]).sqrt();
+                let k = s * (drag + leaf / (1.0 + s * inv_ur));
+                f[0][l] = k * rel[0][l];
+                f[1][l] = k * rel[1][l];
+                f[2][l] = k * rel[2][l];
+            }
+            for l in 0..LANES {
+                li[0][l] += f[0][l];
+                li[1][l] += f[1][l];
+                li[2][l] += f[2][l];
+                li[3][l] += arm[1] * f[2][l] - arm[2] * f[1][l];
+                li[4][l] += arm[2] * f[0][l] - arm[0] * f[2][l];
+                li[5][l] += arm[0] * f[1][l] - arm[1] * f[0][l];
+            }
+            if let Some(held) = st.held {
+                for (part, q) in held[i].iter().zip(&q) {
+                    let [d, cx, cy, cz] = *part;
+                    for l in 0..LANES {
+                        li[0][l] += d * q[0][l];
+                        li[1][l] += d * q[1][l];
+                        li[2][l] += d * q[2][l];
+                        li[3][l] += cy * q[2][l] - cz * q[1][l];
+                        li[4][l] += cz * q[0][l] - cx * q[2][l];
+                        li[5][l] += cx * q[1][l] - cy * q[0][l];
+                    }
+                }
+            }
+            let p = sp.parent[i];
+            if p != sylva_tree::NO_PARENT {
+                let p = p as usize;
+                let (o, op) = (sp.origin[i], sp.origin[p]);
+                let r = [o[0] - op[0], o[1] - op[1], o[2] - op[2]];
+                let (lp, li) = {
+                    let (a, b) = st.loads.split_at_mut(i);
+                    (&mut a[p], &b[0])
+                };
+                for l in 0..LANES {
+                    let fi = [li[0][l], li[1][l], li[2][l]];
+                    lp[0][l] += fi[0];
+                    lp[1][l] += fi[1];
+                    lp[2][l] += fi[2];
+                    lp[3][l] += li[3][l] + (r[1] * fi[2] - r[2] * fi[1]);
+                    lp[4][l] += li[4][l] + (r[2] * fi[0] - r[0] * fi[2]);
+                    lp[5][l] += li[5][l] + (r[0] * fi[1] - r[1] * fi[0]);
+                }
             }
         }
-    }
-    // (2) Springs of the active joints and blend weights, root outwards, and with them:
-    for i in 0..n {
-        let t = &tr[i];
-        let rank = sp.rank[i];
-        let [ax, ay] = sp.axes[i];
-        let li = &st.loads[i];
-        let (th, ra, w) = (&mut st.theta[i], &mut st.rate[i], &mut st.weight[i]);
-        for l in 0..LANES {
-            let active = rank < bud[l];
-            let restart = active && w[l] == 0.0;
-            let mom = [li[3][l], li[4][l], li[5][l]];
-            for (a, axis) in [ax, ay].iter().enumerate() {
-                let eq = dot(mom, *axis) * t.inv_k;
-                // Back from fully off: start at rest under the present load, so the joint
-                // fades in without a step response.
-                let x = if restart { 0.0 } else { th[a][l] - eq };
-                let v = if restart { 0.0 } else { ra[a][l] };
-                let (nx, nv) = (t.a11 * x + t.a12 * v + eq, t.a21 * x + t.a22 * v);
-                th[a][l] = if active { nx } else { th[a][l] };
-                ra[a][l] = if active { nv } else { ra[a][l] };
+        // (2) Springs of the active joints and blend weights, root outwards, and with them:
+        for i in 0..n {
+            let t = &tr[i];
+            let rank = sp.rank[i];
+            let [ax, ay] = sp.axes[i];
+            let li = &st.loads[i];
+            let (th, ra, w) = (&mut st.theta[i], &mut st.rate[i], &mut st.weight[i]);
+            for l in 0..LANES {
+                let active = rank < bud[l];
+                let restart = active && w[l] == 0.0;
+                let mom = [li[3][l], li[4][l], li[5][l]];
+                for (a, axis) in [ax, ay].iter().enumerate() {
+                    let eq = dot(mom, *axis) * t.inv_k;
+                    // Back from fully off: start at rest under the present load, so the joint
+                    // fades in without a step response.
+                    let x = if restart { 0.0 } else { th[a][l] - eq };
+                    let v = if restart { 0.0 } else { ra[a][l] };
+                    let (nx, nv) = (t.a11 * x + t.a12 * v + eq, t.a21 * x + t.a22 * v);
+                    th[a][l] = if active { nx } else { th[a][l] };
+                    ra[a][l] = if active { nv } else { ra[a][l] };
+                }
+                w[l] = if active { (w[l] + blend).min(1.0) } else { (w[l] - blend).max(0.0) };
             }
-            w[l] = if active { (w[l] + blend).min(1.0) } else { (w[l] - blend).max(0.0) };
-        }
-        st.loads[i] = [ZERO; 6];
-        // (3) Palette, in the same sweep (the parent's is done): M_i = M_parent ·
-        // (T(o) R_i T(−o)).
-        let o = sp.origin[i];
-        let (th, w) = (&st.theta[i], &st.weight[i]);
-        let mut phi = [ZERO; 3];
-        let mut small = true;
-        for l in 0..LANES {
-            let (t0, t1) = (w[l] * th[0][l], w[l] * th[1][l]);
-            for c in 0..3 {
-                phi[c][l] = t0 * ax[c] + t1 * ay[c];
+            st.loads[i] = [ZERO; 6];
+            // (3) Palette, in the same sweep (the parent's is done): M_i = M_parent ·
+            // (T(o) R_i T(−o)).
+            let o = sp.origin[i];
+            let (th, w) = (&st.theta[i], &st.weight[i]);
+            let mut phi = [ZERO; 3];
+            let mut small = true;
+            for l in 0..LANES {
+                let (t0, t1) = (w[l] * th[0][l], w[l] * th[1][l]);
+                for c in 0..3 {
+                    phi[c][l] = t0 * ax[c] + t1 * ay[c];
+                }
+                small &= phi[0][l] * phi[0][l] + phi[1][l] * phi[1][l] + phi[2][l] * phi[2][l] < 0.25;
             }
-            small &= phi[0][l] * phi[0][l] + phi[1][l] * phi[1][l] + phi[2][l] * phi[2][l] < 0.25;
-        }
-        let p = sp.parent[i];
-        let (before, rest) = st.lanes.split_at_mut(i);
-        let parent = (p != sylva_tree::NO_PARENT).then(|| &before[p as usize]);
-        // Two copies of the lane loop, both branch-free: the common all-small-angle one, and
-        // one for any angle.
-        if small {
-            palette_lanes(&phi, o, parent, &mut rest[0], small_angle);
-        } else {
-            palette_lanes(&phi, o, parent, &mut rest[0], any_angle);
+            let p = sp.parent[i];
+            let (before, rest) = st.lanes.split_at_mut(i);
+            let parent = (p != sylva_tree::NO_PARENT).then(|| &before[p as usize]);
+            // Two copies of the lane loop, both branch-free: the common all-small-angle one, and
+            // one for any angle.
+            if small {
+                palette_lanes(&phi, o, parent, &mut rest[0], small_angle);
+            } else {
+                palette_lanes(&phi, o, parent, &mut rest[0], any_angle);
+            }
         }
     }
 }
