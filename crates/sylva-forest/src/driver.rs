@@ -801,12 +801,8 @@ fn wind_field(spec: &SceneSpec, radius: f32) -> Result<WindField, ForestError> {
             });
         }
         WindSource::File(path) => {
-            let field = match path.extension().and_then(|e| e.to_str()) {
-                Some("npy") => sylva_wind::io::read_npy(&path),
-                Some("zarr") => sylva_wind::io::read_zarr(&path),
-                _ => sylva_wind::io::read_swf(&path),
-            };
-            return field.map_err(|e| ForestError::Wind(format!("{}: {e}", path.display())));
+            return sylva_wind::io::read_field(&path)
+                .map_err(|e| ForestError::Wind(format!("{}: {e}", path.display())));
         }
     };
     let mut params =

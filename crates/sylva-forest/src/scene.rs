@@ -541,6 +541,13 @@ impl SceneSpec {
         Ok(())
     }
 
+    /// Replace the scene's wind (a command's `--wind`); a preset's U* set by the scene goes
+    /// with the wind it belonged to.
+    pub fn set_wind(&mut self, wind: &WindSource) {
+        self.wind = wind.to_string();
+        self.u_star = None;
+    }
+
     /// The wind this scene asks for (validated when the scene was read).
     pub fn wind_source(&self) -> Result<WindSource, SceneError> {
         WindSource::parse(&self.wind).map_err(|e| SceneError::Value {

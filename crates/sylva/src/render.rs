@@ -180,8 +180,7 @@ pub struct RenderReport {
 pub fn render(a: &RenderArgs) -> anyhow::Result<RenderReport> {
     let mut spec = SceneSpec::load(&a.scene)?;
     if let Some(w) = &a.wind {
-        spec.wind = w.to_string();
-        spec.u_star = None;
+        spec.set_wind(w);
     }
     if !(a.fps > 0.0 && a.fps <= 1000.0) {
         bail!("--fps {}: must be in (0, 1000]", a.fps);

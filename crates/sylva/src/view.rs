@@ -271,8 +271,7 @@ pub fn view(a: &ViewArgs) -> anyhow::Result<()> {
     let mut spec = SceneSpec::load(&a.scene)?;
     a.lod.apply(&mut spec)?;
     if let Some(w) = &a.wind {
-        spec.wind = w.to_string();
-        spec.u_star = None;
+        spec.set_wind(w);
     }
     if let Some(h0) = a.lod_fraction
         && !(h0 > 0.0 && h0.is_finite())

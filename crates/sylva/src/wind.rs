@@ -7,13 +7,13 @@ use anyhow::{Context, bail};
 use clap::{Args, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use sylva_wind::stats::{FieldStats, ensemble_stats_at, field_stats};
-
-use crate::plot::write_stats_plots;
 use sylva_wind::synth::{cholesky_estimate, memory_estimate};
 use sylva_wind::{
     CoherenceSpeed, Grid, Method, Preset, Profile, SpectrumModel, SynthParams, WindField,
     WindParams, io,
 };
+
+use crate::plot::write_stats_plots;
 
 #[derive(Debug, Subcommand)]
 pub enum WindCommand {
@@ -559,9 +559,7 @@ pub fn read(path: &Path) -> anyhow::Result<WindField> {
              `sylva wind info` reads it",
             path.display()
         ),
-        Some("npy") => io::read_npy(path),
-        Some("zarr") => io::read_zarr(path),
-        _ => io::read_swf(path),
+        _ => io::read_field(path),
     };
     field.with_context(|| format!("reading {}", path.display()))
 }

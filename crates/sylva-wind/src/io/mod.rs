@@ -37,6 +37,16 @@ use crate::grid::Grid;
 use crate::params::WindParams;
 use crate::synth::SynthParams;
 
+/// Read a wind field by its file's extension: `.npy` (with its sidecar), `.zarr`, else
+/// `.swf`. (A `.bts` holds one plane without the model: read it with [`read_bts`].)
+pub fn read_field(path: &Path) -> Result<WindField, WindError> {
+    match path.extension().and_then(|e| e.to_str()) {
+        Some("npy") => read_npy(path),
+        Some("zarr") => read_zarr(path),
+        _ => read_swf(path),
+    }
+}
+
 /// Magic bytes of an `.swf` file.
 pub const SWF_MAGIC: &[u8; 8] = b"SYLVAWND";
 /// Current `.swf` format version.
