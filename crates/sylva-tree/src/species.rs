@@ -11,120 +11,6 @@ use std::fmt;
 
 use thiserror::Error;
 
-/// Parameters of one recursion level (WP95 "n" parameters).
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct LevelParams {
-    /// nLength: length of these stems relative to their parent's (level 0: to the tree).
-    pub length: f32,
-    /// nLengthV: variation of `length`.
-    pub length_v: f32,
-    /// nTaper: 0 cylinder, 1 cone, 1–2 spherical ends, 2–3 periodic.
-    pub taper: f32,
-    /// nSegSplits: new stems per segment (fractions carried as an error term).
-    pub seg_splits: f32,
-    /// nSplitAngle: angle between split stems, degrees.
-    pub split_angle: f32,
-    /// nSplitAngleV: its variation, degrees.
-    pub split_angle_v: f32,
-    /// nCurveRes: segments per stem.
-    pub curve_res: u32,
-    /// nCurve: total curvature along the stem, degrees (negative: downwards).
-    pub curve: f32,
-    /// nCurveBack: curvature of the second half (S-curves), degrees; 0 for none.
-    pub curve_back: f32,
-    /// nCurveV: random curvature per segment, degrees; negative makes a helix.
-    pub curve_v: f32,
-    /// nDownAngle: angle from the parent's axis, degrees (level ≥ 1).
-    pub down_angle: f32,
-    /// nDownAngleV: its variation, degrees; negative varies along the parent.
-    pub down_angle_v: f32,
-    /// nRotate: rotation about the parent between successive children, degrees; negative
-    /// alternates sides.
-    pub rotate: f32,
-    /// nRotateV: its variation, degrees.
-    pub rotate_v: f32,
-    /// nBranches: children per parent stem (level ≥ 1).
-    pub branches: f32,
-}
-
-/// A Weber–Penn species.
-#[derive(Debug, Clone, PartialEq, Default)]
-pub struct Species {
-    /// Name (from the file name or the preset).
-    pub name: String,
-    /// Shape: crown envelope 0 conical, 1 spherical, 2 hemispherical, 3 cylindrical,
-    /// 4 tapered cylindrical, 5 flame, 6 inverse conical, 7 tend flame, 8 envelope (pruning).
-    pub shape: u32,
-    /// BaseSize: fraction of the trunk without branches.
-    pub base_size: f32,
-    /// Scale: tree size, m.
-    pub scale: f32,
-    /// ScaleV: its variation, m.
-    pub scale_v: f32,
-    /// ZScale, ZScaleV: vertical scaling (kept for completeness; 1 and 0 for trees).
-    pub z_scale: f32,
-    /// ZScaleV.
-    pub z_scale_v: f32,
-    /// Levels: recursion depth (1–4).
-    pub levels: u32,
-    /// Ratio: trunk radius to tree length.
-    pub ratio: f32,
-    /// RatioPower: how child radii shrink with their length.
-    pub ratio_power: f32,
-    /// Lobes: sinusoidal lobes of the trunk cross-section.
-    pub lobes: u32,
-    /// MaxJoints (Sylva): the most joints a tree of this species may grow; generation is
-    /// refused beyond it (before growing when the branch counts already exceed it). A guard
-    /// against branch counts that would take the machine's memory, raised deliberately.
-    pub max_joints: u32,
-    /// LobeDepth: their depth relative to the radius.
-    pub lobe_depth: f32,
-    /// Flare: widening of the trunk base, relative.
-    pub flare: f32,
-    /// 0Scale, 0ScaleV: trunk radius scale and variation.
-    pub scale0: f32,
-    /// 0ScaleV.
-    pub scale0_v: f32,
-    /// 0BaseSplits: splits right above the trunk base.
-    pub base_splits: u32,
-    /// Leaves: leaves per last-level stem (negative: fan).
-    pub leaves: f32,
-    /// LeafShape: 0–8, the outline in WP95's list.
-    pub leaf_shape: u32,
-    /// LeafScale: leaf length, m.
-    pub leaf_scale: f32,
-    /// LeafScaleX: leaf width relative to its length.
-    pub leaf_scale_x: f32,
-    /// AttractionUp: how strongly stems bend towards (or away from, < 0) the light.
-    pub attraction_up: f32,
-    /// PruneRatio: 0 off, 1 full pruning to the envelope.
-    pub prune_ratio: f32,
-    /// PruneWidth: envelope width relative to height.
-    pub prune_width: f32,
-    /// PruneWidthPeak: relative height of the envelope's widest point.
-    pub prune_width_peak: f32,
-    /// PrunePowerLow: curvature of the envelope's lower part.
-    pub prune_power_low: f32,
-    /// PrunePowerHigh: curvature of its upper part.
-    pub prune_power_high: f32,
-    /// LeafQuality: fraction of leaves kept (they grow to keep the area).
-    pub leaf_quality: f32,
-    /// BarkShade (Sylva): bark colour, 0 dark brown … 1 pale (aspen).
-    pub bark_shade: f32,
-    /// BarkRoughness (Sylva): 0 smooth … 1 deeply furrowed.
-    pub bark_roughness: f32,
-    /// LeafShade (Sylva): foliage colour, 0 dark blue-green … 1 light yellow-green.
-    pub leaf_shade: f32,
-    /// Per-level parameters, levels 0–3.
-    pub level: [LevelParams; 4],
-}
-
-/// Mutable storage of one parameter.
-enum Slot<'a> {
-    F(&'a mut f32),
-    U(&'a mut u32),
-}
-
 /// Where a parameter lives.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Scope {
@@ -155,182 +41,161 @@ pub struct ParamDoc {
     pub doc: &'static str,
 }
 
-const fn g(
-    name: &'static str,
-    unit: &'static str,
-    min: f32,
-    max: f32,
-    integer: bool,
-    default: f32,
-    doc: &'static str,
-) -> ParamDoc {
-    ParamDoc { name, scope: Scope::Global, unit, min, max, integer, default, doc }
-}
-const fn l(
-    name: &'static str,
-    unit: &'static str,
-    min: f32,
-    max: f32,
-    integer: bool,
-    default: f32,
-    doc: &'static str,
-) -> ParamDoc {
-    ParamDoc { name, scope: Scope::Level, unit, min, max, integer, default, doc }
+/// Mutable storage of one parameter.
+enum Slot<'a> {
+    F(&'a mut f32),
+    U(&'a mut u32),
 }
 
-/// Every parameter of a species file.
-pub const PARAMS: &[ParamDoc] = &[
-    g(
-        "Shape",
-        "",
-        0.0,
-        8.0,
-        true,
-        4.0,
-        "crown envelope: 0 conical, 1 spherical, 2 hemispherical, 3 cylindrical, 4 tapered cylindrical, 5 flame, 6 inverse conical, 7 tend flame, 8 pruning envelope",
-    ),
-    g("BaseSize", "", 0.0, 1.0, false, 0.25, "fraction of the trunk below the first branch"),
-    g("Scale", "m", 0.1, 150.0, false, 10.0, "tree size"),
-    g("ScaleV", "m", 0.0, 100.0, false, 0.0, "variation of Scale"),
-    g("ZScale", "", 0.0, 10.0, false, 1.0, "vertical scaling"),
-    g("ZScaleV", "", 0.0, 10.0, false, 0.0, "variation of ZScale"),
-    g("Levels", "", 1.0, 4.0, true, 3.0, "recursion depth: trunk, branches, sub-branches, twigs"),
-    g(
-        "MaxJoints",
-        "joints",
-        1000.0,
-        16_000_000.0,
-        true,
-        1_000_000.0,
-        "guard: the most joints a tree may grow (about 1 kB of memory each with its mesh); \
-         the weeping willow grows 80 000",
-    ),
-    g("Ratio", "", 0.001, 0.5, false, 0.015, "trunk base radius divided by tree length"),
-    g(
-        "RatioPower",
-        "",
-        0.0,
-        5.0,
-        false,
-        1.2,
-        "child radius = parent radius × (child length / parent length)^RatioPower",
-    ),
-    g("Lobes", "", 0.0, 20.0, true, 0.0, "lobes of the trunk cross-section"),
-    g("LobeDepth", "", 0.0, 1.0, false, 0.0, "depth of the lobes, relative to the radius"),
-    g("Flare", "", 0.0, 10.0, false, 0.5, "widening of the trunk base, relative to its radius"),
-    g("0Scale", "", 0.01, 10.0, false, 1.0, "trunk radius scale"),
-    g("0ScaleV", "", 0.0, 10.0, false, 0.0, "variation of 0Scale"),
-    g("0BaseSplits", "", 0.0, 10.0, true, 0.0, "clones made at the trunk base (one split level)"),
-    g(
-        "Leaves",
-        "per stem",
-        -20000.0,
-        20000.0,
-        false,
-        20.0,
-        "leaves on each last-level stem (negative: fan at the tip)",
-    ),
-    g(
-        "LeafShape",
-        "",
-        0.0,
-        8.0,
-        true,
-        0.0,
-        "leaf outline: 0 elliptic, 1 lanceolate, 2 ovate, 3 rounded with a pointed tip, 4 lobed, 5 palmate, 6 needle, 7 round, 8 heart",
-    ),
-    g("LeafScale", "m", 0.001, 5.0, false, 0.15, "leaf length"),
-    g("LeafScaleX", "", 0.01, 5.0, false, 0.7, "leaf width / length"),
-    g(
-        "AttractionUp",
-        "",
-        -10.0,
-        10.0,
-        false,
-        0.0,
-        "bend of stems towards the sky (negative: droop)",
-    ),
-    g("PruneRatio", "", 0.0, 1.0, false, 0.0, "0 no pruning, 1 stems cut to the envelope"),
-    g("PruneWidth", "", 0.01, 10.0, false, 0.5, "envelope width relative to the tree height"),
-    g("PruneWidthPeak", "", 0.0, 1.0, false, 0.5, "relative height of the envelope's widest point"),
-    g("PrunePowerLow", "", 0.0, 10.0, false, 0.5, "curvature of the envelope below its peak"),
-    g("PrunePowerHigh", "", 0.0, 10.0, false, 0.5, "curvature of the envelope above its peak"),
-    g(
-        "LeafQuality",
-        "",
-        0.01,
-        1.0,
-        false,
-        1.0,
-        "fraction of leaves generated (the rest enlarge to keep the area)",
-    ),
-    g("BarkShade", "", 0.0, 1.0, false, 0.3, "bark colour: 0 dark brown … 1 pale (Sylva)"),
-    g("BarkRoughness", "", 0.0, 1.0, false, 0.6, "bark: 0 smooth … 1 deep furrows (Sylva)"),
-    g(
-        "LeafShade",
-        "",
-        0.0,
-        1.0,
-        false,
-        0.5,
-        "foliage: 0 dark blue-green … 1 light yellow-green (Sylva)",
-    ),
-    l(
-        "Length",
-        "",
-        0.0,
-        10.0,
-        false,
-        0.5,
-        "stem length relative to the parent (level 0: to the tree size)",
-    ),
-    l("LengthV", "", 0.0, 10.0, false, 0.0, "variation of Length"),
-    l("Taper", "", 0.0, 3.0, false, 1.0, "0 cylinder, 1 cone, 1–2 rounded tip, 2–3 periodic"),
-    l(
-        "SegSplits",
-        "per segment",
-        0.0,
-        2.0,
-        false,
-        0.0,
-        "splits per segment, fractions carried forward as an error term",
-    ),
-    l("SplitAngle", "°", 0.0, 180.0, false, 0.0, "angle between split stems"),
-    l("SplitAngleV", "°", 0.0, 180.0, false, 0.0, "variation of SplitAngle"),
-    l("CurveRes", "segments", 1.0, 64.0, true, 3.0, "segments per stem"),
-    l("Curve", "°", -360.0, 360.0, false, 0.0, "total curvature along the stem"),
-    l(
-        "CurveBack",
-        "°",
-        -360.0,
-        360.0,
-        false,
-        0.0,
-        "curvature of the upper half (S-curve); 0 for none",
-    ),
-    l("CurveV", "°", -720.0, 720.0, false, 0.0, "random curvature per stem; negative: helix"),
-    l("DownAngle", "°", -180.0, 180.0, false, 45.0, "angle between a child and its parent's axis"),
-    l(
-        "DownAngleV",
-        "°",
-        -180.0,
-        180.0,
-        false,
-        0.0,
-        "variation of DownAngle (negative: varies along the parent)",
-    ),
-    l(
-        "Rotate",
-        "°",
-        -360.0,
-        360.0,
-        false,
-        140.0,
-        "rotation between successive children (negative: alternating)",
-    ),
-    l("RotateV", "°", 0.0, 360.0, false, 0.0, "variation of Rotate"),
-    l("Branches", "per stem", 0.0, 2000.0, false, 0.0, "children per parent stem"),
-];
+/// A field type a species parameter may have: `f32`, or `u32` for whole numbers.
+trait ParamField {
+    /// Whether values must be whole numbers.
+    const INTEGER: bool;
+    fn slot(&mut self) -> Slot<'_>;
+}
+impl ParamField for f32 {
+    const INTEGER: bool = false;
+    fn slot(&mut self) -> Slot<'_> {
+        Slot::F(self)
+    }
+}
+impl ParamField for u32 {
+    const INTEGER: bool = true;
+    fn slot(&mut self) -> Slot<'_> {
+        Slot::U(self)
+    }
+}
+
+/// The one table of species parameters. Each row — field, type, WP95 name, unit, range,
+/// default and meaning — becomes the struct field (documented by the row), its [`PARAMS`]
+/// entry (parsing, range checks, defaults, `sylva tree params`) and its name in the lookup
+/// that `set`/`get` use: adding a parameter is one row here (and the code that uses it).
+macro_rules! species_params {
+    (
+        global { $( $gf:ident : $gt:ident = $gname:literal, $gunit:literal,
+                    $gmin:literal ..= $gmax:literal, $gdef:literal, $gdoc:literal; )* }
+        level { $( $lf:ident : $lt:ident = $lname:literal, $lunit:literal,
+                   $lmin:literal ..= $lmax:literal, $ldef:literal, $ldoc:literal; )* }
+    ) => {
+        /// Parameters of one recursion level (WP95 "n" parameters; each field's doc names the
+        /// key without its level digit).
+        #[derive(Debug, Clone, Copy, PartialEq, Default)]
+        pub struct LevelParams {
+            $( #[doc = concat!("`n", $lname, "`: ", $ldoc, " (unit and range: [`PARAMS`]).")] pub $lf: $lt, )*
+        }
+
+        /// A Weber–Penn species.
+        #[derive(Debug, Clone, PartialEq, Default)]
+        pub struct Species {
+            /// Name (from the file name or the preset).
+            pub name: String,
+            $( #[doc = concat!("`", $gname, "`: ", $gdoc, " (unit and range: [`PARAMS`]).")] pub $gf: $gt, )*
+            /// Per-level parameters, levels 0–3.
+            pub level: [LevelParams; 4],
+        }
+
+        /// Every parameter of a species file (whole-tree ones first, then per-level ones).
+        pub const PARAMS: &[ParamDoc] = &[
+            $( ParamDoc {
+                name: $gname, scope: Scope::Global, unit: $gunit, min: $gmin as f32,
+                max: $gmax as f32, integer: <$gt as ParamField>::INTEGER, default: $gdef as f32,
+                doc: $gdoc,
+            }, )*
+            $( ParamDoc {
+                name: $lname, scope: Scope::Level, unit: $lunit, min: $lmin as f32,
+                max: $lmax as f32, integer: <$lt as ParamField>::INTEGER, default: $ldef as f32,
+                doc: $ldoc,
+            }, )*
+        ];
+
+        impl Species {
+            /// The storage of a parameter, by WP95 name (per-level names without the digit).
+            fn slot(&mut self, level: Option<usize>, name: &str) -> Option<Slot<'_>> {
+                match level {
+                    Some(n) => {
+                        let lp = self.level.get_mut(n)?;
+                        match name {
+                            $( $lname => Some(lp.$lf.slot()), )*
+                            _ => None,
+                        }
+                    }
+                    None => match name {
+                        $( $gname => Some(self.$gf.slot()), )*
+                        _ => None,
+                    },
+                }
+            }
+        }
+    };
+}
+
+species_params! {
+    global {
+        shape: u32 = "Shape", "", 0 ..= 8, 4,
+            "crown envelope: 0 conical, 1 spherical, 2 hemispherical, 3 cylindrical, 4 tapered cylindrical, 5 flame, 6 inverse conical, 7 tend flame, 8 pruning envelope";
+        base_size: f32 = "BaseSize", "", 0.0 ..= 1.0, 0.25, "fraction of the trunk below the first branch";
+        scale: f32 = "Scale", "m", 0.1 ..= 150.0, 10.0, "tree size";
+        scale_v: f32 = "ScaleV", "m", 0.0 ..= 100.0, 0.0, "variation of Scale";
+        z_scale: f32 = "ZScale", "", 0.0 ..= 10.0, 1.0, "vertical scaling";
+        z_scale_v: f32 = "ZScaleV", "", 0.0 ..= 10.0, 0.0, "variation of ZScale";
+        levels: u32 = "Levels", "", 1 ..= 4, 3, "recursion depth: trunk, branches, sub-branches, twigs";
+        max_joints: u32 = "MaxJoints", "joints", 1000 ..= 16_000_000, 1_000_000,
+            "guard: the most joints a tree may grow (about 1 kB of memory each with its mesh); \
+             generation is refused beyond it, before growing when the branch counts already \
+             exceed it; the weeping willow grows 80 000";
+        ratio: f32 = "Ratio", "", 0.001 ..= 0.5, 0.015, "trunk base radius divided by tree length";
+        ratio_power: f32 = "RatioPower", "", 0.0 ..= 5.0, 1.2,
+            "child radius = parent radius × (child length / parent length)^RatioPower";
+        lobes: u32 = "Lobes", "", 0 ..= 20, 0, "lobes of the trunk cross-section";
+        lobe_depth: f32 = "LobeDepth", "", 0.0 ..= 1.0, 0.0, "depth of the lobes, relative to the radius";
+        flare: f32 = "Flare", "", 0.0 ..= 10.0, 0.5, "widening of the trunk base, relative to its radius";
+        scale0: f32 = "0Scale", "", 0.01 ..= 10.0, 1.0, "trunk radius scale";
+        scale0_v: f32 = "0ScaleV", "", 0.0 ..= 10.0, 0.0, "variation of 0Scale";
+        base_splits: u32 = "0BaseSplits", "", 0 ..= 10, 0, "clones made at the trunk base (one split level)";
+        leaves: f32 = "Leaves", "per stem", -20000.0 ..= 20000.0, 20.0,
+            "leaves on each last-level stem (negative: fan at the tip)";
+        leaf_shape: u32 = "LeafShape", "", 0 ..= 8, 0,
+            "leaf outline: 0 elliptic, 1 lanceolate, 2 ovate, 3 rounded with a pointed tip, 4 lobed, 5 palmate, 6 needle, 7 round, 8 heart";
+        leaf_scale: f32 = "LeafScale", "m", 0.001 ..= 5.0, 0.15, "leaf length";
+        leaf_scale_x: f32 = "LeafScaleX", "", 0.01 ..= 5.0, 0.7, "leaf width / length";
+        attraction_up: f32 = "AttractionUp", "", -10.0 ..= 10.0, 0.0,
+            "bend of stems towards the sky (negative: droop)";
+        prune_ratio: f32 = "PruneRatio", "", 0.0 ..= 1.0, 0.0, "0 no pruning, 1 stems cut to the envelope";
+        prune_width: f32 = "PruneWidth", "", 0.01 ..= 10.0, 0.5, "envelope width relative to the tree height";
+        prune_width_peak: f32 = "PruneWidthPeak", "", 0.0 ..= 1.0, 0.5,
+            "relative height of the envelope's widest point";
+        prune_power_low: f32 = "PrunePowerLow", "", 0.0 ..= 10.0, 0.5, "curvature of the envelope below its peak";
+        prune_power_high: f32 = "PrunePowerHigh", "", 0.0 ..= 10.0, 0.5, "curvature of the envelope above its peak";
+        leaf_quality: f32 = "LeafQuality", "", 0.01 ..= 1.0, 1.0,
+            "fraction of leaves generated (the rest enlarge to keep the area)";
+        bark_shade: f32 = "BarkShade", "", 0.0 ..= 1.0, 0.3, "bark colour: 0 dark brown … 1 pale (Sylva)";
+        bark_roughness: f32 = "BarkRoughness", "", 0.0 ..= 1.0, 0.6, "bark: 0 smooth … 1 deep furrows (Sylva)";
+        leaf_shade: f32 = "LeafShade", "", 0.0 ..= 1.0, 0.5,
+            "foliage: 0 dark blue-green … 1 light yellow-green (Sylva)";
+    }
+    level {
+        length: f32 = "Length", "", 0.0 ..= 10.0, 0.5,
+            "stem length relative to the parent (level 0: to the tree size)";
+        length_v: f32 = "LengthV", "", 0.0 ..= 10.0, 0.0, "variation of Length";
+        taper: f32 = "Taper", "", 0.0 ..= 3.0, 1.0, "0 cylinder, 1 cone, 1–2 rounded tip, 2–3 periodic";
+        seg_splits: f32 = "SegSplits", "per segment", 0.0 ..= 2.0, 0.0,
+            "splits per segment, fractions carried forward as an error term";
+        split_angle: f32 = "SplitAngle", "°", 0.0 ..= 180.0, 0.0, "angle between split stems";
+        split_angle_v: f32 = "SplitAngleV", "°", 0.0 ..= 180.0, 0.0, "variation of SplitAngle";
+        curve_res: u32 = "CurveRes", "segments", 1 ..= 64, 3, "segments per stem";
+        curve: f32 = "Curve", "°", -360.0 ..= 360.0, 0.0, "total curvature along the stem";
+        curve_back: f32 = "CurveBack", "°", -360.0 ..= 360.0, 0.0,
+            "curvature of the upper half (S-curve); 0 for none";
+        curve_v: f32 = "CurveV", "°", -720.0 ..= 720.0, 0.0, "random curvature per stem; negative: helix";
+        down_angle: f32 = "DownAngle", "°", -180.0 ..= 180.0, 45.0, "angle between a child and its parent's axis";
+        down_angle_v: f32 = "DownAngleV", "°", -180.0 ..= 180.0, 0.0,
+            "variation of DownAngle (negative: varies along the parent)";
+        rotate: f32 = "Rotate", "°", -360.0 ..= 360.0, 140.0,
+            "rotation between successive children (negative: alternating)";
+        rotate_v: f32 = "RotateV", "°", 0.0 ..= 360.0, 0.0, "variation of Rotate";
+        branches: f32 = "Branches", "per stem", 0.0 ..= 2000.0, 0.0, "children per parent stem";
+    }
+}
 
 /// A species file that cannot be used.
 #[derive(Debug, Clone, PartialEq, Error)]
@@ -429,9 +294,7 @@ fn split_key(key: &str) -> (Option<usize>, &str) {
 impl Species {
     /// A species with every parameter at its documented default.
     pub fn defaults(name: &str) -> Species {
-        // Every field is a parameter of `PARAMS`, whose defaults fill it (a test checks
-        // that each field is reached): adding a parameter takes its field, its `PARAMS`
-        // entry and its name in `slot`.
+        // Every field is a row of `species_params!`, whose defaults fill it.
         let mut s = Species { name: name.into(), ..Species::default() };
         for p in PARAMS {
             match p.scope {
@@ -440,65 +303,6 @@ impl Species {
             }
         }
         s
-    }
-
-    /// The storage of a parameter, by WP95 name (per-level names without the digit).
-    fn slot(&mut self, level: Option<usize>, name: &str) -> Option<Slot<'_>> {
-        use Slot::{F, U};
-        if let Some(n) = level {
-            let lp = self.level.get_mut(n)?;
-            return Some(match name {
-                "Length" => F(&mut lp.length),
-                "LengthV" => F(&mut lp.length_v),
-                "Taper" => F(&mut lp.taper),
-                "SegSplits" => F(&mut lp.seg_splits),
-                "SplitAngle" => F(&mut lp.split_angle),
-                "SplitAngleV" => F(&mut lp.split_angle_v),
-                "CurveRes" => U(&mut lp.curve_res),
-                "Curve" => F(&mut lp.curve),
-                "CurveBack" => F(&mut lp.curve_back),
-                "CurveV" => F(&mut lp.curve_v),
-                "DownAngle" => F(&mut lp.down_angle),
-                "DownAngleV" => F(&mut lp.down_angle_v),
-                "Rotate" => F(&mut lp.rotate),
-                "RotateV" => F(&mut lp.rotate_v),
-                "Branches" => F(&mut lp.branches),
-                _ => return None,
-            });
-        }
-        Some(match name {
-            "Shape" => U(&mut self.shape),
-            "BaseSize" => F(&mut self.base_size),
-            "Scale" => F(&mut self.scale),
-            "ScaleV" => F(&mut self.scale_v),
-            "ZScale" => F(&mut self.z_scale),
-            "ZScaleV" => F(&mut self.z_scale_v),
-            "Levels" => U(&mut self.levels),
-            "Ratio" => F(&mut self.ratio),
-            "RatioPower" => F(&mut self.ratio_power),
-            "Lobes" => U(&mut self.lobes),
-            "MaxJoints" => U(&mut self.max_joints),
-            "LobeDepth" => F(&mut self.lobe_depth),
-            "Flare" => F(&mut self.flare),
-            "0Scale" => F(&mut self.scale0),
-            "0ScaleV" => F(&mut self.scale0_v),
-            "0BaseSplits" => U(&mut self.base_splits),
-            "Leaves" => F(&mut self.leaves),
-            "LeafShape" => U(&mut self.leaf_shape),
-            "LeafScale" => F(&mut self.leaf_scale),
-            "LeafScaleX" => F(&mut self.leaf_scale_x),
-            "AttractionUp" => F(&mut self.attraction_up),
-            "PruneRatio" => F(&mut self.prune_ratio),
-            "PruneWidth" => F(&mut self.prune_width),
-            "PruneWidthPeak" => F(&mut self.prune_width_peak),
-            "PrunePowerLow" => F(&mut self.prune_power_low),
-            "PrunePowerHigh" => F(&mut self.prune_power_high),
-            "LeafQuality" => F(&mut self.leaf_quality),
-            "BarkShade" => F(&mut self.bark_shade),
-            "BarkRoughness" => F(&mut self.bark_roughness),
-            "LeafShade" => F(&mut self.leaf_shade),
-            _ => return None,
-        })
     }
 
     /// Set a parameter by WP95 name (per-level names without the digit; level 0–3).
@@ -634,8 +438,9 @@ impl Species {
 mod tests {
     use super::*;
 
-    /// `PARAMS` and `slot` reach every numeric field: setting every parameter (on every
-    /// level) to 1 leaves no field at its zero default, so `defaults` fills them all.
+    /// `PARAMS` and `slot` reach every numeric field (a field added to the structs outside
+    /// `species_params!` would be missed): setting every parameter (on every level) to 1
+    /// leaves no field at its zero default, so `defaults` fills them all.
     #[test]
     fn every_field_is_a_parameter() {
         let mut s = Species::default();
