@@ -38,7 +38,7 @@ use std::time::Instant;
 
 use bytemuck::{Pod, Zeroable};
 use rayon::prelude::*;
-use sylva_sway::{LANES, LeafParams, LeafSway, SwayBatch, SwayParams, SwaySpecies};
+use sylva_sway::{LANES, LeafParams, LeafSway, PaletteSlot, SwayBatch, SwayParams, SwaySpecies};
 
 use sylva_tree::mesh::{LOD_LEVELS, TreeModel};
 use sylva_tree::{LodOrder, Species, lod_order};
@@ -96,16 +96,14 @@ pub struct Instance {
     pub yaw: f32,
     /// Uniform scale.
     pub scale: f32,
-    /// Index in [`FrameData::palettes`] of element 0 of the instance's joint-0 palette;
-    /// element e (row-major 3×4) of joint j is at `palette + (12 j + e) · palette_stride`.
-    pub palette: u32,
+    /// Where the instance's joint palettes lie in [`FrameData::palettes`] (the lane layout:
+    /// element e of joint j at `palette.base + (12 j + e) · palette.stride`, the stride
+    /// being the instances of its lane group).
+    pub palette: PaletteSlot,
     /// Leaf flutter phase, rad.
     pub leaf_phase: f32,
     /// Leaf flutter amplitude, rad.
     pub leaf_amplitude: f32,
-    /// Distance between consecutive palette elements: the simulated instances whose
-    /// palettes are interleaved with this one's (its lane group, up to 16).
-    pub palette_stride: u32,
     /// Cross-fade: the draw keeps the pixels whose dither value d ∈ [0, 1) lies in
     /// `[fade[0], fade[1])`. A tree between two levels is drawn twice with complementary
     /// ranges `[0, 1 − w)` and `[1 − w, 1)`; a tree at one level has `[0, 2)`.
@@ -731,10 +729,12 @@ impl Forest {
                 position: p.position,
                 yaw: p.yaw,
                 scale: p.scale,
-                palette: block + (g as usize % LANES) as u32,
+                palette: PaletteSlot {
+                    base: block + (g as usize % LANES) as u32,
+                    stride: used as u32,
+                },
                 leaf_phase: group.leaf.phase,
                 leaf_amplitude: group.leaf.amplitude,
-                palette_stride: used as u32,
                 fade,
             });
         }

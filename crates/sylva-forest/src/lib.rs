@@ -19,3 +19,4 @@ pub use scene::{
     CameraKey, Lighting, LodSpec, Placement, SCENES, SceneError, SceneSpec, SwayOverrides, Terrain,
     WindSource, camera_on_path, default_camera_path, layout,
 };
+pub use sylva_sway::PaletteSlot;

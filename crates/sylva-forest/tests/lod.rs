@@ -139,8 +139,7 @@ fn moving_closer_switches_levels_through_a_cross_fade_and_the_crown_blends_in() 
         for b in &f.buckets {
             let joints = forest.species[b.species as usize].joints_drawn(b.lod);
             for i in &f.instances[b.first as usize..(b.first + b.count) as usize] {
-                let last = i.palette as usize + (12 * joints - 1) * i.palette_stride as usize;
-                assert!(last < f.palettes.len());
+                assert!(i.palette.end(joints) <= f.palettes.len());
             }
         }
     }

@@ -70,8 +70,7 @@ fn any_scene_inside_the_ranges_builds_and_draws_well_formed_frames() {
         for b in &frame.buckets {
             let joints = forest.species[b.species as usize].joints_drawn(b.lod);
             for inst in &frame.instances[b.first as usize..(b.first + b.count) as usize] {
-                for k in 0..12 * joints {
-                    let at = inst.palette as usize + k * inst.palette_stride as usize;
+                for at in (0..joints).flat_map(|j| (0..12).map(move |e| inst.palette.index(j, e))) {
                     prop_assert!(
                         frame.palettes.get(at).is_some_and(|v| v.is_finite()),
                         "palette value {} of a species-{} tree at level {}",

@@ -74,8 +74,9 @@ fn frames_draw_every_visible_tree_once_with_valid_palettes_and_trees_move() {
         for b in &f.buckets {
             let joints = drawn[b.species as usize][b.lod as usize];
             for inst in &f.instances[b.first as usize..(b.first + b.count) as usize] {
-                let stride = inst.palette_stride as usize;
-                out.extend((0..12 * joints).map(|k| inst.palette as usize + k * stride));
+                out.extend(
+                    (0..joints).flat_map(|j| (0..12).map(move |e| inst.palette.index(j, e))),
+                );
             }
         }
         out
@@ -86,10 +87,7 @@ fn frames_draw_every_visible_tree_once_with_valid_palettes_and_trees_move() {
     for b in &f.buckets {
         let sk = &forest.species[b.species as usize].model.tree.skeleton;
         for inst in &f.instances[b.first as usize..(b.first + b.count) as usize] {
-            let pal = |j: usize| -> [f32; 12] {
-                let stride = inst.palette_stride as usize;
-                std::array::from_fn(|e| f.palettes[inst.palette as usize + (12 * j + e) * stride])
-            };
+            let pal = |j: usize| inst.palette.read(&f.palettes, j).expect("palette in the frame");
             let drawn = forest.species[b.species as usize].joints_drawn(b.lod);
             for (j, joint) in sk.joints().iter().enumerate().take(drawn).skip(1) {
                 let a = sylva_sway::transform(&pal(j), joint.origin);
@@ -252,7 +250,7 @@ fn scene_sway_and_leaf_tables_reach_the_simulation() {
         let (mut sum, mut n) = (0.0f64, 0usize);
         for inst in &f.instances {
             for e in 0..12 {
-                let v = f.palettes[inst.palette as usize + e * inst.palette_stride as usize];
+                let v = f.palettes[inst.palette.index(0, e)];
                 sum += (v - identity[e]).abs() as f64;
                 n += 1;
             }

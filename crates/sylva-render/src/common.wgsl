@@ -98,8 +98,11 @@ struct Palette {
     r2: vec4<f32>,
 };
 
-fn palette(base: u32, stride: u32, j: u32) -> Palette {
-    let at = base + 12u * j * stride;
+// Joint j's palette of the instance whose slot is (base, stride): sylva-sway's
+// `PaletteSlot`, element e at base + (12 j + e) * stride.
+fn palette(slot: vec2<u32>, j: u32) -> Palette {
+    let stride = slot.y;
+    let at = slot.x + 12u * j * stride;
     var m: Palette;
     m.r0 = vec4<f32>(palettes[at], palettes[at + stride], palettes[at + 2u * stride], palettes[at + 3u * stride]);
     m.r1 = vec4<f32>(palettes[at + 4u * stride], palettes[at + 5u * stride], palettes[at + 6u * stride], palettes[at + 7u * stride]);
@@ -116,14 +119,13 @@ fn palette_rotate(m: Palette, v: vec3<f32>) -> vec3<f32> {
 }
 
 // Per-instance inputs of the tree pipelines (sylva-forest's `Instance`, attributes in
-// layout.rs): trunk base and yaw, scale, first palette element, leaf flutter (phase,
-// amplitude), palette stride, cross-fade range of the dither.
+// layout.rs): trunk base and yaw, scale, palette slot (base, stride), leaf flutter (phase,
+// amplitude), cross-fade range of the dither.
 struct InstanceIn {
     @location(5) base: vec4<f32>,
     @location(6) scale: f32,
-    @location(7) palette: u32,
+    @location(7) palette: vec2<u32>,
     @location(8) leaf: vec2<f32>,
-    @location(9) stride: u32,
     @location(10) fade: vec2<f32>,
 };
 

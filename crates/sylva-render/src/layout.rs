@@ -6,9 +6,11 @@
 //! layout cannot drift; the tests check every struct's size and field offsets against the
 //! WGSL (naga's layouter) and every attribute's format against the shader input's type.
 //!
-//! Palettes stay in the lane layout of the sway step (see [`sylva_forest::FrameData::palettes`]):
-//! element `e` of joint `j` of an instance is at `palette + (12 j + e) · palette_stride`,
-//! read by `palette()` in `common.wgsl`.
+//! Palettes stay in the lane layout of the sway step, one type on both sides:
+//! [`sylva_forest::PaletteSlot`] (`Instance::palette`) says that element `e` of joint `j`
+//! is at `base + (12 j + e) · stride` of [`sylva_forest::FrameData::palettes`]; `palette()`
+//! in `common.wgsl` reads it from the instance's `vec2<u32>` slot (a GPU test checks the
+//! WGSL reader against `PaletteSlot::read`).
 
 use std::mem::{offset_of, size_of};
 
@@ -175,14 +177,14 @@ macro_rules! attr {
 }
 
 /// `InstanceIn` in common.wgsl, read from [`Instance`] as sylva-forest lays it out.
-pub const INSTANCE_ATTRIBUTES: [wgpu::VertexAttribute; 6] = [
+pub const INSTANCE_ATTRIBUTES: [wgpu::VertexAttribute; 5] = [
     // position (vec3) followed by yaw: read together as `base`.
     attr!(Instance, position, Float32x4, 5),
     attr!(Instance, scale, Float32, 6),
-    attr!(Instance, palette, Uint32, 7),
+    // The palette slot (base, stride): `PaletteSlot`, as one vec2<u32>.
+    attr!(Instance, palette, Uint32x2, 7),
     // leaf_phase and leaf_amplitude: read together as `leaf`.
     attr!(Instance, leaf_phase, Float32x2, 8),
-    attr!(Instance, palette_stride, Uint32, 9),
     attr!(Instance, fade, Float32x2, 10),
 ];
 

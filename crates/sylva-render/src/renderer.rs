@@ -440,8 +440,8 @@ impl Renderer {
                 let reads = self.species.get(b.species as usize).map_or(1, |s| s.reads(b.lod));
                 for k in b.first as usize..(b.first + b.count) as usize {
                     let i = &frame.instances[k];
-                    let start = i.palette as usize;
-                    let end = start + (12 * reads).saturating_sub(1) * i.palette_stride as usize;
+                    let start = i.palette.base as usize;
+                    let end = i.palette.end(reads).max(start + 1) - 1;
                     order.push((start, end, k));
                 }
             }
@@ -489,9 +489,10 @@ impl Renderer {
                 for k in range.clone() {
                     let wk = self.window_of[k];
                     let inst = &frame.instances[k];
-                    if wk == w && (inst.palette as usize) < floats {
-                        let base = self.window_offsets[w as usize] as u32;
-                        self.staged.push(Instance { palette: inst.palette - base, ..*inst });
+                    if wk == w && (inst.palette.base as usize) < floats {
+                        let mut palette = inst.palette;
+                        palette.base -= self.window_offsets[w as usize] as u32;
+                        self.staged.push(Instance { palette, ..*inst });
                     } else if wk > w {
                         next = next.min(wk);
                     }

@@ -112,6 +112,7 @@ fn format_name(f: VertexFormat) -> &'static str {
         VertexFormat::Float32x3 => "vec3<f32>",
         VertexFormat::Float32x4 => "vec4<f32>",
         VertexFormat::Uint32 => "u32",
+        VertexFormat::Uint32x2 => "vec2<u32>",
         VertexFormat::Uint32x4 => "vec4<u32>",
         _ => "unexpected",
     }

@@ -161,7 +161,7 @@ fn palettes_beyond_one_storage_binding_are_drawn_through_windows() {
         .flat_map(|b| {
             let joints = forest.species[b.species as usize].joints_drawn(b.lod);
             let r = &frame.instances[b.first as usize..(b.first + b.count) as usize];
-            r.iter().map(move |i| joints * 48 * i.palette_stride as usize)
+            r.iter().map(move |i| joints * 48 * i.palette.stride as usize)
         })
         .max()
         .unwrap_or(0);

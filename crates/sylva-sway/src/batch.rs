@@ -49,6 +49,45 @@ pub type Lanes = [f32; LANES];
 
 const ZERO: Lanes = [0.0; LANES];
 
+/// Where one instance's joint palettes lie in a lane-interleaved buffer of `f32`: element `e`
+/// (row-major 3×4) of joint `j` is at `base + (12 j + e) · stride`.
+///
+/// This is the palette lane layout, the one contract between the sway step, the forest's
+/// frame and the shaders: [`SwayBatch::lane_palettes`] (flattened) is such a buffer with
+/// `stride` = [`LANES`]; sylva-forest copies each lane group's block keeping the layout with
+/// `stride` = the lanes it simulates, and gives every drawn tree its slot
+/// (`Instance::palette`); the vertex shaders read it with `palette()` in sylva-render's
+/// `common.wgsl`. Tested on the simulation side (against [`SwayBatch::palette`]) and on the
+/// GPU side (the WGSL reader against [`PaletteSlot::read`]).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct PaletteSlot {
+    /// Index of element 0 of joint 0.
+    pub base: u32,
+    /// Distance between consecutive elements: the instances whose palettes are interleaved
+    /// with this one's (1 … [`LANES`]).
+    pub stride: u32,
+}
+
+impl PaletteSlot {
+    /// Index of element `e` (0 … 11) of joint `j`'s palette.
+    #[inline]
+    pub fn index(self, j: usize, e: usize) -> usize {
+        self.base as usize + (12 * j + e) * self.stride as usize
+    }
+
+    /// Joint `j`'s palette from `buffer`, or `None` where the buffer ends before it.
+    pub fn read(self, buffer: &[f32], j: usize) -> Option<Palette> {
+        buffer.get(self.index(j, 11))?;
+        Some(std::array::from_fn(|e| buffer[self.index(j, e)]))
+    }
+
+    /// One past the last index the first `joints` palettes use (0 for none).
+    pub fn end(self, joints: usize) -> usize {
+        if joints == 0 { 0 } else { self.index(joints - 1, 11) + 1 }
+    }
+}
+
 /// Lumped static drag of held joints: [D, c] of their wood, then of their leaves.
 type Lump = [[f32; 4]; 2];
 
@@ -279,6 +318,13 @@ impl SwayBatch {
     pub fn palette(&self, i: usize, j: usize) -> Palette {
         let m = &self.pal_lanes[(i / LANES) * self.species.len() + j];
         std::array::from_fn(|e| m[e][i % LANES])
+    }
+
+    /// Where instance `i`'s palettes lie in [`lane_palettes`](Self::lane_palettes),
+    /// flattened to `f32`s.
+    pub fn palette_slot(&self, i: usize) -> PaletteSlot {
+        let group = i / LANES * self.species.len() * 12 * LANES;
+        PaletteSlot { base: (group + i % LANES) as u32, stride: LANES as u32 }
     }
 
     /// All palettes, as the step computes them: per group of [`LANES`] instances, per joint,

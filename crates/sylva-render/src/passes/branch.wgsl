@@ -18,7 +18,7 @@ fn vs_main(v: BranchIn, inst: InstanceIn) -> TreeOut {
     for (var k = 0u; k < 4u; k = k + 1u) {
         let w = v.weights[k];
         if (w > 0.0) {
-            let m = palette(inst.palette, inst.stride, v.joints[k]);
+            let m = palette(inst.palette, v.joints[k]);
             p = p + w * palette_apply(m, v.position);
             n = n + w * palette_rotate(m, v.normal);
         }

@@ -9,7 +9,7 @@
 //! level's alpha so the share of texels passing the alpha test stays that of level 0
 //! (coverage-preserving alpha mips), so far crowns neither thin out nor darken.
 
-use sylva_forest::{Instance, Lighting};
+use sylva_forest::{Instance, Lighting, PaletteSlot};
 use sylva_tree::mesh::TreeModel;
 
 use crate::gpu::{Gpu, RenderError};
@@ -154,8 +154,12 @@ impl FarPass {
             .collect();
         let palettes = palette_buffer(dev, (identity.len() * 4) as u64);
         gpu.queue.write_buffer(&palettes, 0, bytemuck::cast_slice(&identity));
-        let instance =
-            Instance { scale: 1.0, palette_stride: 1, fade: [0.0, 2.0], ..Default::default() };
+        let instance = Instance {
+            scale: 1.0,
+            palette: PaletteSlot { base: 0, stride: 1 },
+            fade: [0.0, 2.0],
+            ..Default::default()
+        };
         let instances =
             buffer(gpu, "bake instance", bytemuck::bytes_of(&instance), wgpu::BufferUsages::VERTEX);
         let light = Lighting::default();

@@ -56,7 +56,7 @@ fn vs_main(@builtin(vertex_index) vi: u32, inst: InstanceIn) -> FarOut {
     let z = far.bottom + corner.y * far.extent;
     var p = right * ((corner.x - 0.5) * far.extent * inst.scale) + vec3<f32>(0.0, 0.0, z * inst.scale);
     // Sway: the trunk top's displacement, sheared in with height.
-    let m = palette(inst.palette, inst.stride, far.joint);
+    let m = palette(inst.palette, far.joint);
     let shift = rotate_z(palette_apply(m, far.tip) - far.tip, yaw) * inst.scale;
     p = p + shift * clamp(z / max(far.tip.z, 0.1), 0.0, 1.5);
     let world = base + p;

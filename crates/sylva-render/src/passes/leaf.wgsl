@@ -41,7 +41,7 @@ fn vs_main(v: LeafIn, inst: InstanceIn) -> TreeOut {
     }
     let k = normalize(axis);
     let swung = v.hang + rotate_axis(offset, k, swing);
-    let m = palette(inst.palette, inst.stride, v.joint);
+    let m = palette(inst.palette, v.joint);
     let c = tree_to_world(palette_apply(m, swung), inst.base, inst.scale);
     var r = rotate_z(palette_rotate(m, rotate_axis(v.right, k, swing)), inst.base.w) * inst.scale;
     var u = rotate_z(palette_rotate(m, rotate_axis(v.up, k, swing)), inst.base.w) * inst.scale;
