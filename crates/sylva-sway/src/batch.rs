@@ -549,6 +549,7 @@ simd_kernel! {
 
 /// Joint palettes of all lanes from their rotation vectors φ, the rest position `o` of the
 /// joint and the parent's palettes.
+#[cfg(not(feature = "glam"))]
 #[inline(always)]
 fn palette_lanes(
     phi: &[Lanes; 3],
@@ -580,7 +581,45 @@ fn palette_lanes(
     }
 }
 
+/// The same palettes through glam's `Affine3A` (the comparison behind the choice of a small
+/// math module over glam: `cargo run --release -p sylva --features sylva-sway/glam -- bench
+/// sway`, figures in docs/benchmarks.md). Same rotation formula; glam builds, composes and
+/// stores the matrices, one lane at a time as its types require.
+#[cfg(feature = "glam")]
+#[inline(always)]
+fn palette_lanes(
+    phi: &[Lanes; 3],
+    o: [f32; 3],
+    parent: Option<&[Lanes; 12]>,
+    out: &mut [Lanes; 12],
+    sc: impl Fn(f32) -> (f32, f32),
+) {
+    use glam::{Affine3A, Mat3A, Vec3A};
+    let origin = Vec3A::from(o);
+    let affine = |m: [f32; 12]| Affine3A {
+        matrix3: Mat3A::from_cols_array(&[m[0], m[4], m[8], m[1], m[5], m[9], m[2], m[6], m[10]]),
+        translation: Vec3A::new(m[3], m[7], m[11]),
+    };
+    for l in 0..LANES {
+        let ph = Vec3A::new(phi[0][l], phi[1][l], phi[2][l]);
+        let (s, c) = sc(ph.length_squared());
+        let r = rodrigues(ph.to_array(), s, c);
+        let rot = Mat3A::from_cols_array_2d(&r).transpose();
+        let local = Affine3A { matrix3: rot, translation: origin - rot * origin };
+        let m = match parent {
+            None => local,
+            Some(pm) => affine(std::array::from_fn(|e| pm[e][l])) * local,
+        };
+        let (x, y, z, w) = (m.matrix3.x_axis, m.matrix3.y_axis, m.matrix3.z_axis, m.translation);
+        let rows = [x.x, y.x, z.x, w.x, x.y, y.y, z.y, w.y, x.z, y.z, z.z, w.z];
+        for e in 0..12 {
+            out[e][l] = rows[e];
+        }
+    }
+}
+
 /// a · b for 3×4 affine matrices.
+#[cfg_attr(feature = "glam", allow(dead_code))]
 fn compose(a: &Palette, b: &Palette) -> Palette {
     let mut o = [0.0; 12];
     for r in 0..3 {
