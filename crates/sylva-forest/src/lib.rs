@@ -7,6 +7,7 @@
 #![forbid(unsafe_code)]
 
 pub mod camera;
+pub mod clip;
 pub mod driver;
 pub mod scene;
 

@@ -54,12 +54,47 @@ pub struct GltfOptions {
     pub max_joints: usize,
     /// Name of the tree (the root node's name).
     pub name: String,
+    /// A sway clip to export as a glTF animation of the joint nodes (every exported LOD's).
+    pub animation: Option<JointAnimation>,
 }
 
 impl Default for GltfOptions {
     fn default() -> Self {
-        GltfOptions { lods: vec![0], max_joints: MAX_GLTF_JOINTS, name: "tree".into() }
+        GltfOptions {
+            lods: vec![0],
+            max_joints: MAX_GLTF_JOINTS,
+            name: "tree".into(),
+            animation: None,
+        }
     }
+}
+
+/// A recorded motion of the skeleton, exported as one glTF animation: a rotation channel per
+/// exported joint, linearly interpolated (glTF's slerp).
+///
+/// Each sample gives, for the joints in `joints`, the rotation part of the joint's palette
+/// (rest → animated, tree space, row-major 3×3) — what the sway simulation computes. A joint
+/// turns about its own origin, which its parent carries, so rotations alone reproduce the
+/// palettes: the node's animated local rotation is `F_pᵀ · R_pᵀ · R_j · F_j` (F: rest frames,
+/// R: palette rotations, p: the parent), its translation stays the rest one.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct JointAnimation {
+    /// Name of the animation.
+    pub name: String,
+    /// Sample times, s, increasing.
+    pub times: Vec<f32>,
+    /// Skeleton joints the samples cover; exported joints not listed do not move.
+    pub joints: Vec<usize>,
+    /// Per sample, per listed joint: its palette's rotation, row-major 3×3.
+    pub rotations: Vec<Vec<[f32; 9]>>,
+    /// Keyframe reduction, m: no point of the tree, played back, is farther than this from
+    /// where the simulation put it at any sample time. A joint's key is dropped where
+    /// interpolating its neighbours reproduces its local rotation within
+    /// `max_error / (reach · chain)` rad at every dropped sample — `reach` the farthest its
+    /// branches extend from it, `chain` the most animated joints on one path from the root —
+    /// since a point's error is at most the sum, over the animated joints above it, of angle
+    /// error × reach. 0 keeps every sample.
+    pub max_error: f32,
 }
 
 /// Rᵀ·v for the frame R with columns f[0], f[1], f[2].
@@ -119,10 +154,10 @@ struct Accessor {
     count: usize,
     #[serde(rename = "type")]
     ty: &'static str,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    min: Option<V3>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    max: Option<V3>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    min: Vec<f32>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    max: Vec<f32>,
 }
 
 /// A `nodes` entry: a joint (translation, rotation, children) or a mesh with its skin.
@@ -202,9 +237,199 @@ struct Gltf {
     samplers: serde_json::Value,
     images: serde_json::Value,
     textures: serde_json::Value,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    animations: Vec<serde_json::Value>,
     accessors: Vec<Accessor>,
     buffer_views: Vec<BufferView>,
     buffers: serde_json::Value,
+}
+
+/// One rotation channel of the animation: the node it turns, its time and value accessors.
+#[derive(Debug, Clone, Copy)]
+struct Channel {
+    node: usize,
+    input: usize,
+    output: usize,
+}
+
+/// Slerp of unit quaternions (x, y, z, w) in f64, as glTF interpolates rotations.
+fn slerp(a: [f64; 4], b: [f64; 4], u: f64) -> [f64; 4] {
+    let mut d: f64 = (0..4).map(|i| a[i] * b[i]).sum();
+    let b = if d < 0.0 {
+        d = -d;
+        b.map(|v| -v)
+    } else {
+        b
+    };
+    let (wa, wb) = if d > 0.999_999 {
+        (1.0 - u, u)
+    } else {
+        let th = d.min(1.0).acos();
+        let s = th.sin();
+        (((1.0 - u) * th).sin() / s, (u * th).sin() / s)
+    };
+    let q: [f64; 4] = std::array::from_fn(|i| wa * a[i] + wb * b[i]);
+    let n = q.iter().map(|v| v * v).sum::<f64>().sqrt();
+    q.map(|v| v / n)
+}
+
+fn norm_of(v: V3) -> f64 {
+    v.iter().map(|&x| x as f64 * x as f64).sum::<f64>().sqrt()
+}
+
+/// Angle between two rotations given as quaternions, rad: 2·atan2(|a − b|, |a + b|) after
+/// normalising and taking b in a's hemisphere (accurate at small angles, where the acos of
+/// a dot product loses everything below about 1e-3 rad to rounding).
+fn rotation_angle(a: [f64; 4], b: [f64; 4]) -> f64 {
+    let unit = |q: [f64; 4]| {
+        let n = q.iter().map(|v| v * v).sum::<f64>().sqrt();
+        q.map(|v| v / n)
+    };
+    let (a, mut b) = (unit(a), unit(b));
+    if (0..4).map(|i| a[i] * b[i]).sum::<f64>() < 0.0 {
+        b = b.map(|v| -v);
+    }
+    let diff = (0..4).map(|i| (a[i] - b[i]).powi(2)).sum::<f64>().sqrt();
+    let sum = (0..4).map(|i| (a[i] + b[i]).powi(2)).sum::<f64>().sqrt();
+    2.0 * diff.atan2(sum)
+}
+
+/// Samples to keep as keys so that slerp between kept neighbours stays within `eps` rad of
+/// every dropped sample (greedy, from the first sample; the last is always kept). `eps` ≤ 0
+/// keeps all.
+fn reduce_keys(times: &[f32], q: &[[f64; 4]], eps: f64) -> Vec<usize> {
+    let n = q.len();
+    if eps <= 0.0 || n <= 2 {
+        return (0..n).collect();
+    }
+    let fits = |a: usize, b: usize| {
+        let span = (times[b] - times[a]) as f64;
+        (a + 1..b).all(|k| {
+            let u = (times[k] - times[a]) as f64 / span;
+            rotation_angle(slerp(q[a], q[b], u), q[k]) <= eps
+        })
+    };
+    let mut keep = vec![0];
+    let mut a = 0;
+    while a + 1 < n {
+        let mut b = a + 1;
+        while b + 1 < n && fits(a, b + 1) {
+            b += 1;
+        }
+        keep.push(b);
+        a = b;
+    }
+    keep
+}
+
+/// Add the rotation channels of `anim` for the joints exported in `keep` (joint nodes from
+/// `base`, skeleton joint → exported index in `index`) to `bin` and `channels`.
+#[allow(clippy::too_many_arguments)]
+fn animate(
+    anim: &JointAnimation,
+    sk: &Skeleton,
+    frames: &[[V3; 3]],
+    keep: &[bool],
+    base: usize,
+    index: &[u16],
+    bin: &mut Bin,
+    channels: &mut Vec<Channel>,
+) {
+    let js = sk.joints();
+    let samples = anim.times.len().min(anim.rotations.len());
+    if samples == 0 {
+        return;
+    }
+    let mut slot = vec![usize::MAX; js.len()];
+    for (k, &j) in anim.joints.iter().enumerate() {
+        if j < slot.len() {
+            slot[j] = k;
+        }
+    }
+    const IDENTITY: [f32; 9] = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
+    let rot = |s: usize, j: usize| -> [f32; 9] {
+        anim.rotations[s].get(slot[j]).copied().unwrap_or(IDENTITY)
+    };
+    let apply = |r: &[f32; 9], v: V3| -> V3 {
+        [
+            r[0] * v[0] + r[1] * v[1] + r[2] * v[2],
+            r[3] * v[0] + r[4] * v[1] + r[5] * v[2],
+            r[6] * v[0] + r[7] * v[1] + r[8] * v[2],
+        ]
+    };
+    let apply_t = |r: &[f32; 9], v: V3| -> V3 {
+        [
+            r[0] * v[0] + r[3] * v[1] + r[6] * v[2],
+            r[1] * v[0] + r[4] * v[1] + r[7] * v[2],
+            r[2] * v[0] + r[5] * v[1] + r[8] * v[2],
+        ]
+    };
+    let times = &anim.times[..samples];
+    let tol = anim.max_error.max(0.0) as f64;
+    // Reach of each joint: an upper bound on the distance from its origin to any point it
+    // carries (children before parents: joints come parents first).
+    let mut reach = vec![0.0f64; js.len()];
+    for j in (0..js.len()).rev() {
+        let own = norm_of(sub(js[j].tip(), js[j].origin));
+        reach[j] = reach[j].max(own);
+        let p = js[j].parent;
+        if p != NO_PARENT {
+            let p = p as usize;
+            let arm = norm_of(sub(js[j].origin, js[p].origin));
+            reach[p] = reach[p].max(arm + reach[j]);
+        }
+    }
+    let mut all_times: Option<usize> = None;
+    let (t0, t1) = (times[0], times[samples - 1]);
+    // Animated joints on the longest chain from the root: a point's error is at most the
+    // sum over the animated joints above it of (angle error × reach), so an angle bound of
+    // tol / (reach × chain) per joint bounds every point's error by tol.
+    let mut depth = vec![0usize; js.len()];
+    let mut chain = 1;
+    for j in 0..js.len() {
+        let p = js[j].parent;
+        let above = if p == NO_PARENT { 0 } else { depth[p as usize] };
+        depth[j] = above + (keep[j] && slot[j] != usize::MAX) as usize;
+        chain = chain.max(depth[j]);
+    }
+    for j in (0..js.len()).filter(|&j| keep[j] && slot[j] != usize::MAX) {
+        let f = &frames[j];
+        let p = js[j].parent;
+        let mut q: Vec<[f64; 4]> = Vec::with_capacity(samples);
+        for s in 0..samples {
+            let rj = rot(s, j);
+            let cols: [V3; 3] = std::array::from_fn(|c| {
+                let a = apply(&rj, f[c]);
+                if p == NO_PARENT {
+                    a
+                } else {
+                    let pf = &frames[p as usize];
+                    to_local(pf, apply_t(&rot(s, p as usize), a))
+                }
+            });
+            let mut k = quaternion(&cols).map(f64::from);
+            // Neighbouring keys in one hemisphere, so interpolation takes the short way.
+            if let Some(prev) = q.last()
+                && (0..4).map(|i| prev[i] * k[i]).sum::<f64>() < 0.0
+            {
+                k = k.map(|v| -v);
+            }
+            q.push(k);
+        }
+        let kept = reduce_keys(times, &q, tol / (reach[j].max(1e-3) * chain as f64));
+        let input = if kept.len() == samples {
+            *all_times.get_or_insert_with(|| {
+                let bytes: Vec<u8> = times.iter().flat_map(|v| v.to_le_bytes()).collect();
+                bin.accessor(&bytes, None, FLOAT, samples, "SCALAR", Some((&[t0], &[t1])))
+            })
+        } else {
+            let bytes: Vec<u8> = kept.iter().flat_map(|&k| times[k].to_le_bytes()).collect();
+            bin.accessor(&bytes, None, FLOAT, kept.len(), "SCALAR", Some((&[t0], &[t1])))
+        };
+        let values: Vec<[f32; 4]> = kept.iter().map(|&k| q[k].map(|v| v as f32)).collect();
+        let output = bin.accessor(&f32_bytes(&values), None, FLOAT, values.len(), "VEC4", None);
+        channels.push(Channel { node: base + index[j] as usize, input, output });
+    }
 }
 
 /// Binary buffer under construction, with one view per accessor.
@@ -233,7 +458,7 @@ impl Bin {
         component_type: u32,
         count: usize,
         ty: &'static str,
-        bounds: Option<(V3, V3)>,
+        bounds: Option<(&[f32], &[f32])>,
     ) -> usize {
         let buffer_view = self.view(bytes, target);
         self.accessors.push(Accessor {
@@ -241,8 +466,8 @@ impl Bin {
             component_type,
             count,
             ty,
-            min: bounds.map(|b| b.0),
-            max: bounds.map(|b| b.1),
+            min: bounds.map_or_else(Vec::new, |b| b.0.to_vec()),
+            max: bounds.map_or_else(Vec::new, |b| b.1.to_vec()),
         });
         self.accessors.len() - 1
     }
@@ -261,6 +486,7 @@ impl Bin {
         material: usize,
     ) -> Primitive {
         let v = Some(ARRAY_BUFFER);
+        let (lo, hi) = bounds(positions);
         let attributes = Attributes {
             position: self.accessor(
                 &f32_bytes(positions),
@@ -268,7 +494,7 @@ impl Bin {
                 FLOAT,
                 positions.len(),
                 "VEC3",
-                Some(bounds(positions)),
+                Some((&lo, &hi)),
             ),
             normal: self.accessor(&f32_bytes(normals), v, FLOAT, normals.len(), "VEC3", None),
             texcoord: self.accessor(&f32_bytes(uvs), v, FLOAT, uvs.len(), "VEC2", None),
@@ -339,10 +565,8 @@ impl TreeModel {
         let js = sk.joints();
         let n = js.len();
         let frames: Vec<[V3; 3]> = (0..n).map(|j| frame(sk, j)).collect();
-        // Joints by priority: carried mass, heaviest first (a parent carries at least what
-        // its child does; ties go to the lower index, which is the parent).
-        let mut order: Vec<usize> = (0..n).collect();
-        order.sort_by(|&a, &b| sk.carried_mass(b).total_cmp(&sk.carried_mass(a)).then(a.cmp(&b)));
+        let order = self.joint_priority();
+        let mut channels: Vec<Channel> = Vec::new();
         let limit = opts.max_joints.clamp(1, MAX_GLTF_JOINTS);
         let mut bin = Bin { data: Vec::new(), views: Vec::new(), accessors: Vec::new() };
         let mut nodes: Vec<Node> = Vec::new();
@@ -361,37 +585,12 @@ impl TreeModel {
         for (k, &l) in lods.iter().enumerate() {
             let lod = &self.lods[l];
             let b = &lod.branches;
-            // This level's joints: those its vertices and clusters use, with their
-            // ancestors, at most `limit` of them by priority.
-            let mut used = vec![false; n];
-            for (j, w) in b.joints.iter().zip(&b.weights) {
-                for s in 0..4 {
-                    if w[s] > 0.0 {
-                        used[j[s] as usize] = true;
-                    }
-                }
-            }
-            for c in &lod.clusters {
-                used[c.joint as usize] = true;
-            }
-            used[0] = true;
-            for j in (1..n).rev() {
-                if used[j] && js[j].parent != NO_PARENT {
-                    used[js[j].parent as usize] = true;
-                }
-            }
-            let mut keep = vec![false; n];
-            for &j in order.iter().filter(|&&j| used[j]).take(limit) {
-                keep[j] = true;
-            }
-            for j in 0..n {
-                let p = js[j].parent;
-                if keep[j] && p != NO_PARENT && !keep[p as usize] {
-                    keep[j] = false;
-                }
-            }
+            let keep = self.exported_mask(l, limit, &order);
             let base = nodes.len();
             let index = self.joint_nodes(&keep, &frames, &mut nodes, &mut bin, &mut skins);
+            if let Some(anim) = &opts.animation {
+                animate(anim, sk, &frames, &keep, base, &index, &mut bin, &mut channels);
+            }
             let mut prims = Vec::new();
             if !b.indices.is_empty() {
                 // Joints folded into the same exported joint add their weights; unused
@@ -534,6 +733,21 @@ impl TreeModel {
                 { "bufferView": leaf_view, "mimeType": "image/png" }
             ]),
             textures: json!([{ "sampler": 0, "source": 0 }, { "sampler": 1, "source": 1 }]),
+            animations: match &opts.animation {
+                Some(a) if !channels.is_empty() => vec![json!({
+                    "name": a.name,
+                    "channels": channels.iter().enumerate().map(|(i, c)| json!({
+                        "sampler": i,
+                        "target": { "node": c.node, "path": "rotation" }
+                    })).collect::<Vec<_>>(),
+                    "samplers": channels.iter().map(|c| json!({
+                        "input": c.input,
+                        "output": c.output,
+                        "interpolation": "LINEAR"
+                    })).collect::<Vec<_>>(),
+                })],
+                _ => Vec::new(),
+            },
             accessors: bin.accessors,
             buffer_views: bin.views,
             buffers: json!([{ "byteLength": len }]),
@@ -560,6 +774,61 @@ impl TreeModel {
         out.extend_from_slice(b"BIN\0");
         out.extend_from_slice(&data);
         out
+    }
+
+    /// Joints exported for level `lod` with at most `max_joints` of them (as
+    /// [`to_glb`](Self::to_glb) picks them): those its vertices and clusters use, with
+    /// their ancestors, heaviest first (carried mass). Parents come before children; every
+    /// exported joint's parent is exported. A sway clip for `tree animate` records these.
+    pub fn exported_joints(&self, lod: usize, max_joints: usize) -> Vec<usize> {
+        let order = self.joint_priority();
+        let keep = self.exported_mask(lod, max_joints.clamp(1, MAX_GLTF_JOINTS), &order);
+        (0..keep.len()).filter(|&j| keep[j]).collect()
+    }
+
+    /// Joints by priority: carried mass, heaviest first (a parent carries at least what its
+    /// child does; ties go to the lower index, which is the parent).
+    fn joint_priority(&self) -> Vec<usize> {
+        let sk = &self.tree.skeleton;
+        let mut order: Vec<usize> = (0..sk.len()).collect();
+        order.sort_by(|&a, &b| sk.carried_mass(b).total_cmp(&sk.carried_mass(a)).then(a.cmp(&b)));
+        order
+    }
+
+    /// Per joint: exported at level `l` (see [`exported_joints`](Self::exported_joints)).
+    fn exported_mask(&self, l: usize, limit: usize, order: &[usize]) -> Vec<bool> {
+        let js = self.tree.skeleton.joints();
+        let n = js.len();
+        let Some(lod) = self.lods.get(l) else { return vec![false; n] };
+        let b = &lod.branches;
+        let mut used = vec![false; n];
+        for (j, w) in b.joints.iter().zip(&b.weights) {
+            for s in 0..4 {
+                if w[s] > 0.0 {
+                    used[j[s] as usize] = true;
+                }
+            }
+        }
+        for c in &lod.clusters {
+            used[c.joint as usize] = true;
+        }
+        used[0] = true;
+        for j in (1..n).rev() {
+            if used[j] && js[j].parent != NO_PARENT {
+                used[js[j].parent as usize] = true;
+            }
+        }
+        let mut keep = vec![false; n];
+        for &j in order.iter().filter(|&&j| used[j]).take(limit) {
+            keep[j] = true;
+        }
+        for j in 0..n {
+            let p = js[j].parent;
+            if keep[j] && p != NO_PARENT && !keep[p as usize] {
+                keep[j] = false;
+            }
+        }
+        keep
     }
 
     /// Append the joint nodes of the joints marked in `keep` (parents first) to `nodes`,

@@ -53,7 +53,7 @@ fn glb_container_holds_json_and_binary_chunks_describing_the_model() {
 
 #[test]
 fn joint_budget_folds_light_joints_into_ancestors() {
-    let opts = GltfOptions { lods: vec![0], max_joints: 100, name: "fir".into() };
+    let opts = GltfOptions { lods: vec![0], max_joints: 100, name: "fir".into(), animation: None };
     let bytes = glb("douglas_fir", 1, &opts);
     let json_len = u32_at(&bytes, 12);
     let json = std::str::from_utf8(&bytes[20..20 + json_len]).expect("json");

@@ -11,7 +11,6 @@ use sylva_forest::WindSource;
 use sylva_sway::probe::{bend_and_release, free_decay};
 use sylva_sway::{SwayBatch, SwayParams, SwaySpecies, transform};
 use sylva_tree::{PARAMS, PRESETS, Species, species::Scope};
-use sylva_wind::{Grid, SynthParams, WindField};
 
 #[derive(Debug, Subcommand)]
 pub enum TreeCommand {
@@ -24,6 +23,10 @@ pub enum TreeCommand {
     /// Generate a tree and write it as glTF 2.0 (.glb): skinned branches, alpha-masked
     /// leaf clusters, textures embedded.
     Generate(GenerateArgs),
+    /// Generate a tree, sway it in a wind and write it as an animated glTF (.glb): the tree
+    /// of `generate` plus one animation, a rotation channel per exported joint sampled from
+    /// the sway simulation (leaf flutter is not exported).
+    Animate(AnimateArgs),
     /// Write a species' procedural textures as PNG: bark.png and leaves.png (the
     /// leaf-cluster atlas, drawn to scale: one cell spans the size its card is shown at).
     Textures(TexturesArgs),
@@ -78,6 +81,52 @@ pub struct GenerateArgs {
     /// Output file (.glb).
     #[arg(long, default_value = "out/tree.glb")]
     out: PathBuf,
+}
+
+#[derive(Debug, Args)]
+pub struct AnimateArgs {
+    /// Preset name (see `sylva tree list`) or a species file (.toml).
+    #[arg(long)]
+    species: String,
+    /// Seed of the tree and of a preset wind.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Wind: a preset (calm, breeze, strong, storm), a steady speed in m/s along +x, or a
+    /// wind file (.swf, .npy, .zarr) sampled at the crown.
+    #[arg(long, default_value = "breeze")]
+    wind: WindSource,
+    /// Length of the clip, s (with --loop: the period of the synthesised wind, rounded to
+    /// 0.1 s; a wind file's own period).
+    #[arg(value_parser = crate::finite::<f64>, long, default_value_t = 10.0)]
+    seconds: f64,
+    /// Samples (keyframes before reduction) per second.
+    #[arg(value_parser = crate::finite::<f64>, long, default_value_t = 30.0)]
+    fps: f64,
+    /// Seconds simulated in the wind before the clip starts (a looping clip: at least three
+    /// periods, so the sway has settled into the wind's loop).
+    #[arg(value_parser = crate::finite::<f64>, long, default_value_t = 10.0)]
+    warmup: f64,
+    /// Loop seamlessly: the clip is one period of the wind, its last key its first.
+    #[arg(long = "loop")]
+    looped: bool,
+    /// Level of detail to export (0 = full detail).
+    #[arg(long, default_value_t = 0)]
+    lod: usize,
+    /// Most joints to export and animate, 1 … 65535 (as for `generate`).
+    #[arg(long, default_value_t = 1024)]
+    max_joints: usize,
+    /// Keyframe reduction, mm: keys are dropped where interpolation reproduces the sway so
+    /// closely that, played back, no point of the tree is farther than this from where the
+    /// simulation put it at any sample time (0 keeps every sample).
+    #[arg(value_parser = crate::finite::<f32>, long, default_value_t = 10.0)]
+    max_error_mm: f32,
+    /// Output file (.glb).
+    #[arg(long, default_value = "out/tree-animated.glb")]
+    out: PathBuf,
+    /// Also write, as JSON, the world positions (glTF axes: +Y up) of a few exported joints
+    /// at every sample time, from the simulation's palettes — to check a client's playback.
+    #[arg(long)]
+    samples: Option<PathBuf>,
 }
 
 #[derive(Debug, Subcommand)]
@@ -176,6 +225,7 @@ pub fn run_tree(cmd: TreeCommand) -> anyhow::Result<()> {
                     lods: vec![l],
                     max_joints: a.max_joints,
                     name: sp.name.clone(),
+                    animation: None,
                 };
                 let bytes = model.to_glb(&opts);
                 sylva_wind::io::atomic::write_atomic(&path, &bytes)
@@ -191,6 +241,7 @@ pub fn run_tree(cmd: TreeCommand) -> anyhow::Result<()> {
                 );
             }
         }
+        TreeCommand::Animate(a) => animate(a)?,
         TreeCommand::Textures(a) => {
             let sp = Species::load(&a.species)?;
             std::fs::create_dir_all(&a.out)
@@ -261,6 +312,118 @@ pub fn run_tree(cmd: TreeCommand) -> anyhow::Result<()> {
     Ok(())
 }
 
+fn animate(a: AnimateArgs) -> anyhow::Result<()> {
+    use sylva_forest::clip::{ClipSettings, PointWind, record};
+    if a.max_joints == 0 || a.max_joints > sylva_tree::gltf::MAX_GLTF_JOINTS {
+        bail!("--max-joints {}: must be 1 … {}", a.max_joints, sylva_tree::gltf::MAX_GLTF_JOINTS);
+    }
+    if !(0.0..=1000.0).contains(&a.max_error_mm) {
+        bail!("--max-error-mm {}: 0 … 1000 mm", a.max_error_mm);
+    }
+    let sp = Species::load(&a.species)?;
+    let model = sp.model(a.seed, sylva_tree::mesh::LOD_LEVELS)?;
+    let last = model.lods.len() - 1;
+    if a.lod > last {
+        bail!("--lod {}: a level 0 … {last}", a.lod);
+    }
+    let sk = &model.tree.skeleton;
+    let crown = [0.0, 0.0, 0.7 * model.tree.stats.height as f64];
+    let started = Instant::now();
+    let wind = PointWind::new(&a.wind, crown, a.seconds, a.seed, a.looped)?;
+    let joints = model.exported_joints(a.lod, a.max_joints);
+    let settings =
+        ClipSettings { seconds: a.seconds, fps: a.fps, warmup: a.warmup, looped: a.looped };
+    let params = SwayParams::for_leaves(sylva_tree::texture::is_needle(&sp));
+    let clip = record(sk, params, &wind, &joints, &settings)?;
+    let animation = sylva_tree::gltf::JointAnimation {
+        name: format!("sway in {}", a.wind),
+        times: clip.times.clone(),
+        joints: clip.joints.clone(),
+        rotations: clip.rotations(),
+        max_error: a.max_error_mm / 1000.0,
+    };
+    let opts = sylva_tree::gltf::GltfOptions {
+        lods: vec![a.lod],
+        max_joints: a.max_joints,
+        name: sp.name.clone(),
+        animation: Some(animation),
+    };
+    let bytes = model.to_glb(&opts);
+    if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    sylva_wind::io::atomic::write_atomic(&a.out, &bytes)
+        .with_context(|| format!("writing {}", a.out.display()))?;
+    let duration = clip.times.last().copied().unwrap_or(0.0);
+    println!(
+        "wrote {} ({:.2} MB: LOD {}, {} of {} joints animated, {:.2} s at {} samples/s, played back within {} mm of the simulation){}; {:.1} s",
+        a.out.display(),
+        bytes.len() as f64 / 1e6,
+        a.lod,
+        joints.len(),
+        sk.len(),
+        duration,
+        a.fps,
+        a.max_error_mm,
+        if a.looped {
+            format!(", loops (seam before closing: {:.3}°)", clip.seam_deg)
+        } else {
+            String::new()
+        },
+        started.elapsed().as_secs_f64()
+    );
+    if let Some(path) = &a.samples {
+        // The trunk top and the ends of the three heaviest exported stems: their joint
+        // nodes' world positions, M_j · o_j, in glTF's axes (x, z, −y).
+        let exported: std::collections::HashSet<usize> = joints.iter().copied().collect();
+        let mut picks = vec![sk.trunk_top()];
+        let mut stems: Vec<usize> =
+            joints.iter().copied().filter(|&j| j > 0 && !sk.joints()[j].continues).collect();
+        stems.sort_by(|&x, &y| sk.carried_mass(y).total_cmp(&sk.carried_mass(x)));
+        for s in stems.into_iter().take(3) {
+            // The stem's last joint, or its nearest exported ancestor.
+            let mut e = sk.stem_end(s);
+            while !exported.contains(&e) {
+                e = sk.joints()[e].parent as usize;
+            }
+            picks.push(e);
+        }
+        picks.retain(|j| exported.contains(j));
+        picks.dedup();
+        let slot = |j: usize| joints.iter().position(|&x| x == j);
+        let series: Vec<serde_json::Value> = picks
+            .iter()
+            .filter_map(|&j| {
+                let k = slot(j)?;
+                let o = sk.joints()[j].origin;
+                let pos: Vec<[f32; 3]> = clip
+                    .palettes
+                    .iter()
+                    .map(|s| {
+                        let p = transform(&s[k], o);
+                        [p[0], p[2], -p[1]]
+                    })
+                    .collect();
+                Some(serde_json::json!({ "node": format!("joint{j}"), "positions": pos }))
+            })
+            .collect();
+        let doc = serde_json::json!({
+            "times": clip.times,
+            "max_error_m": a.max_error_mm / 1000.0,
+            "joints": series
+        });
+        sylva_wind::io::atomic::write_atomic(path, doc.to_string().as_bytes())
+            .with_context(|| format!("writing {}", path.display()))?;
+        println!(
+            "wrote {} ({} joints' positions at {} times)",
+            path.display(),
+            picks.len(),
+            clip.times.len()
+        );
+    }
+    Ok(())
+}
+
 pub fn run_sway(cmd: SwayCommand) -> anyhow::Result<()> {
     let SwayCommand::Probe(a) = cmd;
     if !(a.seconds > 0.0 && a.fps > 0.0) {
@@ -272,33 +435,9 @@ pub fn run_sway(cmd: SwayCommand) -> anyhow::Result<()> {
     let crown = [0.0, 0.0, 0.7 * tree.stats.height as f64];
     let dt = 1.0 / a.fps;
     let steps = (a.seconds * a.fps).ceil() as usize;
-    // Wind at the crown per step.
     // Wind at the crown per step: steady, or sampled from a synthesised or read field.
-    let sample = |field: &WindField| -> Vec<[f32; 3]> {
-        let v = field.view();
-        (0..steps)
-            .map(|k| {
-                let s = v.sample(crown, k as f64 * dt);
-                [s[0] as f32, s[1] as f32, s[2] as f32]
-            })
-            .collect()
-    };
-    let wind: Vec<[f32; 3]> = match &a.wind {
-        WindSource::Steady(speed) => vec![[*speed as f32, 0.0, 0.0]; steps],
-        WindSource::Preset(preset) => {
-            let frames = ((a.seconds / 0.1).ceil() as usize + 4).next_multiple_of(2).max(64);
-            let mut grid = Grid::regular(4, 4, 4.0, &[crown[2].max(1.0)], frames, 0.1);
-            grid.xs = vec![-6.0, -2.0, 2.0, 6.0];
-            grid.ys = grid.xs.clone();
-            sample(&WindField::generate(
-                &preset.params(),
-                &grid,
-                SynthParams { seed: a.seed, ..Default::default() },
-                &|_| {},
-            )?)
-        }
-        WindSource::File(path) => sample(&crate::wind::read(path)?),
-    };
+    let point = sylva_forest::clip::PointWind::new(&a.wind, crown, a.seconds, a.seed, false)?;
+    let wind: Vec<[f32; 3]> = (0..steps).map(|k| point.at(k as f64 * dt)).collect();
     let sp =
         SwaySpecies::new(sk, SwayParams::for_leaves(sylva_tree::texture::is_needle(&species)))?;
     let mut batch = SwayBatch::new(sp, 1);

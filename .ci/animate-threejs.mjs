@@ -1,0 +1,58 @@
+// Play an animated .glb (`sylva tree animate`) in three.js under Node: GLTFLoader, then an
+// AnimationMixer on its clip. At every sample time of the JSON that `--samples` wrote, the
+// named joints' world positions must match Sylva's palettes within 1e-4 m (or the file's
+// keyframe-reduction bound, which the JSON states), and they must move over the clip. Usage: node animate-threejs.mjs tree.glb samples.json. Exit 1 on any
+// failure.
+import { readFileSync } from "node:fs";
+globalThis.self = globalThis;
+if (typeof globalThis.navigator === "undefined") globalThis.navigator = { userAgent: "node" };
+globalThis.createImageBitmap = async () => ({ width: 1, height: 1, close() {} });
+globalThis.fetch = async () => ({ ok: true, status: 200, blob: async () => new Blob([]) });
+const { GLTFLoader } = await import("three/examples/jsm/loaders/GLTFLoader.js");
+const { AnimationMixer, LoopOnce, Vector3 } = await import("three");
+
+const [file, samplesFile] = process.argv.slice(2);
+const buf = readFileSync(file);
+const ab = buf.buffer.slice(buf.byteOffset, buf.byteOffset + buf.byteLength);
+const samples = JSON.parse(readFileSync(samplesFile, "utf8"));
+const gltf = await new GLTFLoader().parseAsync(ab, "");
+if (gltf.animations.length !== 1) {
+  console.log(`${file}: ${gltf.animations.length} animations, expected 1`);
+  process.exit(1);
+}
+const clip = gltf.animations[0];
+const mixer = new AnimationMixer(gltf.scene);
+// Played once and held at its end, so the last sample time reads the last key (a repeating
+// action would wrap it to the first).
+const action = mixer.clipAction(clip);
+action.setLoop(LoopOnce, 1);
+action.clampWhenFinished = true;
+action.play();
+// three.js names nodes by their glTF names (sanitised: no spaces in "jointN").
+const bones = samples.joints.map((j) => gltf.scene.getObjectByName(j.node));
+if (bones.some((b) => !b)) {
+  console.log(`${file}: joints missing: ${samples.joints.filter((_, i) => !bones[i]).map((j) => j.node)}`);
+  process.exit(1);
+}
+let worst = 0, travel = 0;
+const p = new Vector3();
+samples.times.forEach((t, k) => {
+  mixer.setTime(t);
+  gltf.scene.updateMatrixWorld(true);
+  bones.forEach((b, i) => {
+    b.getWorldPosition(p);
+    const want = samples.joints[i].positions[k];
+    const first = samples.joints[i].positions[0];
+    worst = Math.max(worst, Math.abs(p.x - want[0]), Math.abs(p.y - want[1]), Math.abs(p.z - want[2]));
+    travel = Math.max(travel, Math.hypot(p.x - first[0], p.y - first[1], p.z - first[2]));
+  });
+});
+// The file's own bound (keyframe reduction) or, without reduction, 1e-4 m.
+const bound = Math.max(1e-4, (samples.max_error_m ?? 0) + 1e-5);
+const ok = worst <= bound && travel > 0.01;
+console.log(
+  `${file}: animation "${clip.name}", ${clip.duration.toFixed(2)} s, ${clip.tracks.length} tracks; ` +
+    `${bones.length} joints at ${samples.times.length} times: largest gap to Sylva ${worst.toExponential(2)} m (bound ${bound.toExponential(2)}), ` +
+    `largest travel ${travel.toFixed(3)} m — ${ok ? "ok" : "FAILED"}`,
+);
+process.exit(ok ? 0 : 1);

@@ -1,0 +1,237 @@
+//! One tree swaying in a wind, sampled at a fixed rate: the motion `sylva tree animate`
+//! exports as a glTF animation, and the wind series `sylva sway probe` drives its tree with.
+//!
+//! The wind is read at one point, the crown (0.7 of the tree's height above its base), as
+//! the forest reads it for a tree: a preset is synthesised on a small grid around that
+//! point (the loop of the synthesis sets the clip's period with `looped`), a steady speed
+//! blows along +x, and a wind file is sampled where the point falls in it.
+//!
+//! A clip starts after a warm-up in the same wind (the tree already bent and swaying, not
+//! leaving rest). A looping clip lasts one period of its wind, after a warm-up of at least
+//! three periods so the damped response has settled into that period; its last sample is
+//! then the first one, and [`SwayClip::seam_deg`] says how far the simulation was from
+//! closing the loop on its own.
+
+use sylva_sway::{Palette, SwayBatch, SwayParams, SwaySpecies};
+use sylva_tree::Skeleton;
+use sylva_wind::{Grid, Preset, SynthParams, WindField};
+
+use crate::driver::ForestError;
+use crate::scene::WindSource;
+
+/// The wind at one point over time.
+#[derive(Debug)]
+pub enum PointWind {
+    /// A steady uniform wind, m/s (world axes).
+    Steady([f32; 3]),
+    /// A field sampled at `point`; it repeats every `period` s.
+    Field {
+        /// The field.
+        field: Box<WindField>,
+        /// Where it is read, world m.
+        point: [f64; 3],
+        /// Its loop, s.
+        period: f64,
+    },
+}
+
+impl PointWind {
+    /// The wind of `source` at `point` (world m; the tree at the origin, `point` on its
+    /// crown). A preset is synthesised (seed `seed`) for at least `seconds` s — exactly
+    /// `seconds` rounded to the synthesis step of 0.1 s when `looped`.
+    pub fn new(
+        source: &WindSource,
+        point: [f64; 3],
+        seconds: f64,
+        seed: u64,
+        looped: bool,
+    ) -> Result<PointWind, ForestError> {
+        Ok(match source {
+            WindSource::Steady(speed) => PointWind::Steady([*speed as f32, 0.0, 0.0]),
+            WindSource::Preset(preset) => {
+                PointWind::from_preset(*preset, point, seconds, seed, looped)?
+            }
+            WindSource::File(path) => {
+                let field = sylva_wind::io::read_field(path)
+                    .map_err(|e| ForestError::Wind(format!("{}: {e}", path.display())))?;
+                let period = field.grid.frames as f64 * field.grid.dt;
+                PointWind::Field { field: Box::new(field), point, period }
+            }
+        })
+    }
+
+    fn from_preset(
+        preset: Preset,
+        point: [f64; 3],
+        seconds: f64,
+        seed: u64,
+        looped: bool,
+    ) -> Result<PointWind, ForestError> {
+        const DT: f64 = 0.1;
+        if !(seconds > 0.0 && seconds <= 3600.0) {
+            return Err(ForestError::Wind(format!(
+                "{seconds} s of wind: a clip lasts more than 0 and at most 3600 s"
+            )));
+        }
+        let frames = if looped {
+            ((seconds / DT).round() as usize).next_multiple_of(2).max(16)
+        } else {
+            ((seconds / DT).ceil() as usize + 4).next_multiple_of(2).max(64)
+        };
+        let mut grid = Grid::regular(4, 4, 4.0, &[point[2].max(1.0)], frames, DT);
+        grid.xs = vec![point[0] - 6.0, point[0] - 2.0, point[0] + 2.0, point[0] + 6.0];
+        grid.ys = vec![point[1] - 6.0, point[1] - 2.0, point[1] + 2.0, point[1] + 6.0];
+        let field = WindField::generate(
+            &preset.params(),
+            &grid,
+            SynthParams { seed, ..Default::default() },
+            &|_| {},
+        )
+        .map_err(|e| ForestError::Wind(e.to_string()))?;
+        Ok(PointWind::Field { field: Box::new(field), point, period: frames as f64 * DT })
+    }
+
+    /// Velocity at time `t`, s, world m/s.
+    pub fn at(&self, t: f64) -> [f32; 3] {
+        match self {
+            PointWind::Steady(v) => *v,
+            PointWind::Field { field, point, .. } => {
+                let s = field.view().sample(*point, t);
+                [s[0] as f32, s[1] as f32, s[2] as f32]
+            }
+        }
+    }
+
+    /// Time after which the wind repeats, s (`None`: steady, any time).
+    pub fn period(&self) -> Option<f64> {
+        match self {
+            PointWind::Steady(_) => None,
+            PointWind::Field { period, .. } => Some(*period),
+        }
+    }
+}
+
+/// How a clip is sampled.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ClipSettings {
+    /// Length, s (> 0). A looping clip lasts its wind's period instead.
+    pub seconds: f64,
+    /// Samples per second (> 0, ≤ 1000).
+    pub fps: f64,
+    /// Simulated time before the first sample, s (≥ 0).
+    pub warmup: f64,
+    /// Loop seamlessly: the clip is one period of the wind (a steady wind: `seconds`).
+    pub looped: bool,
+}
+
+impl Default for ClipSettings {
+    fn default() -> Self {
+        ClipSettings { seconds: 10.0, fps: 30.0, warmup: 10.0, looped: false }
+    }
+}
+
+/// A recorded sway clip.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SwayClip {
+    /// Sample times from 0, s.
+    pub times: Vec<f32>,
+    /// The skeleton joints recorded.
+    pub joints: Vec<usize>,
+    /// Per sample, per recorded joint: its palette (rest → animated, tree space).
+    pub palettes: Vec<Vec<Palette>>,
+    /// Looping clips: the largest angle, degrees, between a recorded joint's rotation at
+    /// the end of the period and at its start, before the last sample was set to the first.
+    pub seam_deg: f32,
+}
+
+impl SwayClip {
+    /// Per sample, per recorded joint: the rotation part of its palette, row-major 3×3.
+    pub fn rotations(&self) -> Vec<Vec<[f32; 9]>> {
+        self.palettes
+            .iter()
+            .map(|s| {
+                s.iter().map(|p| [p[0], p[1], p[2], p[4], p[5], p[6], p[8], p[9], p[10]]).collect()
+            })
+            .collect()
+    }
+}
+
+/// Simulate one tree with `skeleton` and sway constants `params` in `wind` and record the
+/// palettes of `joints` (skeleton indices) as `settings` ask. The simulation steps at most
+/// 1/60 s (several steps per sample when the rate is lower).
+pub fn record(
+    skeleton: &Skeleton,
+    params: SwayParams,
+    wind: &PointWind,
+    joints: &[usize],
+    settings: &ClipSettings,
+) -> Result<SwayClip, ForestError> {
+    let ClipSettings { seconds, fps, warmup, looped } = *settings;
+    if !(fps > 0.0 && fps <= 1000.0) {
+        return Err(ForestError::Wind(format!("{fps} samples per second: 0 < fps ≤ 1000")));
+    }
+    if !(seconds > 0.0 && seconds <= 3600.0 && (0.0..=36_000.0).contains(&warmup)) {
+        return Err(ForestError::Wind(format!(
+            "a clip of {seconds} s after {warmup} s of warm-up: 0 < seconds ≤ 3600, 0 ≤ warm-up \
+             ≤ 36000"
+        )));
+    }
+    if let Some(&j) = joints.iter().find(|&&j| j >= skeleton.len()) {
+        return Err(ForestError::Species {
+            name: "clip".into(),
+            message: format!("joint {j} is not in the skeleton of {} joints", skeleton.len()),
+        });
+    }
+    let sp = SwaySpecies::new(skeleton, params)
+        .map_err(|e| ForestError::Species { name: "clip".into(), message: e.to_string() })?;
+    let mut batch = SwayBatch::new(sp, 1);
+    let (length, warmup) = match (looped, wind.period()) {
+        (true, Some(p)) => (p, warmup.max(3.0 * p)),
+        (true, None) => (seconds, warmup.max(30.0)),
+        (false, _) => (seconds, warmup),
+    };
+    let samples = (length * fps).round().max(1.0) as usize;
+    let sample_dt = length / samples as f64;
+    let sub = (sample_dt * 60.0).ceil().max(1.0) as usize;
+    let dt = sample_dt / sub as f64;
+    // Warm-up, then the first sample at time `warmup` (rounded to whole steps).
+    let warm_steps = (warmup / dt).round() as usize;
+    let mut t = 0.0;
+    for _ in 0..warm_steps {
+        t += dt;
+        batch.step(dt as f32, &[wind.at(t)]);
+    }
+    let start = t;
+    let take = |b: &SwayBatch| joints.iter().map(|&j| b.palette(0, j)).collect::<Vec<_>>();
+    let mut palettes = vec![take(&batch)];
+    for k in 1..=samples {
+        for s in 0..sub {
+            // Times from the start of the clip, so a looped wind lines up with its period.
+            let tk = start + ((k - 1) * sub + s + 1) as f64 * dt;
+            batch.step(dt as f32, &[wind.at(tk)]);
+        }
+        palettes.push(take(&batch));
+    }
+    let times: Vec<f32> = (0..=samples).map(|k| (k as f64 * sample_dt) as f32).collect();
+    let mut seam_deg = 0.0;
+    if looped {
+        let (first, last) = (&palettes[0], &palettes[samples]);
+        for (a, b) in first.iter().zip(last) {
+            seam_deg = f32::max(seam_deg, rotation_between(a, b).to_degrees());
+        }
+        palettes[samples] = palettes[0].clone();
+    }
+    Ok(SwayClip { times, joints: joints.to_vec(), palettes, seam_deg })
+}
+
+/// Angle of the rotation taking palette `a`'s rotation to `b`'s, rad.
+fn rotation_between(a: &Palette, b: &Palette) -> f32 {
+    // trace(Aᵀ B) = 1 + 2 cos θ.
+    let mut tr = 0.0f64;
+    for r in 0..3 {
+        for c in 0..3 {
+            tr += a[4 * r + c] as f64 * b[4 * r + c] as f64;
+        }
+    }
+    (((tr - 1.0) / 2.0).clamp(-1.0, 1.0)).acos() as f32
+}

@@ -1,0 +1,272 @@
+//! A tree's sway exported as a glTF animation: played back, the joint nodes are where the
+//! simulation's palettes put them; keyframe reduction keeps its error bound; a looping clip
+//! closes on itself.
+
+use serde_json::Value;
+use sylva_forest::WindSource;
+use sylva_forest::clip::{ClipSettings, PointWind, SwayClip, record};
+use sylva_sway::{SwayParams, transform};
+use sylva_tree::gltf::{GltfOptions, JointAnimation};
+use sylva_tree::{Species, TreeModel};
+
+/// The glTF JSON and binary chunk of a `.glb`.
+fn chunks(glb: &[u8]) -> (Value, Vec<u8>) {
+    let word =
+        |at: usize| u32::from_le_bytes(glb[at..at + 4].try_into().expect("4 bytes")) as usize;
+    let json_len = word(12);
+    let json: Value = serde_json::from_slice(&glb[20..20 + json_len]).expect("json");
+    let bin_at = 20 + json_len;
+    (json, glb[bin_at + 8..bin_at + 8 + word(bin_at)].to_vec())
+}
+
+/// The floats of accessor `a`.
+fn floats(json: &Value, bin: &[u8], a: usize) -> Vec<f32> {
+    let acc = &json["accessors"][a];
+    let view = &json["bufferViews"][acc["bufferView"].as_u64().expect("view") as usize];
+    let at = view["byteOffset"].as_u64().unwrap_or(0) as usize;
+    let len = view["byteLength"].as_u64().expect("length") as usize;
+    bin[at..at + len].chunks(4).map(|c| f32::from_le_bytes(c.try_into().expect("4"))).collect()
+}
+
+fn mul_q(a: [f64; 4], b: [f64; 4]) -> [f64; 4] {
+    let [ax, ay, az, aw] = a;
+    let [bx, by, bz, bw] = b;
+    [
+        aw * bx + ax * bw + ay * bz - az * by,
+        aw * by - ax * bz + ay * bw + az * bx,
+        aw * bz + ax * by - ay * bx + az * bw,
+        aw * bw - ax * bx - ay * by - az * bz,
+    ]
+}
+
+fn rotate(q: [f64; 4], v: [f64; 3]) -> [f64; 3] {
+    let p = mul_q(mul_q(q, [v[0], v[1], v[2], 0.0]), [-q[0], -q[1], -q[2], q[3]]);
+    [p[0], p[1], p[2]]
+}
+
+/// World positions of the joint nodes at time `t`, channels interpolated as glTF does.
+fn world_positions(json: &Value, bin: &[u8], t: f32) -> Vec<Option<[f64; 3]>> {
+    let nodes = json["nodes"].as_array().expect("nodes");
+    let mut rot: Vec<Option<[f64; 4]>> = nodes
+        .iter()
+        .map(|n| {
+            n["rotation"].as_array().map(|r| std::array::from_fn(|i| r[i].as_f64().expect("f")))
+        })
+        .collect();
+    let anim = &json["animations"][0];
+    for c in anim["channels"].as_array().expect("channels") {
+        let s = &anim["samplers"][c["sampler"].as_u64().expect("sampler") as usize];
+        let q = floats(json, bin, s["output"].as_u64().expect("output") as usize);
+        let times = floats(json, bin, s["input"].as_u64().expect("input") as usize);
+        let node = c["target"]["node"].as_u64().expect("node") as usize;
+        let key = |i: usize| -> [f64; 4] { std::array::from_fn(|c| q[4 * i + c] as f64) };
+        let b = times.iter().position(|&x| x >= t).unwrap_or(times.len() - 1);
+        rot[node] = Some(if times[b] <= t || b == 0 {
+            key(b)
+        } else {
+            let u = ((t - times[b - 1]) / (times[b] - times[b - 1])) as f64;
+            slerp(key(b - 1), key(b), u)
+        });
+    }
+    let mut parent = vec![usize::MAX; nodes.len()];
+    for (i, n) in nodes.iter().enumerate() {
+        for c in n["children"].as_array().into_iter().flatten() {
+            parent[c.as_u64().expect("child") as usize] = i;
+        }
+    }
+    // World (rotation, translation) of every node, parents first by recursion.
+    fn world(
+        i: usize,
+        nodes: &[Value],
+        rot: &[Option<[f64; 4]>],
+        parent: &[usize],
+    ) -> ([f64; 4], [f64; 3]) {
+        let r = rot[i].unwrap_or([0.0, 0.0, 0.0, 1.0]);
+        let t: [f64; 3] = nodes[i]["translation"]
+            .as_array()
+            .map(|v| std::array::from_fn(|c| v[c].as_f64().expect("f")))
+            .unwrap_or([0.0; 3]);
+        if parent[i] == usize::MAX {
+            return (r, t);
+        }
+        let (pr, pt) = world(parent[i], nodes, rot, parent);
+        let o = rotate(pr, t);
+        (mul_q(pr, r), [pt[0] + o[0], pt[1] + o[1], pt[2] + o[2]])
+    }
+    (0..nodes.len())
+        .map(|i| {
+            nodes[i]["name"]
+                .as_str()
+                .is_some_and(|n| n.starts_with("joint"))
+                .then(|| world(i, nodes, &rot, &parent).1)
+        })
+        .collect()
+}
+
+fn aspen() -> TreeModel {
+    Species::preset("quaking_aspen").expect("preset").model(1, 4).expect("model")
+}
+
+fn clip(model: &TreeModel, joints: &[usize], settings: &ClipSettings) -> SwayClip {
+    let crown = [0.0, 0.0, 0.7 * model.tree.stats.height as f64];
+    let wind = PointWind::new(
+        &WindSource::parse("strong").expect("preset"),
+        crown,
+        4.0,
+        7,
+        settings.looped,
+    )
+    .expect("wind");
+    record(&model.tree.skeleton, SwayParams::default(), &wind, joints, settings).expect("clip")
+}
+
+fn export_m(model: &TreeModel, clip: &SwayClip, max_error: f32, max_joints: usize) -> Vec<u8> {
+    let animation = JointAnimation {
+        name: "sway".into(),
+        times: clip.times.clone(),
+        joints: clip.joints.clone(),
+        rotations: clip.rotations(),
+        max_error,
+    };
+    model.to_glb(&GltfOptions {
+        lods: vec![0],
+        max_joints,
+        name: "aspen".into(),
+        animation: Some(animation),
+    })
+}
+
+#[test]
+fn played_back_joints_sit_where_the_palettes_put_them() {
+    let model = aspen();
+    let joints = model.exported_joints(0, 300);
+    assert_eq!(joints.len(), 300);
+    let settings = ClipSettings { seconds: 2.0, fps: 15.0, warmup: 2.0, looped: false };
+    let c = clip(&model, &joints, &settings);
+    assert_eq!(c.times.len(), 31);
+    let glb = export_m(&model, &c, 0.0, 300);
+    let (json, bin) = chunks(&glb);
+    let names: Vec<String> = json["nodes"]
+        .as_array()
+        .expect("nodes")
+        .iter()
+        .map(|n| n["name"].as_str().unwrap_or("").to_string())
+        .collect();
+    let sk = &model.tree.skeleton;
+    let mut moved = 0.0f64;
+    for k in [0, 17, 30] {
+        let world = world_positions(&json, &bin, c.times[k]);
+        for (slot, &j) in joints.iter().enumerate() {
+            let node = names.iter().position(|n| *n == format!("joint{j}")).expect("joint node");
+            let got = world[node].expect("joint");
+            let o = sk.joints()[j].origin;
+            let p = transform(&c.palettes[k][slot], o);
+            // Sylva's +Z up is glTF's +Y up: (x, y, z) → (x, z, −y).
+            let want = [p[0] as f64, p[2] as f64, -p[1] as f64];
+            let err = (0..3).map(|i| (got[i] - want[i]).abs()).fold(0.0, f64::max);
+            assert!(err < 1e-4, "joint {j} at key {k}: {got:?} vs {want:?}");
+            let rest = [o[0] as f64, o[2] as f64, -o[1] as f64];
+            moved = moved.max((0..3).map(|i| (want[i] - rest[i]).abs()).fold(0.0, f64::max));
+        }
+    }
+    // The comparison is not of a tree at rest: strong wind moves joints by decimetres.
+    assert!(moved > 0.1, "largest displacement {moved} m");
+}
+
+#[test]
+fn reduction_drops_most_keys_and_keeps_the_clip_span() {
+    let model = aspen();
+    let joints = model.exported_joints(0, 200);
+    let settings = ClipSettings { seconds: 3.0, fps: 30.0, warmup: 2.0, looped: false };
+    let c = clip(&model, &joints, &settings);
+    let full = export_m(&model, &c, 0.0, 200);
+    let reduced = export_m(&model, &c, 0.01, 200);
+    let keys = |glb: &[u8]| -> Vec<Vec<f32>> {
+        let (json, bin) = chunks(glb);
+        let a = &json["animations"][0];
+        a["samplers"]
+            .as_array()
+            .expect("samplers")
+            .iter()
+            .map(|s| floats(&json, &bin, s["input"].as_u64().expect("in") as usize))
+            .collect()
+    };
+    let (f, r) = (keys(&full), keys(&reduced));
+    assert_eq!(f.len(), joints.len(), "a channel per animated joint");
+    assert_eq!(f.len(), r.len());
+    let (mut nf, mut nr) = (0, 0);
+    for (ft, rt) in f.iter().zip(&r) {
+        assert_eq!(ft.len(), c.times.len(), "without reduction every sample is a key");
+        assert_eq!((ft[0], ft.last()), (rt[0], rt.last()), "the clip keeps its span");
+        nf += ft.len();
+        nr += rt.len();
+    }
+    // Sway is smooth at 30 samples a second: 1 cm lets most keys go.
+    assert!(nr * 2 < nf, "{nr} keys after reduction of {nf}");
+    assert!(reduced.len() < full.len());
+}
+
+fn slerp(a: [f64; 4], b: [f64; 4], u: f64) -> [f64; 4] {
+    let d: f64 = (0..4).map(|i| a[i] * b[i]).sum();
+    let b = if d < 0.0 { b.map(|v| -v) } else { b };
+    let d = d.abs().min(1.0);
+    let th = d.acos();
+    let (wa, wb) = if th < 1e-9 {
+        (1.0 - u, u)
+    } else {
+        (((1.0 - u) * th).sin() / th.sin(), (u * th).sin() / th.sin())
+    };
+    let q: [f64; 4] = std::array::from_fn(|i| wa * a[i] + wb * b[i]);
+    let n = q.iter().map(|v| v * v).sum::<f64>().sqrt();
+    q.map(|v| v / n)
+}
+
+#[test]
+fn a_looping_clip_is_one_period_of_its_wind_and_closes_on_itself() {
+    let model = aspen();
+    let joints = model.exported_joints(0, 100);
+    let settings = ClipSettings { seconds: 4.0, fps: 20.0, warmup: 0.0, looped: true };
+    let c = clip(&model, &joints, &settings);
+    // The synthesised wind loops every 4 s; the clip is that period.
+    assert_eq!(c.times.len(), 81);
+    assert!((c.times[80] - 4.0).abs() < 1e-5);
+    assert_eq!(c.palettes[0], c.palettes[80]);
+    // After three periods of warm-up the sway repeats with the wind: the gap it closed is
+    // small against the motion itself.
+    let swing =
+        c.palettes.iter().map(|s| ((s[1][2] as f64).asin().abs()).to_degrees()).fold(0.0, f64::max);
+    assert!(c.seam_deg < 0.5, "seam {}° (swing {swing}°)", c.seam_deg);
+}
+
+#[test]
+fn reduced_playback_stays_within_max_error_of_the_simulation() {
+    let model = aspen();
+    let joints = model.exported_joints(0, 300);
+    let settings = ClipSettings { seconds: 3.0, fps: 30.0, warmup: 2.0, looped: false };
+    let c = clip(&model, &joints, &settings);
+    let tol = 0.002;
+    let glb = export_m(&model, &c, tol, 300);
+    let (json, bin) = chunks(&glb);
+    let names: Vec<String> = json["nodes"]
+        .as_array()
+        .expect("nodes")
+        .iter()
+        .map(|n| n["name"].as_str().unwrap_or("").to_string())
+        .collect();
+    let sk = &model.tree.skeleton;
+    let mut worst = (0.0f64, 0usize, 0usize);
+    for (k, &t) in c.times.iter().enumerate() {
+        let world = world_positions(&json, &bin, t);
+        for (slot, &j) in joints.iter().enumerate() {
+            let node = names.iter().position(|n| *n == format!("joint{j}")).expect("joint node");
+            let got = world[node].expect("joint");
+            let p = transform(&c.palettes[k][slot], sk.joints()[j].origin);
+            let want = [p[0] as f64, p[2] as f64, -p[1] as f64];
+            let err = (0..3).map(|i| (got[i] - want[i]).abs()).fold(0.0, f64::max);
+            if err > worst.0 {
+                worst = (err, j, k);
+            }
+        }
+    }
+    assert!(worst.0 <= tol as f64 + 1e-4, "{worst:?}");
+}
