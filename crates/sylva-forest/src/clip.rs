@@ -8,9 +8,12 @@
 //!
 //! A clip starts after a warm-up in the same wind (the tree already bent and swaying, not
 //! leaving rest). A looping clip lasts one period of its wind, after a warm-up of at least
-//! three periods so the damped response has settled into that period; its last sample is
-//! then the first one, and [`SwayClip::seam_deg`] says how far the simulation was from
-//! closing the loop on its own.
+//! three periods. A damped tree driven by a periodic wind settles into that period only
+//! where its response is linear; light twigs in strong wind do not (their motion depends on
+//! where they were), so the end of the period is blended into the start over its last
+//! [`LOOP_BLEND`] (each joint's rotation towards the pose one period earlier, which meets
+//! the start exactly): the clip's last sample is its first, and [`SwayClip::seam_deg`] says
+//! how far the simulation itself was from closing the loop.
 
 use sylva_sway::{Palette, SwayBatch, SwayParams, SwaySpecies};
 use sylva_tree::Skeleton;
@@ -194,8 +197,10 @@ pub fn record(
     let sample_dt = length / samples as f64;
     let sub = (sample_dt * 60.0).ceil().max(1.0) as usize;
     let dt = sample_dt / sub as f64;
-    // Warm-up, then the first sample at time `warmup` (rounded to whole steps).
-    let warm_steps = (warmup / dt).round() as usize;
+    // Warm-up, then the first sample at time `warmup` (rounded to whole steps). A loop also
+    // records the period before, to blend its end into its start.
+    let before = if looped { length } else { 0.0 };
+    let warm_steps = ((warmup - before) / dt).round() as usize;
     let mut t = 0.0;
     for _ in 0..warm_steps {
         t += dt;
@@ -203,8 +208,9 @@ pub fn record(
     }
     let start = t;
     let take = |b: &SwayBatch| joints.iter().map(|&j| b.palette(0, j)).collect::<Vec<_>>();
+    let recorded = if looped { 2 * samples } else { samples };
     let mut palettes = vec![take(&batch)];
-    for k in 1..=samples {
+    for k in 1..=recorded {
         for s in 0..sub {
             // Times from the start of the clip, so a looped wind lines up with its period.
             let tk = start + ((k - 1) * sub + s + 1) as f64 * dt;
@@ -215,13 +221,143 @@ pub fn record(
     let times: Vec<f32> = (0..=samples).map(|k| (k as f64 * sample_dt) as f32).collect();
     let mut seam_deg = 0.0;
     if looped {
-        let (first, last) = (&palettes[0], &palettes[samples]);
-        for (a, b) in first.iter().zip(last) {
+        // S(t): the recorded poses, the clip's period being [W, W + P]. Its end would jump
+        // from S(W + P) back to S(W); over the last LOOP_BLEND of the period each joint's
+        // rotation blends (smoothstep in time, slerp in angle) from S(W + t) into S(W + t − P),
+        // the same wind one period earlier, which reaches S(W) itself at t = P: the loop
+        // closes with no jump in pose or speed.
+        let (prev, cur) = palettes.split_at(samples);
+        let cur = &cur[..=samples];
+        for (a, b) in cur[0].iter().zip(&cur[samples]) {
             seam_deg = f32::max(seam_deg, rotation_between(a, b).to_degrees());
         }
-        palettes[samples] = palettes[0].clone();
+        let mut prev = prev.to_vec();
+        prev.push(cur[0].clone());
+        palettes = (0..=samples)
+            .map(|k| {
+                let x =
+                    ((k as f64 / samples as f64 - (1.0 - LOOP_BLEND)) / LOOP_BLEND).clamp(0.0, 1.0);
+                let w = x * x * (3.0 - 2.0 * x);
+                blend_pose(skeleton, joints, &cur[k], &prev[k], w)
+            })
+            .collect();
     }
     Ok(SwayClip { times, joints: joints.to_vec(), palettes, seam_deg })
+}
+
+/// Fraction of a looping clip over which its end blends into its start.
+pub const LOOP_BLEND: f64 = 0.3;
+
+/// Poses `a` and `b` of `joints` blended with weight `w` (0: a, 1: b): each joint's rotation
+/// slerped, its translation recomposed so that it still turns about its own origin carried
+/// by its (blended) parent.
+fn blend_pose(
+    skeleton: &Skeleton,
+    joints: &[usize],
+    a: &[Palette],
+    b: &[Palette],
+    w: f64,
+) -> Vec<Palette> {
+    if w <= 0.0 {
+        return a.to_vec();
+    }
+    if w >= 1.0 {
+        return b.to_vec();
+    }
+    let js = skeleton.joints();
+    let mut slot = std::collections::HashMap::with_capacity(joints.len());
+    let mut order: Vec<usize> = (0..joints.len()).collect();
+    order.sort_by_key(|&k| joints[k]);
+    let mut out = a.to_vec();
+    for k in order {
+        let j = joints[k];
+        let r = quat_to_rows(slerp(rows_to_quat(&a[k]), rows_to_quat(&b[k]), w));
+        let o = js[j].origin;
+        let ro = [0, 1, 2].map(|i| r[3 * i] * o[0] + r[3 * i + 1] * o[1] + r[3 * i + 2] * o[2]);
+        // Where the joint's origin goes: carried by the blended parent, or else blended.
+        let p = js[j].parent;
+        let moved = match (p != sylva_tree::NO_PARENT).then(|| slot.get(&(p as usize))).flatten() {
+            Some(&kp) => sylva_sway::transform(&out[kp], o),
+            None => {
+                let (pa, pb) = (sylva_sway::transform(&a[k], o), sylva_sway::transform(&b[k], o));
+                [0, 1, 2].map(|i| pa[i] + (pb[i] - pa[i]) * w as f32)
+            }
+        };
+        out[k] = [
+            r[0],
+            r[1],
+            r[2],
+            moved[0] - ro[0],
+            r[3],
+            r[4],
+            r[5],
+            moved[1] - ro[1],
+            r[6],
+            r[7],
+            r[8],
+            moved[2] - ro[2],
+        ];
+        slot.insert(j, k);
+    }
+    out
+}
+
+/// Unit quaternion (x, y, z, w) of a palette's rotation.
+fn rows_to_quat(p: &Palette) -> [f64; 4] {
+    let m = |r: usize, c: usize| p[4 * r + c] as f64;
+    let tr = m(0, 0) + m(1, 1) + m(2, 2);
+    let q = if tr > 0.0 {
+        let s = (tr + 1.0).sqrt() * 2.0;
+        [(m(2, 1) - m(1, 2)) / s, (m(0, 2) - m(2, 0)) / s, (m(1, 0) - m(0, 1)) / s, 0.25 * s]
+    } else if m(0, 0) > m(1, 1) && m(0, 0) > m(2, 2) {
+        let s = (1.0 + m(0, 0) - m(1, 1) - m(2, 2)).sqrt() * 2.0;
+        [0.25 * s, (m(0, 1) + m(1, 0)) / s, (m(0, 2) + m(2, 0)) / s, (m(2, 1) - m(1, 2)) / s]
+    } else if m(1, 1) > m(2, 2) {
+        let s = (1.0 + m(1, 1) - m(0, 0) - m(2, 2)).sqrt() * 2.0;
+        [(m(0, 1) + m(1, 0)) / s, 0.25 * s, (m(1, 2) + m(2, 1)) / s, (m(0, 2) - m(2, 0)) / s]
+    } else {
+        let s = (1.0 + m(2, 2) - m(0, 0) - m(1, 1)).sqrt() * 2.0;
+        [(m(0, 2) + m(2, 0)) / s, (m(1, 2) + m(2, 1)) / s, 0.25 * s, (m(1, 0) - m(0, 1)) / s]
+    };
+    let n = q.iter().map(|v| v * v).sum::<f64>().sqrt();
+    q.map(|v| v / n)
+}
+
+/// Rotation matrix, row-major, of a unit quaternion (x, y, z, w).
+fn quat_to_rows(q: [f64; 4]) -> [f32; 9] {
+    let [x, y, z, w] = q;
+    [
+        1.0 - 2.0 * (y * y + z * z),
+        2.0 * (x * y - z * w),
+        2.0 * (x * z + y * w),
+        2.0 * (x * y + z * w),
+        1.0 - 2.0 * (x * x + z * z),
+        2.0 * (y * z - x * w),
+        2.0 * (x * z - y * w),
+        2.0 * (y * z + x * w),
+        1.0 - 2.0 * (x * x + y * y),
+    ]
+    .map(|v| v as f32)
+}
+
+/// Spherical interpolation of unit quaternions, the short way round.
+fn slerp(a: [f64; 4], b: [f64; 4], u: f64) -> [f64; 4] {
+    let mut d: f64 = (0..4).map(|i| a[i] * b[i]).sum();
+    let b = if d < 0.0 {
+        d = -d;
+        b.map(|v| -v)
+    } else {
+        b
+    };
+    let (wa, wb) = if d > 0.9999 {
+        (1.0 - u, u)
+    } else {
+        let th = d.min(1.0).acos();
+        (((1.0 - u) * th).sin() / th.sin(), (u * th).sin() / th.sin())
+    };
+    let q: [f64; 4] = std::array::from_fn(|i| wa * a[i] + wb * b[i]);
+    let n = q.iter().map(|v| v * v).sum::<f64>().sqrt();
+    q.map(|v| v / n)
 }
 
 /// Angle of the rotation taking palette `a`'s rotation to `b`'s, rad.
