@@ -240,10 +240,10 @@ fn a_looping_clip_is_one_period_of_its_wind_and_closes_on_itself() {
     assert_eq!(c.times.len(), 81);
     assert!((c.times[80] - 4.0).abs() < 1e-5);
     assert_eq!(c.palettes[0], c.palettes[80]);
-    // No jump anywhere in the loop, the seam included (the last sample is the first): no
-    // joint turns further between samples in the blend than the clip's ordinary largest
-    // step before it. The light twigs among these 1000 joints do not repeat with the wind
-    // (the simulation alone leaves a seam of tens of degrees), so the blend is exercised.
+    // After three periods of warm-up the damped sway repeats with its wind: the simulation
+    // alone comes back to within a degree of where the period began. And no jump anywhere
+    // in the loop, the seam included (the last sample is the first): no joint turns further
+    // between samples in the blend than the clip's ordinary largest step before it.
     let step = |a: &[[f32; 12]], b: &[[f32; 12]]| {
         a.iter().zip(b).map(|(p, q)| angle(p, q)).fold(0.0f64, f64::max)
     };
@@ -255,7 +255,7 @@ fn a_looping_clip_is_one_period_of_its_wind_and_closes_on_itself() {
         ordinary.to_degrees(),
         blend.to_degrees()
     );
-    assert!(c.seam_deg > 5.0, "the seam to close: {}°", c.seam_deg);
+    assert!(c.seam_deg < 1.0, "the seam the simulation left: {}°", c.seam_deg);
     assert!(blend <= 1.5 * ordinary, "steps in the blend {blend} vs before {ordinary}");
 }
 

@@ -49,6 +49,9 @@ pub type Lanes = [f32; LANES];
 
 const ZERO: Lanes = [0.0; LANES];
 
+/// Largest bend of any joint from its parent, rad (1.2 rad, about 70°).
+pub const MAX_BEND: f32 = 1.2;
+
 /// Where one instance's joint palettes lie in a lane-interleaved buffer of `f32`: element `e`
 /// (row-major 3×4) of joint `j` is at `base + (12 j + e) · stride`.
 ///
@@ -517,6 +520,16 @@ simd_kernel! {
                     th[a][l] = if active { nx } else { th[a][l] };
                     ra[a][l] = if active { nv } else { ra[a][l] };
                 }
+                // The loads act on the rest pose (the small-angle model), so nothing turns a
+                // joint's drag away as it bends: beyond MAX_BEND a joint stops, as a branch
+                // that has streamlined into the flow.
+                let b2 = th[0][l] * th[0][l] + th[1][l] * th[1][l];
+                let over = b2 > MAX_BEND * MAX_BEND;
+                let k = if over { MAX_BEND / b2.sqrt() } else { 1.0 };
+                th[0][l] *= k;
+                th[1][l] *= k;
+                ra[0][l] = if over { 0.0 } else { ra[0][l] };
+                ra[1][l] = if over { 0.0 } else { ra[1][l] };
                 w[l] = if active { (w[l] + blend).min(1.0) } else { (w[l] - blend).max(0.0) };
             }
             st.loads[i] = [ZERO; 6];

@@ -69,6 +69,19 @@ pub struct SwaySpecies {
     pub(crate) rank: Vec<u32>,
 }
 
+/// Wind speed, m/s, under which no joint may bend more than [`DESIGN_BEND`] at rest: a
+/// fresh breeze (Beaufort 5, 8–10.7 m/s). Trees grow their twigs stiff enough for the winds
+/// they meet (thigmomorphogenesis); Weber–Penn radii are not sized for the load: the
+/// cantilever estimate lowered by the carried leaf mass gives the thinnest leafy twigs
+/// hundredths of a hertz (a 2 mm twig carrying 0.2 kg of leaves), which turned them through
+/// half a circle in a breeze. So a joint's stiffness is raised where its own estimate would
+/// let the drag on what it carries fold it; leafy twigs then sway at about 1.5 Hz, and the
+/// trunk and limbs keep their frequencies (the design moment binds only on weak joints).
+pub const DESIGN_WIND: f32 = 10.0;
+
+/// Largest static bend, rad, of any joint under [`DESIGN_WIND`]: 0.35 rad (20°).
+pub const DESIGN_BEND: f32 = 0.35;
+
 impl SwaySpecies {
     /// Prepare `skeleton` for animation with `params`.
     pub fn new(skeleton: &Skeleton, params: SwayParams) -> Result<SwaySpecies, SwayParamError> {
@@ -112,6 +125,9 @@ impl SwaySpecies {
         // 33/140 of its mass, the textbook value).
         let mut inertia = vec![0.0f32; n];
         let mut modal = vec![0.0f32; n];
+        // Σ drag area × lever over what each joint carries, for the design-wind floor.
+        let mut lever_area = vec![0.0f32; n];
+        let reconfigured = 1.0 / (1.0 + DESIGN_WIND / params.leaf_reconfiguration_speed);
         for (k, jk) in joints.iter().enumerate() {
             let m = jk.own_mass + jk.leaf_mass;
             let c = [
@@ -119,11 +135,15 @@ impl SwaySpecies {
                 jk.origin[1] + 0.5 * jk.length * jk.axis[1],
                 jk.origin[2] + 0.5 * jk.length * jk.axis[2],
             ];
+            let area = params.wood_drag * 2.0 * jk.radius * jk.length
+                + params.leaf_drag * jk.leaf_area * reconfigured;
             let mut a = k as u32;
             while a != sylva_tree::NO_PARENT {
                 let ja = &joints[a as usize];
                 let d = [c[0] - ja.origin[0], c[1] - ja.origin[1], c[2] - ja.origin[2]];
-                inertia[a as usize] += m * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+                let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+                inertia[a as usize] += m * r2;
+                lever_area[a as usize] += area * r2.sqrt();
                 let along = d[0] * ja.axis[0] + d[1] * ja.axis[1] + d[2] * ja.axis[2];
                 let xi = (along / rest_len[a as usize]).clamp(0.0, 1.0);
                 let phi = 0.5 * xi * xi * (3.0 - xi);
@@ -144,7 +164,14 @@ impl SwaySpecies {
             let inertia = inertia[i].max(1e-9);
             let f_bare = 0.14 * cbar * d / (l * l);
             let meff = CANTILEVER_TIP_MASS_FRACTION * m_stem;
-            let frequency = f_bare * (meff / modal[i].max(meff)).sqrt();
+            let mut frequency = f_bare * (meff / modal[i].max(meff)).sqrt();
+            // No joint bends more than DESIGN_BEND under the drag of the design wind on all it
+            // carries (the moment at rest pose, an upper bound): thin twigs loaded with leaves
+            // would otherwise come out at hundredths of a hertz and whirl round in a breeze.
+            let design_moment =
+                0.5 * params.air_density * DESIGN_WIND * DESIGN_WIND * lever_area[i];
+            let w_design = (design_moment / DESIGN_BEND / inertia).sqrt();
+            frequency = frequency.max(w_design / (2.0 * PI));
             let w = 2.0 * PI * frequency;
             let stiffness = inertia * w * w;
             let damping = 2.0 * params.damping_ratio * (stiffness * inertia).sqrt();
