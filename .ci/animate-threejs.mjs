@@ -14,8 +14,44 @@ const { AnimationMixer, LoopOnce, Vector3 } = await import("three");
 const [file, samplesFile] = process.argv.slice(2);
 const buf = readFileSync(file);
 const ab = buf.buffer.slice(buf.byteOffset, buf.byteOffset + buf.byteLength);
-const samples = JSON.parse(readFileSync(samplesFile, "utf8"));
 const gltf = await new GLTFLoader().parseAsync(ab, "");
+if (!samplesFile) {
+  const clip = gltf.animations[0];
+  if (!clip) {
+    console.log(`${file}: no animation`);
+    process.exit(1);
+  }
+  const mixer = new AnimationMixer(gltf.scene);
+  mixer.clipAction(clip).play();
+  // One skeleton per tree (a tree's bark and leaves are two skinned meshes sharing it).
+  const skeletons = new Set();
+  gltf.scene.traverse((o) => o.isSkinnedMesh && skeletons.add(o.skeleton));
+  const meshes = [...skeletons].map((skeleton) => ({ skeleton }));
+  // Per skinned mesh: its bones' largest travel over the clip, and its root bone's place.
+  const pose = () => {
+    gltf.scene.updateMatrixWorld(true);
+    return meshes.map((m) => m.skeleton.bones.map((b) => b.getWorldPosition(new Vector3())));
+  };
+  mixer.setTime(0);
+  const first = pose();
+  const travel = meshes.map(() => 0);
+  for (let k = 1; k <= 8; k++) {
+    mixer.setTime((clip.duration * k) / 8.001);
+    pose().forEach((bones, m) => bones.forEach((p, b) => (travel[m] = Math.max(travel[m], p.distanceTo(first[m][b])))));
+  }
+  const roots = first.map((bones) => bones[0]);
+  let closest = Infinity;
+  roots.forEach((a, i) => roots.forEach((b, j) => i < j && (closest = Math.min(closest, a.distanceTo(b)))));
+  const still = travel.filter((t) => t < 0.01).length;
+  const ok = meshes.length > 1 && still === 0 && closest > 1;
+  console.log(
+    `${file}: animation "${clip.name}", ${clip.duration.toFixed(2)} s, ${clip.tracks.length} tracks; ` +
+      `${meshes.length} skinned trees, ${still} not moving, least bone travel ${Math.min(...travel).toFixed(3)} m, ` +
+      `nearest trunks ${closest.toFixed(1)} m apart — ${ok ? "ok" : "FAILED"}`,
+  );
+  process.exit(ok ? 0 : 1);
+}
+const samples = JSON.parse(readFileSync(samplesFile, "utf8"));
 if (gltf.animations.length !== 1) {
   console.log(`${file}: ${gltf.animations.length} animations, expected 1`);
   process.exit(1);

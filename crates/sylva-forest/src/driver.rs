@@ -538,6 +538,30 @@ impl Forest {
         self.trees.len()
     }
 
+    /// Placement of tree `t` (species, trunk base, yaw, scale), if there is such a tree.
+    pub fn placement(&self, t: usize) -> Option<Placement> {
+        self.trees.get(t).map(|&(p, _)| p)
+    }
+
+    /// Palettes (rest → animated, tree space) of joints `joints` of tree `t`'s simulation
+    /// — its instance group's — in its species' joint numbering ([`SpeciesRuntime::model`],
+    /// in LOD order). Empty for an unknown tree; a joint past the skeleton reads identity.
+    pub fn tree_palettes(&self, t: usize, joints: &[usize]) -> Vec<sylva_sway::Palette> {
+        let Some(&(p, g)) = self.trees.get(t) else { return Vec::new() };
+        let s = &self.species[p.species as usize];
+        let n = s.batch.species().len();
+        joints
+            .iter()
+            .map(|&j| {
+                if j < n {
+                    s.batch.palette(g as usize, j)
+                } else {
+                    [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0]
+                }
+            })
+            .collect()
+    }
+
     fn wind_at(&self, p: [f64; 3], t: f64) -> [f32; 3] {
         sample_wind(self.wind.level(0), self.gain, self.turn, p, t)
     }

@@ -74,30 +74,32 @@ fn world_positions(json: &Value, bin: &[u8], t: f32) -> Vec<Option<[f64; 3]>> {
             parent[c.as_u64().expect("child") as usize] = i;
         }
     }
-    // World (rotation, translation) of every node, parents first by recursion.
+    // World (rotation, translation, uniform scale) of every node, parents first by
+    // recursion.
     fn world(
         i: usize,
         nodes: &[Value],
         rot: &[Option<[f64; 4]>],
         parent: &[usize],
-    ) -> ([f64; 4], [f64; 3]) {
+    ) -> ([f64; 4], [f64; 3], f64) {
         let r = rot[i].unwrap_or([0.0, 0.0, 0.0, 1.0]);
         let t: [f64; 3] = nodes[i]["translation"]
             .as_array()
             .map(|v| std::array::from_fn(|c| v[c].as_f64().expect("f")))
             .unwrap_or([0.0; 3]);
+        let s = nodes[i]["scale"].as_array().map_or(1.0, |v| v[0].as_f64().expect("f"));
         if parent[i] == usize::MAX {
-            return (r, t);
+            return (r, t, s);
         }
-        let (pr, pt) = world(parent[i], nodes, rot, parent);
+        let (pr, pt, ps) = world(parent[i], nodes, rot, parent);
         let o = rotate(pr, t);
-        (mul_q(pr, r), [pt[0] + o[0], pt[1] + o[1], pt[2] + o[2]])
+        (mul_q(pr, r), [pt[0] + ps * o[0], pt[1] + ps * o[1], pt[2] + ps * o[2]], ps * s)
     }
     (0..nodes.len())
         .map(|i| {
             nodes[i]["name"]
                 .as_str()
-                .is_some_and(|n| n.starts_with("joint"))
+                .is_some_and(|n| n.contains("joint"))
                 .then(|| world(i, nodes, &rot, &parent).1)
         })
         .collect()
@@ -290,4 +292,82 @@ fn reduced_playback_stays_within_max_error_of_the_simulation() {
         }
     }
     assert!(worst.0 <= tol as f64 + 1e-4, "{worst:?}");
+}
+
+#[test]
+fn a_forest_export_places_each_tree_and_plays_its_own_simulation() {
+    use sylva_forest::{Forest, SceneSpec};
+    use sylva_tree::gltf::{ForestTree, forest_to_glb};
+    let mut spec = SceneSpec::builtin("small").expect("small");
+    spec.lod.animation = false;
+    let mut forest = Forest::new(&spec).expect("forest");
+    for _ in 0..30 {
+        forest.step(1.0 / 30.0);
+    }
+    let joints: Vec<Vec<usize>> =
+        forest.species.iter().map(|s| s.model.exported_joints(0, 60)).collect();
+    let times = vec![0.0, 0.1];
+    let mut poses = Vec::new();
+    let mut trees = Vec::new();
+    for t in 0..forest.trees() {
+        let p = forest.placement(t).expect("tree");
+        let js = &joints[p.species as usize];
+        let a = forest.tree_palettes(t, js);
+        poses.push(a.clone());
+        let rot = |ps: &[[f32; 12]]| -> Vec<[f32; 9]> {
+            ps.iter().map(|p| [p[0], p[1], p[2], p[4], p[5], p[6], p[8], p[9], p[10]]).collect()
+        };
+        trees.push(ForestTree {
+            species: p.species as usize,
+            position: p.position,
+            yaw: p.yaw,
+            scale: p.scale,
+            animation: Some(JointAnimation {
+                name: "sway".into(),
+                times: times.clone(),
+                joints: js.clone(),
+                rotations: vec![rot(&a), rot(&a)],
+                max_error: 0.0,
+            }),
+        });
+    }
+    let models: Vec<&TreeModel> = forest.species.iter().map(|s| &s.model).collect();
+    let glb = forest_to_glb(&models, &trees, 60, "small");
+    let (json, bin) = chunks(&glb);
+    assert_eq!(json["skins"].as_array().expect("skins").len(), forest.trees(), "a skin per tree");
+    let names: Vec<String> = json["nodes"]
+        .as_array()
+        .expect("nodes")
+        .iter()
+        .map(|n| n["name"].as_str().unwrap_or("").to_string())
+        .collect();
+    let world = world_positions(&json, &bin, 0.0);
+    let mut spread = 0.0f64;
+    for (t, tree) in trees.iter().enumerate() {
+        let sk = &models[tree.species].tree.skeleton;
+        let (s, c) = tree.yaw.sin_cos();
+        for (k, &j) in joints[tree.species].iter().enumerate() {
+            let node = names.iter().position(|n| *n == format!("tree{t} joint{j}")).expect("node");
+            let got = world[node].expect("joint");
+            // Sylva world: position + yaw · (scale · palette · origin), then +Z up → +Y up.
+            let p = transform(&poses[t][k], sk.joints()[j].origin);
+            let q = [
+                tree.scale * (c * p[0] - s * p[1]),
+                tree.scale * (s * p[0] + c * p[1]),
+                tree.scale * p[2],
+            ];
+            let w = [tree.position[0] + q[0], tree.position[1] + q[1], tree.position[2] + q[2]];
+            let want = [w[0] as f64, w[2] as f64, -w[1] as f64];
+            let err = (0..3).map(|i| (got[i] - want[i]).abs()).fold(0.0, f64::max);
+            assert!(err < 1e-3, "tree {t} joint {j}: {got:?} vs {want:?}");
+            spread = spread.max(
+                (got[0]
+                    - world[names.iter().position(|n| n == "tree0 joint0").expect("root")]
+                        .expect("j")[0])
+                    .abs(),
+            );
+        }
+    }
+    // The trees stand apart (the scene spaces them 9 m).
+    assert!(spread > 5.0, "spread {spread} m");
 }

@@ -168,6 +168,8 @@ struct Node {
     translation: Option<V3>,
     #[serde(skip_serializing_if = "Option::is_none")]
     rotation: Option<[f32; 4]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    scale: Option<V3>,
     #[serde(skip_serializing_if = "Vec::is_empty")]
     children: Vec<usize>,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -581,87 +583,14 @@ impl TreeModel {
         };
         let mut meshes: Vec<Mesh> = Vec::new();
         let mut scenes: Vec<Scene> = Vec::new();
-        let cells = self.leaves.cells.max(1);
         for (k, &l) in lods.iter().enumerate() {
-            let lod = &self.lods[l];
-            let b = &lod.branches;
             let keep = self.exported_mask(l, limit, &order);
             let base = nodes.len();
             let index = self.joint_nodes(&keep, &frames, &mut nodes, &mut bin, &mut skins);
             if let Some(anim) = &opts.animation {
                 animate(anim, sk, &frames, &keep, base, &index, &mut bin, &mut channels);
             }
-            let mut prims = Vec::new();
-            if !b.indices.is_empty() {
-                // Joints folded into the same exported joint add their weights; unused
-                // slots are joint 0 with weight 0, as the specification asks.
-                let mut jb = Vec::with_capacity(8 * b.joints.len());
-                let mut wv = Vec::with_capacity(b.weights.len());
-                for (j, w) in b.joints.iter().zip(&b.weights) {
-                    let mut js4 = [0u16; 4];
-                    let mut ws4 = [0f32; 4];
-                    let mut used = 0;
-                    for s in 0..4 {
-                        if w[s] <= 0.0 {
-                            continue;
-                        }
-                        let e = index[j[s] as usize];
-                        match js4[..used].iter().position(|&x| x == e) {
-                            Some(k) => ws4[k] += w[s],
-                            None => {
-                                js4[used] = e;
-                                ws4[used] = w[s];
-                                used += 1;
-                            }
-                        }
-                    }
-                    for v in js4 {
-                        jb.extend_from_slice(&v.to_le_bytes());
-                    }
-                    wv.push(ws4);
-                }
-                prims.push(bin.primitive(
-                    &b.positions,
-                    &b.normals,
-                    &b.uvs,
-                    &jb,
-                    &wv,
-                    &b.indices,
-                    0,
-                ));
-            }
-            if !lod.clusters.is_empty() {
-                let mut p = Vec::with_capacity(4 * lod.clusters.len());
-                let mut nrm = Vec::with_capacity(4 * lod.clusters.len());
-                let mut uv = Vec::with_capacity(4 * lod.clusters.len());
-                let mut jb = Vec::with_capacity(32 * lod.clusters.len());
-                let mut w = Vec::with_capacity(4 * lod.clusters.len());
-                let mut ids: Vec<u32> = Vec::with_capacity(6 * lod.clusters.len());
-                for c in &lod.clusters {
-                    let (corners, normal) = leaf_quad(c);
-                    let first = p.len() as u32;
-                    let cell = [(c.atlas % cells) as f32, (c.atlas / cells) as f32];
-                    for (q, corner) in corners.iter().enumerate() {
-                        p.push(*corner);
-                        nrm.push(normal);
-                        let (a, bb) = [(0.0, 1.0), (1.0, 1.0), (1.0, 0.0), (0.0, 0.0)][q];
-                        uv.push([(cell[0] + a) / cells as f32, (cell[1] + bb) / cells as f32]);
-                        for v in [index[c.joint as usize], 0, 0, 0] {
-                            jb.extend_from_slice(&v.to_le_bytes());
-                        }
-                        w.push([1.0f32, 0.0, 0.0, 0.0]);
-                    }
-                    ids.extend_from_slice(&[
-                        first,
-                        first + 1,
-                        first + 2,
-                        first,
-                        first + 2,
-                        first + 3,
-                    ]);
-                }
-                prims.push(bin.primitive(&p, &nrm, &uv, &jb, &w, &ids, 1));
-            }
+            let prims = self.lod_primitives(l, &index, &mut bin, [0, 1]);
             meshes.push(Mesh { name: format!("lod{l}"), primitives: prims });
             // glTF is +Y up, Sylva +Z up: the joints hang under a node turning Z up into Y up.
             // The skinned mesh node stays a root with no transform (glTF ignores it), so its
@@ -670,6 +599,7 @@ impl TreeModel {
                 name: format!("{} lod{l} Y-up", opts.name),
                 translation: None,
                 rotation: Some(Z_UP_TO_Y_UP),
+                scale: None,
                 children: vec![base],
                 mesh: None,
                 skin: None,
@@ -679,101 +609,94 @@ impl TreeModel {
                 name: format!("{} lod{l}", opts.name),
                 translation: None,
                 rotation: None,
+                scale: None,
                 children: Vec::new(),
                 mesh: Some(k),
                 skin: Some(k),
             });
             scenes.push(Scene { name: format!("lod{l}"), nodes: vec![up, nodes.len() - 1] });
         }
-        let len = bin.data.len().next_multiple_of(4);
-        let gltf = Gltf {
-            asset: json!({ "version": "2.0", "generator": "sylva" }),
-            scene: 0,
-            scenes,
-            nodes,
-            meshes,
-            skins,
-            materials: json!([
-                {
-                    "name": "bark",
-                    "pbrMetallicRoughness": {
-                        "baseColorTexture": { "index": 0 },
-                        "metallicFactor": 0,
-                        "roughnessFactor": 0.9
+        let animation = opts.animation.as_ref().map(|a| a.name.as_str());
+        assemble(scenes, nodes, meshes, skins, &[(bark_view, leaf_view)], animation, &channels, bin)
+    }
+
+    /// Level `l`'s two primitives (bark; leaf quads) with joint indices mapped through
+    /// `index` (skeleton joint → exported joint) and the given (bark, leaf) materials.
+    fn lod_primitives(
+        &self,
+        l: usize,
+        index: &[u16],
+        bin: &mut Bin,
+        materials: [usize; 2],
+    ) -> Vec<Primitive> {
+        let lod = &self.lods[l];
+        let b = &lod.branches;
+        let cells = self.leaves.cells.max(1);
+        let mut prims = Vec::new();
+        if !b.indices.is_empty() {
+            // Joints folded into the same exported joint add their weights; unused
+            // slots are joint 0 with weight 0, as the specification asks.
+            let mut jb = Vec::with_capacity(8 * b.joints.len());
+            let mut wv = Vec::with_capacity(b.weights.len());
+            for (j, w) in b.joints.iter().zip(&b.weights) {
+                let mut js4 = [0u16; 4];
+                let mut ws4 = [0f32; 4];
+                let mut used = 0;
+                for s in 0..4 {
+                    if w[s] <= 0.0 {
+                        continue;
                     }
-                },
-                {
-                    "name": "leaves",
-                    "pbrMetallicRoughness": {
-                        "baseColorTexture": { "index": 1 },
-                        "metallicFactor": 0,
-                        "roughnessFactor": 0.7
-                    },
-                    "alphaMode": "MASK",
-                    "alphaCutoff": 0.5,
-                    "doubleSided": true
+                    let e = index[j[s] as usize];
+                    match js4[..used].iter().position(|&x| x == e) {
+                        Some(k) => ws4[k] += w[s],
+                        None => {
+                            js4[used] = e;
+                            ws4[used] = w[s];
+                            used += 1;
+                        }
+                    }
                 }
-            ]),
-            samplers: json!([
-                {
-                    "magFilter": LINEAR,
-                    "minFilter": LINEAR_MIPMAP_LINEAR,
-                    "wrapS": REPEAT,
-                    "wrapT": REPEAT
-                },
-                {
-                    "magFilter": LINEAR,
-                    "minFilter": LINEAR_MIPMAP_LINEAR,
-                    "wrapS": CLAMP_TO_EDGE,
-                    "wrapT": CLAMP_TO_EDGE
+                for v in js4 {
+                    jb.extend_from_slice(&v.to_le_bytes());
                 }
-            ]),
-            images: json!([
-                { "bufferView": bark_view, "mimeType": "image/png" },
-                { "bufferView": leaf_view, "mimeType": "image/png" }
-            ]),
-            textures: json!([{ "sampler": 0, "source": 0 }, { "sampler": 1, "source": 1 }]),
-            animations: match &opts.animation {
-                Some(a) if !channels.is_empty() => vec![json!({
-                    "name": a.name,
-                    "channels": channels.iter().enumerate().map(|(i, c)| json!({
-                        "sampler": i,
-                        "target": { "node": c.node, "path": "rotation" }
-                    })).collect::<Vec<_>>(),
-                    "samplers": channels.iter().map(|c| json!({
-                        "input": c.input,
-                        "output": c.output,
-                        "interpolation": "LINEAR"
-                    })).collect::<Vec<_>>(),
-                })],
-                _ => Vec::new(),
-            },
-            accessors: bin.accessors,
-            buffer_views: bin.views,
-            buffers: json!([{ "byteLength": len }]),
-        };
-        // Serialising plain structs and numbers cannot fail.
-        let json = serde_json::to_vec(&gltf).unwrap_or_default();
-        let mut json = json;
-        while !json.len().is_multiple_of(4) {
-            json.push(b' ');
+                wv.push(ws4);
+            }
+            prims.push(bin.primitive(
+                &b.positions,
+                &b.normals,
+                &b.uvs,
+                &jb,
+                &wv,
+                &b.indices,
+                materials[0],
+            ));
         }
-        let mut data = bin.data;
-        while !data.len().is_multiple_of(4) {
-            data.push(0);
+        if !lod.clusters.is_empty() {
+            let mut p = Vec::with_capacity(4 * lod.clusters.len());
+            let mut nrm = Vec::with_capacity(4 * lod.clusters.len());
+            let mut uv = Vec::with_capacity(4 * lod.clusters.len());
+            let mut jb = Vec::with_capacity(32 * lod.clusters.len());
+            let mut w = Vec::with_capacity(4 * lod.clusters.len());
+            let mut ids: Vec<u32> = Vec::with_capacity(6 * lod.clusters.len());
+            for c in &lod.clusters {
+                let (corners, normal) = leaf_quad(c);
+                let first = p.len() as u32;
+                let cell = [(c.atlas % cells) as f32, (c.atlas / cells) as f32];
+                for (q, corner) in corners.iter().enumerate() {
+                    p.push(*corner);
+                    nrm.push(normal);
+                    let (a, bb) = [(0.0, 1.0), (1.0, 1.0), (1.0, 0.0), (0.0, 0.0)][q];
+                    uv.push([(cell[0] + a) / cells as f32, (cell[1] + bb) / cells as f32]);
+                    for v in [index[c.joint as usize], 0, 0, 0] {
+                        jb.extend_from_slice(&v.to_le_bytes());
+                    }
+                    w.push([1.0f32, 0.0, 0.0, 0.0]);
+                }
+                ids.extend_from_slice(&[first, first + 1, first + 2, first, first + 2, first + 3]);
+            }
+            prims.push(bin.primitive(&p, &nrm, &uv, &jb, &w, &ids, materials[1]));
         }
-        let total = 12 + 8 + json.len() + 8 + data.len();
-        let mut out = Vec::with_capacity(total);
-        out.extend_from_slice(b"glTF");
-        out.extend_from_slice(&2u32.to_le_bytes());
-        out.extend_from_slice(&(total as u32).to_le_bytes());
-        out.extend_from_slice(&(json.len() as u32).to_le_bytes());
-        out.extend_from_slice(b"JSON");
-        out.extend_from_slice(&json);
-        out.extend_from_slice(&(data.len() as u32).to_le_bytes());
-        out.extend_from_slice(b"BIN\0");
-        out.extend_from_slice(&data);
-        out
+        prims
     }
 
     /// Joints exported for level `lod` with at most `max_joints` of them (as
@@ -874,6 +797,7 @@ impl TreeModel {
                 name: format!("joint{j}"),
                 translation: Some(t),
                 rotation: Some(r),
+                scale: None,
                 children: children[i].iter().map(|c| base + c).collect(),
                 mesh: None,
                 skin: None,
@@ -908,4 +832,226 @@ impl TreeModel {
         });
         index
     }
+}
+
+/// The `.glb` bytes: the JSON chunk from these parts and the binary chunk `bin`. Per species
+/// `k` of `images` (its bark and leaf images' buffer views), materials `2k` (bark) and
+/// `2k + 1` (leaves) and textures of the same numbers.
+#[allow(clippy::too_many_arguments)]
+fn assemble(
+    scenes: Vec<Scene>,
+    nodes: Vec<Node>,
+    meshes: Vec<Mesh>,
+    skins: Vec<Skin>,
+    images: &[(usize, usize)],
+    animation: Option<&str>,
+    channels: &[Channel],
+    bin: Bin,
+) -> Vec<u8> {
+    let len = bin.data.len().next_multiple_of(4);
+    let mut materials = Vec::new();
+    let mut image_list = Vec::new();
+    let mut textures = Vec::new();
+    for (k, &(bark, leaf)) in images.iter().enumerate() {
+        materials.push(json!({
+            "name": "bark",
+            "pbrMetallicRoughness": {
+                "baseColorTexture": { "index": 2 * k },
+                "metallicFactor": 0,
+                "roughnessFactor": 0.9
+            }
+        }));
+        materials.push(json!({
+            "name": "leaves",
+            "pbrMetallicRoughness": {
+                "baseColorTexture": { "index": 2 * k + 1 },
+                "metallicFactor": 0,
+                "roughnessFactor": 0.7
+            },
+            "alphaMode": "MASK",
+            "alphaCutoff": 0.5,
+            "doubleSided": true
+        }));
+        image_list.push(json!({ "bufferView": bark, "mimeType": "image/png" }));
+        image_list.push(json!({ "bufferView": leaf, "mimeType": "image/png" }));
+        textures.push(json!({ "sampler": 0, "source": 2 * k }));
+        textures.push(json!({ "sampler": 1, "source": 2 * k + 1 }));
+    }
+    let gltf = Gltf {
+        asset: json!({ "version": "2.0", "generator": "sylva" }),
+        scene: 0,
+        scenes,
+        nodes,
+        meshes,
+        skins,
+        materials: serde_json::Value::Array(materials),
+        samplers: json!([
+            {
+                "magFilter": LINEAR,
+                "minFilter": LINEAR_MIPMAP_LINEAR,
+                "wrapS": REPEAT,
+                "wrapT": REPEAT
+            },
+            {
+                "magFilter": LINEAR,
+                "minFilter": LINEAR_MIPMAP_LINEAR,
+                "wrapS": CLAMP_TO_EDGE,
+                "wrapT": CLAMP_TO_EDGE
+            }
+        ]),
+        images: serde_json::Value::Array(image_list),
+        textures: serde_json::Value::Array(textures),
+        animations: match animation {
+            Some(name) if !channels.is_empty() => vec![json!({
+                "name": name,
+                "channels": channels.iter().enumerate().map(|(i, c)| json!({
+                    "sampler": i,
+                    "target": { "node": c.node, "path": "rotation" }
+                })).collect::<Vec<_>>(),
+                "samplers": channels.iter().map(|c| json!({
+                    "input": c.input,
+                    "output": c.output,
+                    "interpolation": "LINEAR"
+                })).collect::<Vec<_>>(),
+            })],
+            _ => Vec::new(),
+        },
+        accessors: bin.accessors,
+        buffer_views: bin.views,
+        buffers: json!([{ "byteLength": len }]),
+    };
+    // Serialising plain structs and numbers cannot fail.
+    let mut json = serde_json::to_vec(&gltf).unwrap_or_default();
+    while !json.len().is_multiple_of(4) {
+        json.push(b' ');
+    }
+    let mut data = bin.data;
+    while !data.len().is_multiple_of(4) {
+        data.push(0);
+    }
+    let total = 12 + 8 + json.len() + 8 + data.len();
+    let mut out = Vec::with_capacity(total);
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&(total as u32).to_le_bytes());
+    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(&json);
+    out.extend_from_slice(&(data.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"BIN\0");
+    out.extend_from_slice(&data);
+    out
+}
+
+/// One tree of a forest export: its species (index into the models), placement in Sylva's
+/// world (+Z up: trunk base, turn about z, uniform scale) and its motion.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ForestTree {
+    /// Index into the species models.
+    pub species: usize,
+    /// Trunk base, world m.
+    pub position: V3,
+    /// Turn about the vertical, rad.
+    pub yaw: f32,
+    /// Uniform scale.
+    pub scale: f32,
+    /// Its sway (joints of the species' exported set; see [`TreeModel::exported_joints`]).
+    pub animation: Option<JointAnimation>,
+}
+
+/// A forest as one `.glb`: per species one mesh (full detail, at most `max_joints` joints
+/// exported) and its textures; per tree its own joint hierarchy and skin — trees sway
+/// apart — under a node placing it (translation, turn about the vertical, scale), all under
+/// one root turning Sylva's +Z up into glTF's +Y up; the skinned mesh nodes stay roots.
+/// One animation holds every tree's rotation channels.
+pub fn forest_to_glb(
+    models: &[&TreeModel],
+    trees: &[ForestTree],
+    max_joints: usize,
+    name: &str,
+) -> Vec<u8> {
+    let limit = max_joints.clamp(1, MAX_GLTF_JOINTS);
+    let mut bin = Bin { data: Vec::new(), views: Vec::new(), accessors: Vec::new() };
+    let (mut nodes, mut skins, mut meshes) = (Vec::new(), Vec::new(), Vec::new());
+    let mut channels = Vec::new();
+    // Textures and materials of the species some tree uses, in order: slot k holds
+    // materials 2k and 2k + 1.
+    let mut slot_of = vec![None; models.len()];
+    let mut images = Vec::new();
+    for t in trees {
+        if let Some(m) = models.get(t.species)
+            && slot_of[t.species].is_none()
+        {
+            slot_of[t.species] = Some(images.len());
+            images.push((bin.view(&png(&m.bark), None), bin.view(&png(&m.leaves.image), None)));
+        }
+    }
+    // Per species: exported joints, rest frames, and its mesh once built.
+    let prepared: Vec<(Vec<bool>, Vec<[V3; 3]>)> = models
+        .iter()
+        .map(|m| {
+            let sk = &m.tree.skeleton;
+            let keep = m.exported_mask(0, limit, &m.joint_priority());
+            (keep, (0..sk.len()).map(|j| frame(sk, j)).collect())
+        })
+        .collect();
+    let mut mesh_of: Vec<Option<usize>> = vec![None; models.len()];
+    let mut places = Vec::new();
+    let mut roots = Vec::new();
+    let mut name_of = None;
+    for (i, tree) in trees.iter().enumerate() {
+        let Some(model) = models.get(tree.species) else { continue };
+        let (keep, frames) = &prepared[tree.species];
+        let base = nodes.len();
+        let index = model.joint_nodes(keep, frames, &mut nodes, &mut bin, &mut skins);
+        for n in &mut nodes[base..] {
+            n.name = format!("tree{i} {}", n.name);
+        }
+        if let Some(anim) = &tree.animation {
+            let sk = &model.tree.skeleton;
+            animate(anim, sk, frames, keep, base, &index, &mut bin, &mut channels);
+            name_of.get_or_insert(anim.name.clone());
+        }
+        let mesh = *mesh_of[tree.species].get_or_insert_with(|| {
+            let s = tree.species;
+            let k = slot_of[s].unwrap_or(0);
+            let primitives = model.lod_primitives(0, &index, &mut bin, [2 * k, 2 * k + 1]);
+            meshes.push(Mesh { name: format!("species{s}"), primitives });
+            meshes.len() - 1
+        });
+        let (sn, cs) = (0.5 * tree.yaw).sin_cos();
+        nodes.push(Node {
+            name: format!("tree{i}"),
+            translation: Some(tree.position),
+            rotation: Some([0.0, 0.0, sn, cs]),
+            scale: Some([tree.scale; 3]),
+            children: vec![base],
+            mesh: None,
+            skin: None,
+        });
+        places.push(nodes.len() - 1);
+        nodes.push(Node {
+            name: format!("tree{i} mesh"),
+            translation: None,
+            rotation: None,
+            scale: None,
+            children: Vec::new(),
+            mesh: Some(mesh),
+            skin: Some(skins.len() - 1),
+        });
+        roots.push(nodes.len() - 1);
+    }
+    nodes.push(Node {
+        name: format!("{name} Y-up"),
+        translation: None,
+        rotation: Some(Z_UP_TO_Y_UP),
+        scale: None,
+        children: places,
+        mesh: None,
+        skin: None,
+    });
+    let mut scene_nodes = vec![nodes.len() - 1];
+    scene_nodes.extend(roots);
+    let scenes = vec![Scene { name: name.to_string(), nodes: scene_nodes }];
+    assemble(scenes, nodes, meshes, skins, &images, name_of.as_deref(), &channels, bin)
 }

@@ -5,6 +5,7 @@
 //! so every check happens once, at the edge, with an error that names the flag.
 
 mod bench;
+mod forest;
 mod gallery;
 mod plot;
 mod render;
@@ -49,6 +50,9 @@ enum Command {
     /// Weber–Penn species: list, document, generate and inspect trees.
     #[command(subcommand)]
     Tree(tree::TreeCommand),
+    /// A scene's trees as one animated glTF.
+    #[command(subcommand)]
+    Forest(forest::ForestCommand),
     /// Branch sway: probe how a tree moves in wind.
     #[command(subcommand)]
     Sway(tree::SwayCommand),
@@ -158,6 +162,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         }
         Command::Tree(c) => tree::run_tree(c),
         Command::Sway(c) => tree::run_sway(c),
+        Command::Forest(c) => forest::run(c),
         Command::Bench(c) => bench::run(c),
         Command::Gallery(a) => gallery::gallery(&a),
     }
