@@ -1,0 +1,166 @@
+//! `sylva_wind._native`: the Rust side of the Python package. Fields cross as little-endian
+//! `f32` bytes (layout frame, component, z, y, x) with their grid, model and synthesis
+//! settings as JSON — the serde forms of `Grid`, `WindParams` and `SynthParams`, so every
+//! model parameter keeps its Rust name. The Python wrapper (`sylva_wind/__init__.py`) turns
+//! them into numpy arrays.
+
+use std::path::Path;
+
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::PyBytes;
+use serde_json::json;
+use sylva_wind::stats::Welch;
+use sylva_wind::synth::Method;
+use sylva_wind::{Grid, Preset, SynthParams, WindError, WindField, WindParams};
+
+/// A Rust error as a Python `ValueError` with the same message as the command line's.
+fn value_error(e: impl std::fmt::Display) -> PyErr {
+    PyValueError::new_err(e.to_string())
+}
+
+fn parse<T: serde::de::DeserializeOwned>(what: &str, text: &str) -> PyResult<T> {
+    serde_json::from_str(text).map_err(|e| PyValueError::new_err(format!("{what}: {e}")))
+}
+
+/// The field's data as bytes and its settings as JSON.
+fn to_python<'py>(py: Python<'py>, f: &WindField) -> (Bound<'py, PyBytes>, String) {
+    let bytes: Vec<u8> = f.data.iter().flat_map(|v| v.to_le_bytes()).collect();
+    let meta = json!({
+        "grid": f.grid,
+        "params": f.params,
+        "synth": f.synth,
+        "coherence_error": f.coherence_error,
+    });
+    (PyBytes::new(py, &bytes), meta.to_string())
+}
+
+/// Names of the wind presets.
+#[pyfunction]
+fn presets() -> Vec<&'static str> {
+    Preset::ALL.iter().map(|p| p.name()).collect()
+}
+
+/// A preset's model parameters as JSON.
+#[pyfunction]
+fn preset_params(name: &str) -> PyResult<String> {
+    let p = Preset::from_name(name).ok_or_else(|| {
+        let names: Vec<&str> = Preset::ALL.iter().map(|p| p.name()).collect();
+        PyValueError::new_err(format!("no preset named `{name}`; presets: {}", names.join(", ")))
+    })?;
+    Ok(serde_json::to_string(&p.params()).unwrap_or_default())
+}
+
+/// Synthesise a field: model, grid and synthesis settings as JSON (`method` may be
+/// `"auto"`: the fastest exact method for the grid). The GIL is released while it runs.
+#[pyfunction]
+fn generate<'py>(
+    py: Python<'py>,
+    params: &str,
+    grid: &str,
+    seed: u64,
+    method: &str,
+) -> PyResult<(Bound<'py, PyBytes>, String)> {
+    let params: WindParams = parse("params", params)?;
+    let grid: Grid = parse("grid", grid)?;
+    params.validate().map_err(value_error)?;
+    grid.validate().map_err(value_error)?;
+    let method = match method {
+        "auto" => Method::fastest(&params, &grid),
+        other => parse::<Method>("method", &format!("\"{other}\""))?,
+    };
+    let synth = SynthParams { seed, method };
+    let field = py
+        .allow_threads(|| WindField::generate(&params, &grid, synth, &|_| {}))
+        .map_err(value_error)?;
+    Ok(to_python(py, &field))
+}
+
+/// Read a field file: `.swf`, `.npy` (with its sidecar) or a `.zarr` store.
+#[pyfunction]
+fn read<'py>(py: Python<'py>, path: &str) -> PyResult<(Bound<'py, PyBytes>, String)> {
+    let p = Path::new(path);
+    let field = py.allow_threads(|| sylva_wind::io::read_field(p)).map_err(value_error)?;
+    Ok(to_python(py, &field))
+}
+
+/// Write a field (bytes and JSON settings as `read` gives them) by the path's extension:
+/// `.swf`, `.npy` (with its sidecar) or `.bts` (the y–z plane at x index `bts_x_index`).
+#[pyfunction]
+#[pyo3(signature = (path, data, meta, bts_x_index = 0))]
+fn write(py: Python<'_>, path: &str, data: &[u8], meta: &str, bts_x_index: usize) -> PyResult<()> {
+    #[derive(serde::Deserialize)]
+    struct Meta {
+        grid: Grid,
+        params: WindParams,
+        synth: SynthParams,
+        #[serde(default)]
+        coherence_error: f64,
+    }
+    let m: Meta = parse("meta", meta)?;
+    m.grid.validate().map_err(value_error)?;
+    let want = m.grid.points() * 3 * m.grid.frames;
+    if data.len() != 4 * want {
+        return Err(PyValueError::new_err(format!(
+            "data holds {} bytes; the grid needs {} values of 4 bytes",
+            data.len(),
+            want
+        )));
+    }
+    let values = data.chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]));
+    let field = WindField {
+        grid: m.grid,
+        params: m.params,
+        synth: m.synth,
+        data: values.collect(),
+        coherence_error: m.coherence_error,
+    };
+    let p = Path::new(path);
+    let ext = p.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+    py.allow_threads(|| match ext.as_str() {
+        "swf" => sylva_wind::io::write_swf(&field, p),
+        "npy" => sylva_wind::io::write_npy(&field, p),
+        "bts" => sylva_wind::io::write_bts(&field, bts_x_index, p),
+        _ => Err(WindError::Export(format!(
+            "{path}: write .swf, .npy or .bts (a .zarr store comes from `sylva wind generate`)"
+        ))),
+    })
+    .map_err(value_error)
+}
+
+/// Welch power spectral density of a record sampled every `dt` s, in segments of
+/// `segment` samples (Hann window, half overlap): (frequencies in Hz, PSD in (m/s)²/Hz).
+#[pyfunction]
+fn psd(
+    py: Python<'_>,
+    record: Vec<f64>,
+    dt: f64,
+    segment: usize,
+) -> PyResult<(Vec<f64>, Vec<f64>)> {
+    if !(dt > 0.0 && dt.is_finite()) {
+        return Err(PyValueError::new_err(format!("dt = {dt}: must be finite and > 0")));
+    }
+    if segment < 4 || segment > record.len() || !segment.is_multiple_of(2) {
+        return Err(PyValueError::new_err(format!(
+            "segment = {segment}: an even number of samples, 4 … {} (the record's length)",
+            record.len()
+        )));
+    }
+    Ok(py.allow_threads(|| {
+        let w = Welch::new(segment, dt);
+        let s = w.spectra(&record);
+        (w.freqs(), w.psd([&s]))
+    }))
+}
+
+/// The native module.
+#[pymodule]
+fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(presets, m)?)?;
+    m.add_function(wrap_pyfunction!(preset_params, m)?)?;
+    m.add_function(wrap_pyfunction!(generate, m)?)?;
+    m.add_function(wrap_pyfunction!(read, m)?)?;
+    m.add_function(wrap_pyfunction!(write, m)?)?;
+    m.add_function(wrap_pyfunction!(psd, m)?)?;
+    Ok(())
+}

@@ -1,0 +1,174 @@
+"""Stochastic wind fields from Sylva's ``sylva-wind``: synthesise, read, write, analyse.
+
+A field is three velocity components on a rectilinear grid over a looping time axis,
+synthesised from wind-engineering spectra (Kaimal, von Kármán) and coherence (Davenport)
+with a mean profile (log or power law). The same Rust library runs the command line
+(``sylva wind generate``), so a field made here with the same model, grid, seed and method
+is the same field, bit for bit.
+
+>>> import sylva_wind as sw
+>>> f = sw.generate("strong", nx=16, ny=16, heights=(10.0, 20.0), frames=256, seed=3)
+>>> f.data.shape            # (t, component, z, y, x), float32, m/s
+(256, 3, 2, 16, 16)
+>>> freqs, psd = sw.psd(f, "u", z=1)
+
+Model parameters keep their Rust names (``sw.default_params()`` lists them; see
+``WindParams`` in the Rust documentation for meaning, unit and range). Errors from the
+library are raised as ``ValueError`` with the command line's message.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field as _field
+from typing import Any, Dict, Iterable, Optional, Sequence, Tuple
+
+import numpy as np
+
+from . import _native
+
+__all__ = ["Field", "PRESETS", "COMPONENTS", "default_params", "generate", "read", "write", "psd"]
+
+#: Names of the wind presets (calm, breeze, strong, storm).
+PRESETS: Tuple[str, ...] = tuple(_native.presets())
+
+#: Velocity components, in the order of the data's axis 1.
+COMPONENTS: Tuple[str, ...] = ("u", "v", "w")
+
+
+@dataclass
+class Field:
+    """A wind field: ``data[t, c, z, y, x]`` in m/s (``u`` includes the mean wind), the grid
+    (``xs``, ``ys``, ``zs`` in m, ``frames``, ``dt`` in s), the model ``params`` and the
+    synthesis settings (``seed``, ``method``)."""
+
+    data: np.ndarray
+    grid: Dict[str, Any]
+    params: Dict[str, Any]
+    synth: Dict[str, Any]
+    coherence_error: float = 0.0
+    _meta: Dict[str, Any] = _field(default_factory=dict, repr=False)
+
+    @property
+    def t(self) -> np.ndarray:
+        """Times of the frames, s."""
+        return np.arange(self.grid["frames"]) * self.grid["dt"]
+
+    @property
+    def x(self) -> np.ndarray:
+        """Along-wind coordinates, m."""
+        return np.asarray(self.grid["xs"])
+
+    @property
+    def y(self) -> np.ndarray:
+        """Lateral coordinates, m."""
+        return np.asarray(self.grid["ys"])
+
+    @property
+    def z(self) -> np.ndarray:
+        """Heights above ground, m."""
+        return np.asarray(self.grid["zs"])
+
+    def to_xarray(self):
+        """The field as an ``xarray.Dataset`` with variables u, v, w over (t, z, y, x) and the
+        model and synthesis settings as attributes (needs the ``xarray`` package)."""
+        import xarray as xr
+
+        coords = {"t": self.t, "z": self.z, "y": self.y, "x": self.x}
+        variables = {
+            c: (("t", "z", "y", "x"), self.data[:, k], {"units": "m/s"})
+            for k, c in enumerate(COMPONENTS)
+        }
+        attrs = {f"param_{k}": json.dumps(v) for k, v in self.params.items()}
+        attrs.update({"seed": self.synth["seed"], "method": self.synth["method"]})
+        return xr.Dataset(variables, coords=coords, attrs=attrs)
+
+    def _meta_json(self) -> str:
+        return json.dumps(
+            {
+                "grid": self.grid,
+                "params": self.params,
+                "synth": self.synth,
+                "coherence_error": self.coherence_error,
+            }
+        )
+
+
+def _field_from(native: Tuple[bytes, str]) -> Field:
+    data, meta = native
+    m = json.loads(meta)
+    g = m["grid"]
+    shape = (g["frames"], 3, len(g["zs"]), len(g["ys"]), len(g["xs"]))
+    array = np.frombuffer(data, dtype="<f4").reshape(shape)
+    return Field(array, g, m["params"], m["synth"], m["coherence_error"])
+
+
+def default_params(preset: str = "breeze") -> Dict[str, Any]:
+    """A preset's model parameters (Rust ``WindParams`` names and values)."""
+    return json.loads(_native.preset_params(preset))
+
+
+def generate(
+    preset: str = "breeze",
+    *,
+    nx: int = 64,
+    ny: int = 64,
+    spacing: float = 4.0,
+    heights: Sequence[float] = (20.0,),
+    xs: Optional[Iterable[float]] = None,
+    ys: Optional[Iterable[float]] = None,
+    frames: int = 2048,
+    dt: float = 0.1,
+    seed: int = 1,
+    method: str = "auto",
+    params: Optional[Dict[str, Any]] = None,
+    **overrides: Any,
+) -> Field:
+    """Synthesise a field.
+
+    The model is ``params`` if given, else the preset's; keyword ``overrides`` replace single
+    parameters by their Rust names (``u_star=1.8``, ``direction_deg=30``, …). The grid is
+    ``nx × ny`` points ``spacing`` m apart from the origin (or the coordinates ``xs``,
+    ``ys``), at ``heights`` m, over ``frames`` frames ``dt`` s apart (the field loops every
+    ``frames · dt`` s). ``method`` is ``"auto"`` (the fastest exact method for the grid),
+    ``"separable"``, ``"embedding"`` or ``"cholesky"``. The GIL is released during
+    synthesis.
+    """
+    model = dict(params) if params is not None else default_params(preset)
+    unknown = [k for k in overrides if k not in model]
+    if unknown:
+        raise ValueError(f"unknown wind parameter(s) {unknown}; known: {sorted(model)}")
+    model.update(overrides)
+    grid = {
+        "xs": list(xs) if xs is not None else [spacing * i for i in range(nx)],
+        "ys": list(ys) if ys is not None else [spacing * j for j in range(ny)],
+        "zs": [float(h) for h in heights],
+        "frames": int(frames),
+        "dt": float(dt),
+    }
+    return _field_from(_native.generate(json.dumps(model), json.dumps(grid), int(seed), method))
+
+
+def read(path: str) -> Field:
+    """Read a ``.swf``, ``.npy`` (with its ``.json`` sidecar) or ``.zarr`` field."""
+    return _field_from(_native.read(str(path)))
+
+
+def write(field: Field, path: str, *, bts_x_index: int = 0) -> None:
+    """Write ``field`` as ``.swf``, ``.npy`` (with its sidecar) or TurbSim ``.bts`` (the y–z
+    plane at x index ``bts_x_index``), by the path's extension. Written atomically."""
+    data = np.ascontiguousarray(field.data, dtype="<f4").tobytes()
+    _native.write(str(path), data, field._meta_json(), bts_x_index)
+
+
+def psd(
+    field: Field, component: str = "u", z: int = 0, y: int = 0, x: int = 0, segment: int = 256
+) -> Tuple[np.ndarray, np.ndarray]:
+    """Welch power spectral density of one component's record at one grid point (Hann
+    window, segments of ``segment`` frames with half overlap, wrapping the loop): the
+    frequencies in Hz and the PSD in (m/s)²/Hz — the estimator ``sylva wind stats`` uses."""
+    if component not in COMPONENTS:
+        raise ValueError(f"component `{component}`: one of {COMPONENTS}")
+    record = field.data[:, COMPONENTS.index(component), z, y, x].astype(np.float64)
+    freqs, values = _native.psd(record.tolist(), float(field.grid["dt"]), int(segment))
+    return np.asarray(freqs), np.asarray(values)
