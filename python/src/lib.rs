@@ -89,6 +89,53 @@ fn read<'py>(py: Python<'py>, path: &str) -> PyResult<(Bound<'py, PyBytes>, Stri
 #[pyfunction]
 #[pyo3(signature = (path, data, meta, bts_x_index = 0))]
 fn write(py: Python<'_>, path: &str, data: &[u8], meta: &str, bts_x_index: usize) -> PyResult<()> {
+    let field = from_python(data, meta)?;
+    let p = Path::new(path);
+    let ext = p.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+    py.allow_threads(|| match ext.as_str() {
+        "swf" => sylva_wind::io::write_swf(&field, p),
+        "npy" => sylva_wind::io::write_npy(&field, p),
+        "bts" => sylva_wind::io::write_bts(&field, bts_x_index, p),
+        _ => Err(WindError::Export(format!(
+            "{path}: write .swf, .npy or .bts (a .zarr store comes from `sylva wind generate`)"
+        ))),
+    })
+    .map_err(value_error)
+}
+
+/// The statistics `sylva wind stats --json` prints, as JSON: per height (all, or
+/// `height_index`), per component σ against the model with its expected scatter, the
+/// auto-spectrum against eq. 4 in log bands and the co-coherence against eq. 5.
+#[pyfunction]
+#[pyo3(signature = (data, meta, segment = None, height_index = None))]
+fn stats(
+    py: Python<'_>,
+    data: &[u8],
+    meta: &str,
+    segment: Option<usize>,
+    height_index: Option<usize>,
+) -> PyResult<String> {
+    let field = from_python(data, meta)?;
+    let nz = field.grid.nz();
+    let heights: Vec<usize> = match height_index {
+        Some(h) if h >= nz => {
+            return Err(PyValueError::new_err(format!(
+                "height index {h} is outside the grid ({nz} heights, so 0 … {})",
+                nz - 1
+            )));
+        }
+        Some(h) => vec![h],
+        None => (0..nz).collect(),
+    };
+    let fields = [field];
+    let rows: Vec<sylva_wind::stats::FieldStats> = py.allow_threads(|| {
+        heights.iter().map(|&h| sylva_wind::stats::ensemble_stats_at(&fields, segment, h)).collect()
+    });
+    serde_json::to_string(&rows).map_err(value_error)
+}
+
+/// A field from the bytes and JSON settings `read` and `generate` give.
+fn from_python(data: &[u8], meta: &str) -> PyResult<WindField> {
     #[derive(serde::Deserialize)]
     struct Meta {
         grid: Grid,
@@ -108,24 +155,13 @@ fn write(py: Python<'_>, path: &str, data: &[u8], meta: &str, bts_x_index: usize
         )));
     }
     let values = data.chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]));
-    let field = WindField {
+    Ok(WindField {
         grid: m.grid,
         params: m.params,
         synth: m.synth,
         data: values.collect(),
         coherence_error: m.coherence_error,
-    };
-    let p = Path::new(path);
-    let ext = p.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
-    py.allow_threads(|| match ext.as_str() {
-        "swf" => sylva_wind::io::write_swf(&field, p),
-        "npy" => sylva_wind::io::write_npy(&field, p),
-        "bts" => sylva_wind::io::write_bts(&field, bts_x_index, p),
-        _ => Err(WindError::Export(format!(
-            "{path}: write .swf, .npy or .bts (a .zarr store comes from `sylva wind generate`)"
-        ))),
     })
-    .map_err(value_error)
 }
 
 /// Welch power spectral density of a record sampled every `dt` s, in segments of
@@ -162,5 +198,6 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(read, m)?)?;
     m.add_function(wrap_pyfunction!(write, m)?)?;
     m.add_function(wrap_pyfunction!(psd, m)?)?;
+    m.add_function(wrap_pyfunction!(stats, m)?)?;
     Ok(())
 }

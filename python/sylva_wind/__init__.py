@@ -21,13 +21,23 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass, field as _field
-from typing import Any, Dict, Iterable, Optional, Sequence, Tuple
+from typing import Any, Dict, Iterable, List, Optional, Sequence, Tuple
 
 import numpy as np
 
 from . import _native
 
-__all__ = ["Field", "PRESETS", "COMPONENTS", "default_params", "generate", "read", "write", "psd"]
+__all__ = [
+    "Field",
+    "PRESETS",
+    "COMPONENTS",
+    "default_params",
+    "generate",
+    "read",
+    "write",
+    "psd",
+    "stats",
+]
 
 #: Names of the wind presets (calm, breeze, strong, storm).
 PRESETS: Tuple[str, ...] = tuple(_native.presets())
@@ -172,3 +182,32 @@ def psd(
     record = field.data[:, COMPONENTS.index(component), z, y, x].astype(np.float64)
     freqs, values = _native.psd(record.tolist(), float(field.grid["dt"]), int(segment))
     return np.asarray(freqs), np.asarray(values)
+
+
+def stats(
+    field: Field, *, height: Optional[int] = None, segment: Optional[int] = None
+) -> List[Dict[str, Any]]:
+    """What ``sylva wind stats --json`` reports, per height (every height, or the index
+    ``height``): per component ``u``, ``v``, ``w`` the measured σ against the model's and
+    the discrete target's with its expected scatter, and two tables as numpy arrays — the
+    auto-spectrum against eq. 4 in log bands (``spectrum``: a column per field) and the
+    co-coherence against eq. 5 at several separations (``coherence``). ``segment`` is the
+    Welch segment length (default: the command line's)."""
+    data = np.ascontiguousarray(field.data, dtype="<f4").tobytes()
+    rows = json.loads(_native.stats(data, field._meta_json(), segment, height))
+    for row in rows:
+        for comp in row["components"]:
+            for table in ("spectrum", "coherence"):
+                entries = comp[table]
+                keys = entries[0].keys() if entries else []
+                comp[table] = {k: _column([e[k] for e in entries]) for k in keys}
+    return rows
+
+
+def _column(values: List[Any]) -> Any:
+    """A table column as a numpy array, or as the list itself where its entries differ in
+    shape (a column of per-row lists of varying length)."""
+    try:
+        return np.asarray(values)
+    except ValueError:
+        return values

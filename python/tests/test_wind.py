@@ -116,3 +116,28 @@ def test_xarray_dataset_when_available():
     ds = small().to_xarray()
     assert set(ds.data_vars) == {"u", "v", "w"} and ds["u"].dims == ("t", "z", "y", "x")
     assert isinstance(ds, xr.Dataset) and ds.attrs["seed"] == 3
+
+
+def test_stats_are_the_command_lines(tmp_path):
+    # The same tables as `sylva wind stats --json` on the same file, value for value.
+    import json
+
+    out = tmp_path / "s.npy"
+    r = cli("wind", "generate", "--preset", "breeze", "--nx", "8", "--ny", "8", "--heights", "20",
+            "--frames", "512", "--seed", "2", "--out", str(out))
+    assert r.returncode == 0, r.stderr
+    r = cli("wind", "stats", "--json", str(out))
+    assert r.returncode == 0, r.stderr
+    want = json.loads(r.stdout)
+    got = sw.stats(sw.read(out))
+    assert len(got) == len(want) == 1
+    for g, w in zip(got[0]["components"], want[0]["components"]):
+        assert g["component"] == w["component"] and g["sigma"] == w["sigma"]
+        for table in ("spectrum", "coherence"):
+            for key, column in g[table].items():
+                assert list(column) == [row[key] for row in w[table]], (table, key)
+    # The spectrum follows the model: the measured σ is within a few expected scatters.
+    u = got[0]["components"][0]
+    assert abs(u["sigma_error"]) < 4 * u["sigma_scatter"] + 0.02
+    with pytest.raises(ValueError, match="outside the grid"):
+        sw.stats(sw.read(out), height=3)

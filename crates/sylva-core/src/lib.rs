@@ -3,6 +3,7 @@
 //! - [`rng`]: SplitMix64, the one seeded generator behind every random choice (layout,
 //!   tree growth, textures), so a seed means the same stream everywhere;
 //! - [`mat4`]: column-major 4×4 product and inverse (camera and renderer);
+//! - [`quat`]: unit quaternions from and to rotation matrices, slerp (glTF animation);
 //! - [`v3`]: helpers on `[f32; 3]`, the vector type of every public struct (plain, `Pod`,
 //!   serde-friendly, so no conversion at crate boundaries);
 //! - [`simd_kernel!`]: one CPU-feature dispatch — a kernel compiled for AVX-512, AVX2 and
@@ -10,6 +11,7 @@
 #![warn(missing_docs)]
 
 pub mod mat4;
+pub mod quat;
 pub mod rng;
 pub mod simd;
 pub mod v3;

@@ -15,6 +15,7 @@
 //! the start exactly): the clip's last sample is its first, and [`SwayClip::seam_deg`] says
 //! how far the simulation itself was from closing the loop.
 
+use sylva_core::quat;
 use sylva_sway::{Palette, SwayBatch, SwayParams, SwaySpecies};
 use sylva_tree::Skeleton;
 use sylva_wind::{Grid, Preset, SynthParams, WindField};
@@ -271,7 +272,9 @@ fn blend_pose(
     let mut out = a.to_vec();
     for k in order {
         let j = joints[k];
-        let r = quat_to_rows(slerp(rows_to_quat(&a[k]), rows_to_quat(&b[k]), w));
+        let q = |p: &Palette| quat::from_matrix(|r, c| p[4 * r + c] as f64);
+        let rows = quat::to_rows(quat::slerp(q(&a[k]), q(&b[k]), w));
+        let r: [f32; 9] = std::array::from_fn(|e| rows[e / 3][e % 3] as f32);
         let o = js[j].origin;
         let ro = [0, 1, 2].map(|i| r[3 * i] * o[0] + r[3 * i + 1] * o[1] + r[3 * i + 2] * o[2]);
         // Where the joint's origin goes: carried by the blended parent, or else blended.
@@ -300,64 +303,6 @@ fn blend_pose(
         slot.insert(j, k);
     }
     out
-}
-
-/// Unit quaternion (x, y, z, w) of a palette's rotation.
-fn rows_to_quat(p: &Palette) -> [f64; 4] {
-    let m = |r: usize, c: usize| p[4 * r + c] as f64;
-    let tr = m(0, 0) + m(1, 1) + m(2, 2);
-    let q = if tr > 0.0 {
-        let s = (tr + 1.0).sqrt() * 2.0;
-        [(m(2, 1) - m(1, 2)) / s, (m(0, 2) - m(2, 0)) / s, (m(1, 0) - m(0, 1)) / s, 0.25 * s]
-    } else if m(0, 0) > m(1, 1) && m(0, 0) > m(2, 2) {
-        let s = (1.0 + m(0, 0) - m(1, 1) - m(2, 2)).sqrt() * 2.0;
-        [0.25 * s, (m(0, 1) + m(1, 0)) / s, (m(0, 2) + m(2, 0)) / s, (m(2, 1) - m(1, 2)) / s]
-    } else if m(1, 1) > m(2, 2) {
-        let s = (1.0 + m(1, 1) - m(0, 0) - m(2, 2)).sqrt() * 2.0;
-        [(m(0, 1) + m(1, 0)) / s, 0.25 * s, (m(1, 2) + m(2, 1)) / s, (m(0, 2) - m(2, 0)) / s]
-    } else {
-        let s = (1.0 + m(2, 2) - m(0, 0) - m(1, 1)).sqrt() * 2.0;
-        [(m(0, 2) + m(2, 0)) / s, (m(1, 2) + m(2, 1)) / s, 0.25 * s, (m(1, 0) - m(0, 1)) / s]
-    };
-    let n = q.iter().map(|v| v * v).sum::<f64>().sqrt();
-    q.map(|v| v / n)
-}
-
-/// Rotation matrix, row-major, of a unit quaternion (x, y, z, w).
-fn quat_to_rows(q: [f64; 4]) -> [f32; 9] {
-    let [x, y, z, w] = q;
-    [
-        1.0 - 2.0 * (y * y + z * z),
-        2.0 * (x * y - z * w),
-        2.0 * (x * z + y * w),
-        2.0 * (x * y + z * w),
-        1.0 - 2.0 * (x * x + z * z),
-        2.0 * (y * z - x * w),
-        2.0 * (x * z - y * w),
-        2.0 * (y * z + x * w),
-        1.0 - 2.0 * (x * x + y * y),
-    ]
-    .map(|v| v as f32)
-}
-
-/// Spherical interpolation of unit quaternions, the short way round.
-fn slerp(a: [f64; 4], b: [f64; 4], u: f64) -> [f64; 4] {
-    let mut d: f64 = (0..4).map(|i| a[i] * b[i]).sum();
-    let b = if d < 0.0 {
-        d = -d;
-        b.map(|v| -v)
-    } else {
-        b
-    };
-    let (wa, wb) = if d > 0.9999 {
-        (1.0 - u, u)
-    } else {
-        let th = d.min(1.0).acos();
-        (((1.0 - u) * th).sin() / th.sin(), (u * th).sin() / th.sin())
-    };
-    let q: [f64; 4] = std::array::from_fn(|i| wa * a[i] + wb * b[i]);
-    let n = q.iter().map(|v| v * v).sum::<f64>().sqrt();
-    q.map(|v| v / n)
 }
 
 /// Angle of the rotation taking palette `a`'s rotation to `b`'s, rad.

@@ -104,24 +104,7 @@ fn to_local(f: &[V3; 3], v: V3) -> V3 {
 
 /// Unit quaternion (x, y, z, w) of the rotation matrix with columns c.
 fn quaternion(c: &[V3; 3]) -> [f32; 4] {
-    // m[row][col]
-    let m = |r: usize, k: usize| c[k][r] as f64;
-    let trace = m(0, 0) + m(1, 1) + m(2, 2);
-    let q = if trace > 0.0 {
-        let s = (trace + 1.0).sqrt() * 2.0;
-        [(m(2, 1) - m(1, 2)) / s, (m(0, 2) - m(2, 0)) / s, (m(1, 0) - m(0, 1)) / s, 0.25 * s]
-    } else if m(0, 0) > m(1, 1) && m(0, 0) > m(2, 2) {
-        let s = (1.0 + m(0, 0) - m(1, 1) - m(2, 2)).sqrt() * 2.0;
-        [0.25 * s, (m(0, 1) + m(1, 0)) / s, (m(0, 2) + m(2, 0)) / s, (m(2, 1) - m(1, 2)) / s]
-    } else if m(1, 1) > m(2, 2) {
-        let s = (1.0 + m(1, 1) - m(0, 0) - m(2, 2)).sqrt() * 2.0;
-        [(m(0, 1) + m(1, 0)) / s, 0.25 * s, (m(1, 2) + m(2, 1)) / s, (m(0, 2) - m(2, 0)) / s]
-    } else {
-        let s = (1.0 + m(2, 2) - m(0, 0) - m(1, 1)).sqrt() * 2.0;
-        [(m(0, 2) + m(2, 0)) / s, (m(1, 2) + m(2, 1)) / s, 0.25 * s, (m(1, 0) - m(0, 1)) / s]
-    };
-    let n = q.iter().map(|v| v * v).sum::<f64>().sqrt();
-    [(q[0] / n) as f32, (q[1] / n) as f32, (q[2] / n) as f32, (q[3] / n) as f32]
+    sylva_core::quat::from_matrix(|r, k| c[k][r] as f64).map(|v| v as f32)
 }
 
 /// An orthonormal rest frame per joint (columns x, y, z; z along the segment), made
@@ -254,27 +237,6 @@ struct Channel {
     output: usize,
 }
 
-/// Slerp of unit quaternions (x, y, z, w) in f64, as glTF interpolates rotations.
-fn slerp(a: [f64; 4], b: [f64; 4], u: f64) -> [f64; 4] {
-    let mut d: f64 = (0..4).map(|i| a[i] * b[i]).sum();
-    let b = if d < 0.0 {
-        d = -d;
-        b.map(|v| -v)
-    } else {
-        b
-    };
-    let (wa, wb) = if d > 0.999_999 {
-        (1.0 - u, u)
-    } else {
-        let th = d.min(1.0).acos();
-        let s = th.sin();
-        (((1.0 - u) * th).sin() / s, (u * th).sin() / s)
-    };
-    let q: [f64; 4] = std::array::from_fn(|i| wa * a[i] + wb * b[i]);
-    let n = q.iter().map(|v| v * v).sum::<f64>().sqrt();
-    q.map(|v| v / n)
-}
-
 fn norm_of(v: V3) -> f64 {
     v.iter().map(|&x| x as f64 * x as f64).sum::<f64>().sqrt()
 }
@@ -308,7 +270,7 @@ fn reduce_keys(times: &[f32], q: &[[f64; 4]], eps: f64) -> Vec<usize> {
         let span = (times[b] - times[a]) as f64;
         (a + 1..b).all(|k| {
             let u = (times[k] - times[a]) as f64 / span;
-            rotation_angle(slerp(q[a], q[b], u), q[k]) <= eps
+            rotation_angle(sylva_core::quat::slerp(q[a], q[b], u), q[k]) <= eps
         })
     };
     let mut keep = vec![0];
