@@ -19,6 +19,12 @@ fn chunks(glb: &[u8]) -> (Value, Vec<u8>) {
     (json, glb[bin_at + 8..bin_at + 8 + word(bin_at)].to_vec())
 }
 
+/// The names of the nodes, in order.
+fn node_names(json: &Value) -> Vec<String> {
+    let nodes = json["nodes"].as_array().expect("nodes");
+    nodes.iter().map(|n| n["name"].as_str().unwrap_or("").to_string()).collect()
+}
+
 /// The floats of accessor `a`.
 fn floats(json: &Value, bin: &[u8], a: usize) -> Vec<f32> {
     let acc = &json["accessors"][a];
@@ -148,12 +154,7 @@ fn played_back_joints_sit_where_the_palettes_put_them() {
     assert_eq!(c.times.len(), 31);
     let glb = export_m(&model, &c, 0.0, 300);
     let (json, bin) = chunks(&glb);
-    let names: Vec<String> = json["nodes"]
-        .as_array()
-        .expect("nodes")
-        .iter()
-        .map(|n| n["name"].as_str().unwrap_or("").to_string())
-        .collect();
+    let names = node_names(&json);
     let sk = &model.tree.skeleton;
     let mut moved = 0.0f64;
     for k in [0, 17, 30] {
@@ -270,12 +271,7 @@ fn reduced_playback_stays_within_max_error_of_the_simulation() {
     let tol = 0.002;
     let glb = export_m(&model, &c, tol, 300);
     let (json, bin) = chunks(&glb);
-    let names: Vec<String> = json["nodes"]
-        .as_array()
-        .expect("nodes")
-        .iter()
-        .map(|n| n["name"].as_str().unwrap_or("").to_string())
-        .collect();
+    let names = node_names(&json);
     let sk = &model.tree.skeleton;
     let mut worst = (0.0f64, 0usize, 0usize);
     for (k, &t) in c.times.iter().enumerate() {
@@ -335,12 +331,7 @@ fn a_forest_export_places_each_tree_and_plays_its_own_simulation() {
     let glb = forest_to_glb(&models, &trees, 60, "small");
     let (json, bin) = chunks(&glb);
     assert_eq!(json["skins"].as_array().expect("skins").len(), forest.trees(), "a skin per tree");
-    let names: Vec<String> = json["nodes"]
-        .as_array()
-        .expect("nodes")
-        .iter()
-        .map(|n| n["name"].as_str().unwrap_or("").to_string())
-        .collect();
+    let names = node_names(&json);
     let world = world_positions(&json, &bin, 0.0);
     let mut spread = 0.0f64;
     for (t, tree) in trees.iter().enumerate() {
