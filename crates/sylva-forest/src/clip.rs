@@ -72,9 +72,9 @@ impl PointWind {
         looped: bool,
     ) -> Result<PointWind, ForestError> {
         const DT: f64 = 0.1;
-        if !(seconds > 0.0 && seconds <= 3600.0) {
+        if !(seconds > 0.0 && seconds <= 86_400.0) {
             return Err(ForestError::Wind(format!(
-                "{seconds} s of wind: a clip lasts more than 0 and at most 3600 s"
+                "{seconds} s of wind: more than 0 and at most 86 400 s (a day)"
             )));
         }
         let frames = if looped {
