@@ -151,12 +151,7 @@ pub struct SwayClip {
 impl SwayClip {
     /// Per sample, per recorded joint: the rotation part of its palette, row-major 3×3.
     pub fn rotations(&self) -> Vec<Vec<[f32; 9]>> {
-        self.palettes
-            .iter()
-            .map(|s| {
-                s.iter().map(|p| [p[0], p[1], p[2], p[4], p[5], p[6], p[8], p[9], p[10]]).collect()
-            })
-            .collect()
+        self.palettes.iter().map(|s| s.iter().map(sylva_sway::rotation_of).collect()).collect()
     }
 }
 

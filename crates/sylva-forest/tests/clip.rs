@@ -311,7 +311,7 @@ fn a_forest_export_places_each_tree_and_plays_its_own_simulation() {
         let a = forest.tree_palettes(t, js);
         poses.push(a.clone());
         let rot = |ps: &[[f32; 12]]| -> Vec<[f32; 9]> {
-            ps.iter().map(|p| [p[0], p[1], p[2], p[4], p[5], p[6], p[8], p[9], p[10]]).collect()
+            ps.iter().map(sylva_sway::rotation_of).collect()
         };
         trees.push(ForestTree {
             species: p.species as usize,

@@ -647,6 +647,11 @@ fn compose(a: &Palette, b: &Palette) -> Palette {
     o
 }
 
+/// The rotation part of a palette, row-major 3×3.
+pub fn rotation_of(p: &Palette) -> [f32; 9] {
+    [p[0], p[1], p[2], p[4], p[5], p[6], p[8], p[9], p[10]]
+}
+
 /// Apply a palette to a rest-pose point.
 pub fn transform(p: &Palette, x: [f32; 3]) -> [f32; 3] {
     [

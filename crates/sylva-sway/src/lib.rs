@@ -17,7 +17,7 @@ pub mod params;
 pub mod probe;
 pub mod species;
 
-pub use batch::{LANES, Lanes, Palette, PaletteSlot, SwayBatch, transform};
+pub use batch::{LANES, Lanes, Palette, PaletteSlot, SwayBatch, rotation_of, transform};
 pub use leaves::{LeafParams, LeafSway};
 pub use params::{NEEDLE_LEAF_DRAG, SwayParamError, SwayParams};
 pub use species::{JointSpring, SwaySpecies};

@@ -96,11 +96,7 @@ pub fn run(cmd: ForestCommand) -> anyhow::Result<()> {
         for (t, rot) in rotations.iter_mut().enumerate() {
             let s = forest.placement(t).map_or(0, |p| p.species as usize);
             let pose = forest.tree_palettes(t, &joints[s]);
-            rot.push(
-                pose.iter()
-                    .map(|p| [p[0], p[1], p[2], p[4], p[5], p[6], p[8], p[9], p[10]])
-                    .collect(),
-            );
+            rot.push(pose.iter().map(sylva_sway::rotation_of).collect());
         }
     }
     let times: Vec<f32> = (0..=samples).map(|k| k as f32 * dt).collect();
