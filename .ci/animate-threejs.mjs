@@ -1,8 +1,10 @@
 // Play an animated .glb (`sylva tree animate`) in three.js under Node: GLTFLoader, then an
 // AnimationMixer on its clip. At every sample time of the JSON that `--samples` wrote, the
 // named joints' world positions must match Sylva's palettes within 1e-4 m (or the file's
-// keyframe-reduction bound, which the JSON states), and they must move over the clip. Usage: node animate-threejs.mjs tree.glb samples.json. Exit 1 on any
-// failure.
+// keyframe-reduction bound, which the JSON states), and they must move over the clip. So must
+// the leaf-card corners the JSON lists (morph targets for the flutter, then the skin: three.js's
+// SkinnedMesh.getVertexPosition). Usage: node animate-threejs.mjs tree.glb samples.json. Exit 1
+// on any failure.
 import { readFileSync } from "node:fs";
 globalThis.self = globalThis;
 if (typeof globalThis.navigator === "undefined") globalThis.navigator = { userAgent: "node" };
@@ -70,25 +72,44 @@ if (bones.some((b) => !b)) {
   console.log(`${file}: joints missing: ${samples.joints.filter((_, i) => !bones[i]).map((j) => j.node)}`);
   process.exit(1);
 }
-let worst = 0, travel = 0;
+// The leaf cards: the skinned mesh with the "leaves" material.
+let leafMesh = null;
+gltf.scene.traverse((o) => o.isSkinnedMesh && o.material?.name === "leaves" && (leafMesh = o));
+const leaves = samples.leaves ?? [];
+if (leaves.length && (!leafMesh || !leafMesh.morphTargetInfluences?.length)) {
+  console.log(`${file}: leaf corners listed but no leaf mesh with flutter targets`);
+  process.exit(1);
+}
+let worst = 0, travel = 0, leafWorst = 0, leafTravel = 0, flutter = 0;
 const p = new Vector3();
+const gap = (p, want) => Math.max(Math.abs(p.x - want[0]), Math.abs(p.y - want[1]), Math.abs(p.z - want[2]));
+const moved = (p, first) => Math.hypot(p.x - first[0], p.y - first[1], p.z - first[2]);
 samples.times.forEach((t, k) => {
   mixer.setTime(t);
   gltf.scene.updateMatrixWorld(true);
   bones.forEach((b, i) => {
     b.getWorldPosition(p);
-    const want = samples.joints[i].positions[k];
-    const first = samples.joints[i].positions[0];
-    worst = Math.max(worst, Math.abs(p.x - want[0]), Math.abs(p.y - want[1]), Math.abs(p.z - want[2]));
-    travel = Math.max(travel, Math.hypot(p.x - first[0], p.y - first[1], p.z - first[2]));
+    worst = Math.max(worst, gap(p, samples.joints[i].positions[k]));
+    travel = Math.max(travel, moved(p, samples.joints[i].positions[0]));
   });
+  if (leafMesh) {
+    flutter = Math.max(flutter, ...leafMesh.morphTargetInfluences.map(Math.abs));
+    leaves.forEach((l) => {
+      leafMesh.getVertexPosition(l.vertex, p);
+      p.applyMatrix4(leafMesh.matrixWorld);
+      leafWorst = Math.max(leafWorst, gap(p, l.positions[k]));
+      leafTravel = Math.max(leafTravel, moved(p, l.positions[0]));
+    });
+  }
 });
 // The file's own bound (keyframe reduction) or, without reduction, 1e-4 m.
 const bound = Math.max(1e-4, (samples.max_error_m ?? 0) + 1e-5);
-const ok = worst <= bound && travel > 0.01;
+const leavesOk = !leaves.length || (leafWorst <= bound && leafTravel > 0.01 && flutter > 0.01);
+const ok = worst <= bound && travel > 0.01 && leavesOk;
 console.log(
   `${file}: animation "${clip.name}", ${clip.duration.toFixed(2)} s, ${clip.tracks.length} tracks; ` +
     `${bones.length} joints at ${samples.times.length} times: largest gap to Sylva ${worst.toExponential(2)} m (bound ${bound.toExponential(2)}), ` +
-    `largest travel ${travel.toFixed(3)} m — ${ok ? "ok" : "FAILED"}`,
+    `largest travel ${travel.toFixed(3)} m; ${leaves.length} leaf corners: largest gap ${leafWorst.toExponential(2)} m, ` +
+    `largest travel ${leafTravel.toFixed(3)} m, largest flutter weight ${flutter.toFixed(3)} — ${ok ? "ok" : "FAILED"}`,
 );
 process.exit(ok ? 0 : 1);

@@ -1,6 +1,8 @@
 # Import an animated .glb (`sylva tree animate`) with Blender's own glTF importer (bpy from
 # PyPI) and check that the sway arrived: an action with rotation curves on the armature's
-# bones, spanning the clip, and bones that move when the scene plays. Exit 1 on any failure.
+# bones, spanning the clip, and bones that move when the scene plays; and the leaf flutter:
+# shape keys named flutter_sin and flutter_cos whose values change over the clip. Exit 1 on
+# any failure.
 import os
 import sys
 import time
@@ -39,13 +41,36 @@ for path in sys.argv[1:]:
                     start[b.name] = p.copy()
                 else:
                     moved = max(moved, (p - start[b.name]).length)
+    # Flutter: the shape keys' largest value over the same frames.
+    keyed = [
+        o.data.shape_keys
+        for o in scene.objects
+        if o.type == "MESH" and o.data.shape_keys is not None
+    ]
+    names = sorted({b.name for k in keyed for b in k.key_blocks if b.name.startswith("flutter")})
+    flutter = 0.0
+    if keyed and last > first:
+        for k in range(9):
+            scene.frame_set(int(first + (last - first) * k / 8))
+            for sk in keyed:
+                for b in sk.key_blocks:
+                    if b.name.startswith("flutter"):
+                        flutter = max(flutter, abs(b.value))
     fps = scene.render.fps / scene.render.fps_base
-    ok = bool(armatures) and rotation_curves > 0 and last > first and moved > 0.01
+    ok = (
+        bool(armatures)
+        and rotation_curves > 0
+        and last > first
+        and moved > 0.01
+        and names == ["flutter_cos", "flutter_sin"]
+        and flutter > 0.01
+    )
     print(
         f"{path}: Blender {bpy.app.version_string} imported in {seconds:.1f} s: "
         f"{len(actions)} actions, {curves} curves ({rotation_curves} quaternion), frames "
         f"{first:.0f}..{last:.0f} ({(last - first) / fps:.2f} s at {fps:.0f} fps); bones travel "
-        f"up to {moved:.3f} m when played — {'ok' if ok else 'FAILED'}"
+        f"up to {moved:.3f} m when played; shape keys {names}, values up to {flutter:.3f} — "
+        f"{'ok' if ok else 'FAILED'}"
     )
     failed = failed or not ok
 sys.stdout.flush()

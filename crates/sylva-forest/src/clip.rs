@@ -16,7 +16,7 @@
 //! how far the simulation itself was from closing the loop.
 
 use sylva_core::quat;
-use sylva_sway::{Palette, SwayBatch, SwayParams, SwaySpecies};
+use sylva_sway::{LeafParams, LeafSway, Palette, SwayBatch, SwayParams, SwaySpecies};
 use sylva_tree::Skeleton;
 use sylva_wind::{Grid, Preset, SynthParams, WindField};
 
@@ -126,11 +126,19 @@ pub struct ClipSettings {
     pub warmup: f64,
     /// Loop seamlessly: the clip is one period of the wind (a steady wind: `seconds`).
     pub looped: bool,
+    /// The leaf-flutter model, driven by the wind speed at the same point.
+    pub leaves: LeafParams,
 }
 
 impl Default for ClipSettings {
     fn default() -> Self {
-        ClipSettings { seconds: 10.0, fps: 30.0, warmup: 10.0, looped: false }
+        ClipSettings {
+            seconds: 10.0,
+            fps: 30.0,
+            warmup: 10.0,
+            looped: false,
+            leaves: LeafParams::default(),
+        }
     }
 }
 
@@ -146,12 +154,21 @@ pub struct SwayClip {
     /// Looping clips: the largest angle, degrees, between a recorded joint's rotation at
     /// the end of the period and at its start, before the last sample was set to the first.
     pub seam_deg: f32,
+    /// Per sample: the leaves' flutter (amplitude and phase, rad), as the renderer reads it
+    /// per tree. A looping clip's flutter runs a whole number of cycles in the period (its
+    /// rate scaled by at most half a cycle over the clip), so its last sample is its first.
+    pub flutter: Vec<LeafSway>,
 }
 
 impl SwayClip {
     /// Per sample, per recorded joint: the rotation part of its palette, row-major 3×3.
     pub fn rotations(&self) -> Vec<Vec<[f32; 9]>> {
         self.palettes.iter().map(|s| s.iter().map(sylva_sway::rotation_of).collect()).collect()
+    }
+
+    /// Per sample: the flutter as (amplitude, phase), rad — `JointAnimation::flutter`.
+    pub fn flutter_track(&self) -> Vec<[f32; 2]> {
+        self.flutter.iter().map(|l| [l.amplitude, l.phase]).collect()
     }
 }
 
@@ -165,7 +182,8 @@ pub fn record(
     joints: &[usize],
     settings: &ClipSettings,
 ) -> Result<SwayClip, ForestError> {
-    let ClipSettings { seconds, fps, warmup, looped } = *settings;
+    let ClipSettings { seconds, fps, warmup, looped, leaves } = *settings;
+    leaves.validate().map_err(|e| ForestError::Wind(format!("leaf flutter: {e}")))?;
     if !(fps > 0.0 && fps <= 1000.0) {
         return Err(ForestError::Wind(format!("{fps} samples per second: 0 < fps ≤ 1000")));
     }
@@ -198,22 +216,54 @@ pub fn record(
     let before = if looped { length } else { 0.0 };
     let warm_steps = ((warmup - before) / dt).round() as usize;
     let mut t = 0.0;
+    // Flutter: its amplitude follows the wind speed; its phase is kept unwrapped (f64) here.
+    let mut leaf = LeafSway::default();
+    let mut phase = 0.0f64;
+    let step = |batch: &mut SwayBatch, leaf: &mut LeafSway, phase: &mut f64, t: f64| {
+        let w = wind.at(t);
+        batch.step(dt as f32, &[w]);
+        let speed = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
+        *phase += std::f64::consts::TAU * leaves.frequency(speed) as f64 * dt;
+        leaf.amplitude = leaves.amplitude(speed);
+    };
     for _ in 0..warm_steps {
         t += dt;
-        batch.step(dt as f32, &[wind.at(t)]);
+        step(&mut batch, &mut leaf, &mut phase, t);
     }
     let start = t;
     let take = |b: &SwayBatch| joints.iter().map(|&j| b.palette(0, j)).collect::<Vec<_>>();
     let recorded = if looped { 2 * samples } else { samples };
     let mut palettes = vec![take(&batch)];
+    let mut flutter = vec![(leaf.amplitude, phase)];
     for k in 1..=recorded {
         for s in 0..sub {
             // Times from the start of the clip, so a looped wind lines up with its period.
             let tk = start + ((k - 1) * sub + s + 1) as f64 * dt;
-            batch.step(dt as f32, &[wind.at(tk)]);
+            step(&mut batch, &mut leaf, &mut phase, tk);
         }
         palettes.push(take(&batch));
+        flutter.push((leaf.amplitude, phase));
     }
+    if looped {
+        // The period's own samples; the flutter's rate scaled to whole cycles in it.
+        flutter.drain(..samples);
+        let (a0, p0) = flutter[0];
+        let advance = flutter[samples].1 - p0;
+        let tau = std::f64::consts::TAU;
+        let cycles = (advance / tau).round().max(1.0);
+        let rate = if advance > 0.0 { cycles * tau / advance } else { 1.0 };
+        for f in &mut flutter {
+            f.1 = p0 + (f.1 - p0) * rate;
+        }
+        flutter[samples] = (a0, p0 + cycles * tau);
+    }
+    let flutter: Vec<LeafSway> = flutter
+        .iter()
+        .map(|&(amplitude, p)| LeafSway {
+            amplitude,
+            phase: p.rem_euclid(std::f64::consts::TAU) as f32,
+        })
+        .collect();
     let times: Vec<f32> = (0..=samples).map(|k| (k as f64 * sample_dt) as f32).collect();
     let mut seam_deg = 0.0;
     if looped {
@@ -238,7 +288,7 @@ pub fn record(
             })
             .collect();
     }
-    Ok(SwayClip { times, joints: joints.to_vec(), palettes, seam_deg })
+    Ok(SwayClip { times, joints: joints.to_vec(), palettes, seam_deg, flutter })
 }
 
 /// Fraction of a looping clip over which its end blends into its start.

@@ -562,6 +562,13 @@ impl Forest {
             .collect()
     }
 
+    /// Leaf flutter of tree `t` (its instance group's), as the renderer draws it; `None`
+    /// for an unknown tree.
+    pub fn tree_leaves(&self, t: usize) -> Option<sylva_sway::LeafSway> {
+        let &(p, g) = self.trees.get(t)?;
+        self.species[p.species as usize].groups.get(g as usize).map(|g| g.leaf)
+    }
+
     fn wind_at(&self, p: [f64; 3], t: f64) -> [f32; 3] {
         sample_wind(self.wind.level(0), self.gain, self.turn, p, t)
     }

@@ -60,7 +60,8 @@ fn world_positions(json: &Value, bin: &[u8], t: f32) -> Vec<Option<[f64; 3]>> {
         })
         .collect();
     let anim = &json["animations"][0];
-    for c in anim["channels"].as_array().expect("channels") {
+    let channels = anim["channels"].as_array().expect("channels");
+    for c in channels.iter().filter(|c| c["target"]["path"] == "rotation") {
         let s = &anim["samplers"][c["sampler"].as_u64().expect("sampler") as usize];
         let q = floats(json, bin, s["output"].as_u64().expect("output") as usize);
         let times = floats(json, bin, s["input"].as_u64().expect("input") as usize);
@@ -135,6 +136,7 @@ fn export_m(model: &TreeModel, clip: &SwayClip, max_error: f32, max_joints: usiz
         joints: clip.joints.clone(),
         rotations: clip.rotations(),
         max_error,
+        flutter: clip.flutter_track(),
     };
     model.to_glb(&GltfOptions {
         lods: vec![0],
@@ -149,7 +151,8 @@ fn played_back_joints_sit_where_the_palettes_put_them() {
     let model = aspen();
     let joints = model.exported_joints(0, 300);
     assert_eq!(joints.len(), 300);
-    let settings = ClipSettings { seconds: 2.0, fps: 15.0, warmup: 2.0, looped: false };
+    let settings =
+        ClipSettings { seconds: 2.0, fps: 15.0, warmup: 2.0, looped: false, ..Default::default() };
     let c = clip(&model, &joints, &settings);
     assert_eq!(c.times.len(), 31);
     let glb = export_m(&model, &c, 0.0, 300);
@@ -180,17 +183,21 @@ fn played_back_joints_sit_where_the_palettes_put_them() {
 fn reduction_drops_most_keys_and_keeps_the_clip_span() {
     let model = aspen();
     let joints = model.exported_joints(0, 200);
-    let settings = ClipSettings { seconds: 3.0, fps: 30.0, warmup: 2.0, looped: false };
+    let settings =
+        ClipSettings { seconds: 3.0, fps: 30.0, warmup: 2.0, looped: false, ..Default::default() };
     let c = clip(&model, &joints, &settings);
     let full = export_m(&model, &c, 0.0, 200);
     let reduced = export_m(&model, &c, 0.01, 200);
     let keys = |glb: &[u8]| -> Vec<Vec<f32>> {
         let (json, bin) = chunks(glb);
         let a = &json["animations"][0];
-        a["samplers"]
+        // The joints' rotation channels (the flutter's weights channel keeps every sample).
+        a["channels"]
             .as_array()
-            .expect("samplers")
+            .expect("channels")
             .iter()
+            .filter(|c| c["target"]["path"] == "rotation")
+            .map(|c| &a["samplers"][c["sampler"].as_u64().expect("sampler") as usize])
             .map(|s| floats(&json, &bin, s["input"].as_u64().expect("in") as usize))
             .collect()
     };
@@ -237,7 +244,8 @@ fn slerp(a: [f64; 4], b: [f64; 4], u: f64) -> [f64; 4] {
 fn a_looping_clip_is_one_period_of_its_wind_and_closes_on_itself() {
     let model = aspen();
     let joints = model.exported_joints(0, 1000);
-    let settings = ClipSettings { seconds: 4.0, fps: 20.0, warmup: 0.0, looped: true };
+    let settings =
+        ClipSettings { seconds: 4.0, fps: 20.0, warmup: 0.0, looped: true, ..Default::default() };
     let c = clip(&model, &joints, &settings);
     // The synthesised wind loops every 4 s; the clip is that period.
     assert_eq!(c.times.len(), 81);
@@ -266,7 +274,8 @@ fn a_looping_clip_is_one_period_of_its_wind_and_closes_on_itself() {
 fn reduced_playback_stays_within_max_error_of_the_simulation() {
     let model = aspen();
     let joints = model.exported_joints(0, 300);
-    let settings = ClipSettings { seconds: 3.0, fps: 30.0, warmup: 2.0, looped: false };
+    let settings =
+        ClipSettings { seconds: 3.0, fps: 30.0, warmup: 2.0, looped: false, ..Default::default() };
     let c = clip(&model, &joints, &settings);
     let tol = 0.002;
     let glb = export_m(&model, &c, tol, 300);
@@ -324,6 +333,7 @@ fn a_forest_export_places_each_tree_and_plays_its_own_simulation() {
                 joints: js.clone(),
                 rotations: vec![rot(&a), rot(&a)],
                 max_error: 0.0,
+                flutter: Vec::new(),
             }),
         });
     }
@@ -361,4 +371,44 @@ fn a_forest_export_places_each_tree_and_plays_its_own_simulation() {
     }
     // The trees stand apart (the scene spaces them 9 m).
     assert!(spread > 5.0, "spread {spread} m");
+}
+
+#[test]
+fn flutter_follows_the_wind_at_the_crown_and_a_looping_clip_closes_it() {
+    let model = aspen();
+    let joints = model.exported_joints(0, 100);
+    let leaves = sylva_sway::LeafParams::default();
+    // In a steady wind the flutter's amplitude is the model's at that speed and its phase
+    // turns at the model's frequency: 8 m/s → 3 Hz, so 0.1 s between samples is 0.3 cycle.
+    let skeleton = &model.tree.skeleton;
+    let steady = PointWind::Steady([8.0, 0.0, 0.0]);
+    let settings = ClipSettings {
+        seconds: 1.0,
+        fps: 10.0,
+        warmup: 1.0,
+        looped: false,
+        leaves,
+    };
+    let c = record(skeleton, SwayParams::default(), &steady, &joints, &settings).expect("clip");
+    assert_eq!(c.flutter.len(), c.times.len());
+    let tau = std::f32::consts::TAU;
+    for pair in c.flutter.windows(2) {
+        assert!((pair[1].amplitude - leaves.amplitude(8.0)).abs() < 1e-6);
+        let turned = (pair[1].phase - pair[0].phase).rem_euclid(tau);
+        assert!((turned - 0.3 * tau).abs() < 1e-3, "phase turned {turned} rad in 0.1 s");
+    }
+    // A looping clip: the last sample's flutter is the first's, and no step between samples
+    // turns the phase much further than the wind's own rate allows (f ≤ f0 + f1·|u|).
+    let settings =
+        ClipSettings { seconds: 4.0, fps: 20.0, warmup: 0.0, looped: true, ..Default::default() };
+    let c = clip(&model, &joints, &settings);
+    let (first, last) = (c.flutter[0], c.flutter[c.flutter.len() - 1]);
+    assert_eq!(first.amplitude, last.amplitude);
+    assert!((first.phase - last.phase).abs() < 1e-4, "{first:?} vs {last:?}");
+    let fastest = leaves.frequency(40.0) * tau * 0.05;
+    for pair in c.flutter.windows(2) {
+        let turned = (pair[1].phase - pair[0].phase).rem_euclid(tau);
+        assert!(turned > 0.0 && turned < fastest, "phase turned {turned} rad in 0.05 s");
+    }
+    assert!(c.flutter.iter().any(|l| l.amplitude > 0.05), "strong wind sets the leaves fluttering");
 }

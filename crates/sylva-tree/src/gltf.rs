@@ -95,7 +95,25 @@ pub struct JointAnimation {
     /// since a point's error is at most the sum, over the animated joints above it, of angle
     /// error × reach. 0 keeps every sample.
     pub max_error: f32,
+    /// Leaf flutter per sample: the tree's (amplitude A, rad; phase θ, rad) of sylva-sway's
+    /// `LeafSway`, or empty for none. Exported as two morph targets of the leaf cards,
+    /// weighted `A·sin θ` and `A·cos θ`: a card c swings about its hanging point by
+    /// `A·sin(θ + φ_c)`, the renderer's flutter, to first order in the angle (see
+    /// [`FLUTTER_TARGETS`]).
+    pub flutter: Vec<[f32; 2]>,
 }
+
+/// Names of the two morph targets that carry leaf flutter (`extras.targetNames` of each
+/// mesh, glTF's convention). A leaf card c hangs at h_c with phase offset φ_c and turns about
+/// k_c = unit(o × z), o = its centre − h_c (the renderer's axis). For a corner p, r = p − h_c,
+/// the targets hold `cos φ_c · (k_c × r)` and `sin φ_c · (k_c × r)`. With weights `A·sin θ`
+/// and `A·cos θ` the corner moves by `A·sin(θ + φ_c) · (k_c × r)`: the rotation by the
+/// renderer's angle a = A·sin(θ + φ_c) to first order. The rest, r·(1 − cos a) towards the
+/// axis and r·(a − sin a) along the swing, is at most `a²/2 · |r|` — 6 % of a corner's
+/// distance from its hanging point at the largest default swing (0.35 rad). Weights are
+/// interpolated linearly between samples. The bark primitive carries the same two targets,
+/// all zero (accessors without a buffer view), as glTF asks every primitive of a mesh to.
+pub const FLUTTER_TARGETS: [&str; 2] = ["flutter_sin", "flutter_cos"];
 
 /// Rᵀ·v for the frame R with columns f[0], f[1], f[2].
 fn to_local(f: &[V3; 3], v: V3) -> V3 {
@@ -132,7 +150,9 @@ struct BufferView {
 #[derive(Serialize)]
 #[serde(rename_all = "camelCase")]
 struct Accessor {
-    buffer_view: usize,
+    /// None: every element zero (glTF §3.6.2.3), as the bark's flutter targets are.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    buffer_view: Option<usize>,
     component_type: u32,
     count: usize,
     #[serde(rename = "type")]
@@ -185,12 +205,21 @@ struct Attributes {
     weights: usize,
 }
 
+/// A morph target: position displacements.
+#[derive(Serialize)]
+struct Target {
+    #[serde(rename = "POSITION")]
+    position: usize,
+}
+
 /// A mesh primitive (triangles).
 #[derive(Serialize)]
 struct Primitive {
     attributes: Attributes,
     indices: usize,
     material: usize,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    targets: Vec<Target>,
 }
 
 /// A `meshes` entry.
@@ -198,6 +227,22 @@ struct Primitive {
 struct Mesh {
     name: String,
     primitives: Vec<Primitive>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    weights: Vec<f32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    extras: Option<serde_json::Value>,
+}
+
+impl Mesh {
+    fn new(name: String, primitives: Vec<Primitive>) -> Mesh {
+        let morphs = primitives.first().map_or(0, |p| p.targets.len());
+        Mesh {
+            name,
+            primitives,
+            weights: vec![0.0; morphs],
+            extras: (morphs > 0).then(|| json!({ "targetNames": FLUTTER_TARGETS })),
+        }
+    }
 }
 
 /// A `scenes` entry.
@@ -229,10 +274,12 @@ struct Gltf {
     buffers: serde_json::Value,
 }
 
-/// One rotation channel of the animation: the node it turns, its time and value accessors.
+/// One channel of the animation: the node it drives, what of it (`rotation` of a joint,
+/// `weights` of a mesh node's flutter targets), its time and value accessors.
 #[derive(Debug, Clone, Copy)]
 struct Channel {
     node: usize,
+    path: &'static str,
     input: usize,
     output: usize,
 }
@@ -392,8 +439,47 @@ fn animate(
         };
         let values: Vec<[f32; 4]> = kept.iter().map(|&k| q[k].map(|v| v as f32)).collect();
         let output = bin.accessor(&f32_bytes(&values), None, FLOAT, values.len(), "VEC4", None);
-        channels.push(Channel { node: base + index[j] as usize, input, output });
+        channels.push(Channel { node: base + index[j] as usize, path: "rotation", input, output });
     }
+}
+
+/// Whether `anim` carries leaf flutter for every sample.
+fn has_flutter(anim: &JointAnimation) -> bool {
+    let samples = anim.times.len().min(anim.rotations.len());
+    samples > 0 && anim.flutter.len() >= samples
+}
+
+/// The `weights` channel of mesh node `node`: per sample the flutter targets' weights
+/// (A·sin θ, A·cos θ), every sample kept (two floats each).
+fn flutter_channel(anim: &JointAnimation, node: usize, bin: &mut Bin, channels: &mut Vec<Channel>) {
+    if !has_flutter(anim) {
+        return;
+    }
+    let samples = anim.times.len().min(anim.rotations.len());
+    let times = &anim.times[..samples];
+    let bytes: Vec<u8> = times.iter().flat_map(|v| v.to_le_bytes()).collect();
+    let range = (&[times[0]][..], &[times[samples - 1]][..]);
+    let input = bin.accessor(&bytes, None, FLOAT, samples, "SCALAR", Some(range));
+    let weights: Vec<[f32; 2]> = anim.flutter[..samples]
+        .iter()
+        .map(|&[a, theta]| {
+            let (sn, cs) = theta.sin_cos();
+            [a * sn, a * cs]
+        })
+        .collect();
+    let output = bin.accessor(&f32_bytes(&weights), None, FLOAT, 2 * samples, "SCALAR", None);
+    channels.push(Channel { node, path: "weights", input, output });
+}
+
+/// The two flutter targets of a leaf card's four corners (see [`FLUTTER_TARGETS`]), for
+/// the corners of [`leaf_quad`].
+pub fn flutter_displacements(c: &LeafCluster, corners: &[V3; 4]) -> [[V3; 4]; 2] {
+    let o = sub(c.center, c.hang);
+    let axis = cross(o, [0.0, 0.0, 1.0]);
+    let k = if dot(axis, axis) < 1e-10 { [1.0, 0.0, 0.0] } else { norm(axis) };
+    let (sn, cs) = c.phase.sin_cos();
+    let swing = corners.map(|p| cross(k, sub(p, c.hang)));
+    [swing.map(|d| scale(d, cs)), swing.map(|d| scale(d, sn))]
 }
 
 /// Binary buffer under construction, with one view per accessor.
@@ -426,7 +512,7 @@ impl Bin {
     ) -> usize {
         let buffer_view = self.view(bytes, target);
         self.accessors.push(Accessor {
-            buffer_view,
+            buffer_view: Some(buffer_view),
             component_type,
             count,
             ty,
@@ -474,7 +560,35 @@ impl Bin {
             "SCALAR",
             None,
         );
-        Primitive { attributes, indices, material }
+        Primitive { attributes, indices, material, targets: Vec::new() }
+    }
+
+    /// A morph target of `count` zero displacements: an accessor with no buffer view.
+    fn zero_target(&mut self, count: usize) -> Target {
+        self.accessors.push(Accessor {
+            buffer_view: None,
+            component_type: FLOAT,
+            count,
+            ty: "VEC3",
+            min: vec![0.0; 3],
+            max: vec![0.0; 3],
+        });
+        Target { position: self.accessors.len() - 1 }
+    }
+
+    /// A morph target of position displacements.
+    fn target(&mut self, d: &[V3]) -> Target {
+        let (lo, hi) = bounds(d);
+        Target {
+            position: self.accessor(
+                &f32_bytes(d),
+                Some(ARRAY_BUFFER),
+                FLOAT,
+                d.len(),
+                "VEC3",
+                Some((&lo, &hi)),
+            ),
+        }
     }
 }
 
@@ -508,8 +622,9 @@ fn png(img: &Image) -> Vec<u8> {
     out
 }
 
-/// The leaf quad of a cluster: four corners and its normal (out of the crown).
-fn leaf_quad(c: &LeafCluster) -> ([V3; 4], V3) {
+/// The leaf quad of a cluster as exported: four corners (rest pose, tree space) and its
+/// normal (out of the crown).
+pub fn leaf_quad(c: &LeafCluster) -> ([V3; 4], V3) {
     let (u, v) = c.axes();
     let h = 0.5 * c.size;
     let corner = |a: f32, b: f32| {
@@ -552,8 +667,9 @@ impl TreeModel {
             if let Some(anim) = &opts.animation {
                 animate(anim, sk, &frames, &keep, base, &index, &mut bin, &mut channels);
             }
-            let prims = self.lod_primitives(l, &index, &mut bin, [0, 1]);
-            meshes.push(Mesh { name: format!("lod{l}"), primitives: prims });
+            let flutter = opts.animation.as_ref().is_some_and(has_flutter);
+            let prims = self.lod_primitives(l, &index, &mut bin, [0, 1], flutter);
+            meshes.push(Mesh::new(format!("lod{l}"), prims));
             // glTF is +Y up, Sylva +Z up: the joints hang under a node turning Z up into Y up.
             // The skinned mesh node stays a root with no transform (glTF ignores it), so its
             // vertices follow the joints, turned with them.
@@ -576,6 +692,9 @@ impl TreeModel {
                 mesh: Some(k),
                 skin: Some(k),
             });
+            if let Some(anim) = &opts.animation {
+                flutter_channel(anim, nodes.len() - 1, &mut bin, &mut channels);
+            }
             scenes.push(Scene { name: format!("lod{l}"), nodes: vec![up, nodes.len() - 1] });
         }
         let animation = opts.animation.as_ref().map(|a| a.name.as_str());
@@ -583,13 +702,15 @@ impl TreeModel {
     }
 
     /// Level `l`'s two primitives (bark; leaf quads) with joint indices mapped through
-    /// `index` (skeleton joint → exported joint) and the given (bark, leaf) materials.
+    /// `index` (skeleton joint → exported joint) and the given (bark, leaf) materials; with
+    /// `flutter`, the two morph targets of [`FLUTTER_TARGETS`] on each.
     fn lod_primitives(
         &self,
         l: usize,
         index: &[u16],
         bin: &mut Bin,
         materials: [usize; 2],
+        flutter: bool,
     ) -> Vec<Primitive> {
         let lod = &self.lods[l];
         let b = &lod.branches;
@@ -623,15 +744,12 @@ impl TreeModel {
                 }
                 wv.push(ws4);
             }
-            prims.push(bin.primitive(
-                &b.positions,
-                &b.normals,
-                &b.uvs,
-                &jb,
-                &wv,
-                &b.indices,
-                materials[0],
-            ));
+            let mut bark =
+                bin.primitive(&b.positions, &b.normals, &b.uvs, &jb, &wv, &b.indices, materials[0]);
+            if flutter {
+                bark.targets = (0..2).map(|_| bin.zero_target(b.positions.len())).collect();
+            }
+            prims.push(bark);
         }
         if !lod.clusters.is_empty() {
             let mut p = Vec::with_capacity(4 * lod.clusters.len());
@@ -640,8 +758,15 @@ impl TreeModel {
             let mut jb = Vec::with_capacity(32 * lod.clusters.len());
             let mut w = Vec::with_capacity(4 * lod.clusters.len());
             let mut ids: Vec<u32> = Vec::with_capacity(6 * lod.clusters.len());
+            let mut swing: [Vec<V3>; 2] = Default::default();
             for c in &lod.clusters {
                 let (corners, normal) = leaf_quad(c);
+                if flutter {
+                    let d = flutter_displacements(c, &corners);
+                    for (t, dt) in swing.iter_mut().zip(d) {
+                        t.extend_from_slice(&dt);
+                    }
+                }
                 let first = p.len() as u32;
                 let cell = [(c.atlas % cells) as f32, (c.atlas / cells) as f32];
                 for (q, corner) in corners.iter().enumerate() {
@@ -656,7 +781,11 @@ impl TreeModel {
                 }
                 ids.extend_from_slice(&[first, first + 1, first + 2, first, first + 2, first + 3]);
             }
-            prims.push(bin.primitive(&p, &nrm, &uv, &jb, &w, &ids, materials[1]));
+            let mut leaves = bin.primitive(&p, &nrm, &uv, &jb, &w, &ids, materials[1]);
+            if flutter {
+                leaves.targets = swing.iter().map(|d| bin.target(d)).collect();
+            }
+            prims.push(leaves);
         }
         prims
     }
@@ -868,7 +997,7 @@ fn assemble(
                 "name": name,
                 "channels": channels.iter().enumerate().map(|(i, c)| json!({
                     "sampler": i,
-                    "target": { "node": c.node, "path": "rotation" }
+                    "target": { "node": c.node, "path": c.path }
                 })).collect::<Vec<_>>(),
                 "samplers": channels.iter().map(|c| json!({
                     "input": c.input,
@@ -958,6 +1087,8 @@ pub fn forest_to_glb(
         })
         .collect();
     let mut mesh_of: Vec<Option<usize>> = vec![None; models.len()];
+    // Species meshes carry the flutter targets when some tree's clip has flutter.
+    let flutter = trees.iter().any(|t| t.animation.as_ref().is_some_and(has_flutter));
     let mut places = Vec::new();
     let mut roots = Vec::new();
     let mut name_of = None;
@@ -977,8 +1108,8 @@ pub fn forest_to_glb(
         let mesh = *mesh_of[tree.species].get_or_insert_with(|| {
             let s = tree.species;
             let k = slot_of[s].unwrap_or(0);
-            let primitives = model.lod_primitives(0, &index, &mut bin, [2 * k, 2 * k + 1]);
-            meshes.push(Mesh { name: format!("species{s}"), primitives });
+            let primitives = model.lod_primitives(0, &index, &mut bin, [2 * k, 2 * k + 1], flutter);
+            meshes.push(Mesh::new(format!("species{s}"), primitives));
             meshes.len() - 1
         });
         let (sn, cs) = (0.5 * tree.yaw).sin_cos();
@@ -1002,6 +1133,9 @@ pub fn forest_to_glb(
             skin: Some(skins.len() - 1),
         });
         roots.push(nodes.len() - 1);
+        if let Some(anim) = &tree.animation {
+            flutter_channel(anim, nodes.len() - 1, &mut bin, &mut channels);
+        }
     }
     nodes.push(Node {
         name: format!("{name} Y-up"),

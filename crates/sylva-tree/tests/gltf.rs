@@ -14,6 +14,11 @@ fn u32_at(b: &[u8], at: usize) -> usize {
     u32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]]) as usize
 }
 
+/// The JSON chunk of a `.glb`.
+fn json_of(b: &[u8]) -> serde_json::Value {
+    serde_json::from_slice(&b[20..20 + u32_at(b, 12)]).expect("glTF JSON")
+}
+
 #[test]
 fn same_seed_same_bytes_and_another_seed_another_file() {
     let all = GltfOptions { lods: vec![], ..Default::default() };
@@ -127,4 +132,88 @@ fn the_exported_tree_stands_along_plus_y() {
         let (lo, hi) = span(k);
         assert!(hi - lo < 0.7 * (y1 - y0), "axis {k} spans {lo} … {hi}");
     }
+}
+
+/// Rotate `v` about the unit axis `k` by `a` (Rodrigues), as the renderer's leaf shader does.
+fn rotate_about(v: [f32; 3], k: [f32; 3], a: f32) -> [f32; 3] {
+    let (s, c) = a.sin_cos();
+    let kxv = [k[1] * v[2] - k[2] * v[1], k[2] * v[0] - k[0] * v[2], k[0] * v[1] - k[1] * v[0]];
+    let kv = k[0] * v[0] + k[1] * v[1] + k[2] * v[2];
+    std::array::from_fn(|i| v[i] * c + kxv[i] * s + k[i] * kv * (1.0 - c))
+}
+
+#[test]
+fn flutter_targets_are_the_renderers_leaf_swing_to_first_order() {
+    use sylva_tree::gltf::{flutter_displacements, leaf_quad};
+    let model = Species::preset("quaking_aspen").expect("preset").model(3, 2).expect("model");
+    let clusters = &model.lods[0].clusters;
+    assert!(clusters.len() > 100);
+    // Weights A·sin θ and A·cos θ move a corner by A·sin(θ + φ)·(k × r): the renderer's
+    // rotation by a = A·sin(θ + φ) about the card's hanging point, up to a²/2·|r|.
+    for (amplitude, theta) in [(0.01f32, 0.3f32), (0.1, 2.0), (0.35, 4.5)] {
+        let (w0, w1) = (amplitude * theta.sin(), amplitude * theta.cos());
+        let mut worst_ratio = 0.0f32;
+        for c in clusters.iter().step_by(37) {
+            let (corners, _) = leaf_quad(c);
+            let d = flutter_displacements(c, &corners);
+            let o = [c.center[0] - c.hang[0], c.center[1] - c.hang[1], c.center[2] - c.hang[2]];
+            let axis = [o[1], -o[0], 0.0f32];
+            let len = (axis[0] * axis[0] + axis[1] * axis[1]).sqrt();
+            let k = if len < 1e-5 { [1.0, 0.0, 0.0] } else { [axis[0] / len, axis[1] / len, 0.0] };
+            let a = amplitude * (theta + c.phase).sin();
+            for q in 0..4 {
+                let r: [f32; 3] = std::array::from_fn(|i| corners[q][i] - c.hang[i]);
+                let exact = rotate_about(r, k, a);
+                let morphed: [f32; 3] =
+                    std::array::from_fn(|i| r[i] + w0 * d[0][q][i] + w1 * d[1][q][i]);
+                let err = (0..3).map(|i| (exact[i] - morphed[i]).powi(2)).sum::<f32>().sqrt();
+                let rlen = r.iter().map(|v| v * v).sum::<f32>().sqrt();
+                let bound = 0.5 * a * a * rlen + 1e-6;
+                assert!(err <= bound * 1.01, "corner off by {err} m, bound {bound} (a = {a})");
+                if a.abs() > 0.05 && rlen > 1e-2 {
+                    worst_ratio = worst_ratio.max(err / (a * a * rlen));
+                }
+            }
+        }
+        // The error is second order: it shrinks with the square of the swing.
+        assert!(worst_ratio <= 0.51, "error / (a²|r|) up to {worst_ratio}");
+    }
+}
+
+#[test]
+fn a_clip_with_flutter_carries_two_targets_on_every_primitive_and_a_weights_channel() {
+    use sylva_tree::gltf::{FLUTTER_TARGETS, GltfOptions, JointAnimation};
+    let model = Species::preset("quaking_aspen").expect("preset").model(3, 2).expect("model");
+    let joints = model.exported_joints(0, 64);
+    let identity = [1.0f32, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
+    let animation = JointAnimation {
+        name: "flutter".into(),
+        times: vec![0.0, 0.5, 1.0],
+        joints: joints.clone(),
+        rotations: vec![vec![identity; joints.len()]; 3],
+        max_error: 0.0,
+        flutter: vec![[0.2, 0.0], [0.2, 1.0], [0.1, 2.0]],
+    };
+    let glb = model.to_glb(&GltfOptions {
+        max_joints: 64,
+        animation: Some(animation),
+        ..GltfOptions::default()
+    });
+    let json = json_of(&glb);
+    let mesh = &json["meshes"][0];
+    assert_eq!(mesh["weights"].as_array().map(Vec::len), Some(2));
+    assert_eq!(mesh["extras"]["targetNames"], serde_json::json!(FLUTTER_TARGETS));
+    for p in mesh["primitives"].as_array().expect("primitives") {
+        assert_eq!(p["targets"].as_array().map(Vec::len), Some(2), "{p}");
+    }
+    let channels = json["animations"][0]["channels"].as_array().expect("channels");
+    let weights: Vec<_> = channels.iter().filter(|c| c["target"]["path"] == "weights").collect();
+    assert_eq!(weights.len(), 1);
+    let sampler = &json["animations"][0]["samplers"]
+        [weights[0]["sampler"].as_u64().expect("sampler") as usize];
+    // Two weights per sample.
+    assert_eq!(json["accessors"][sampler["output"].as_u64().expect("output") as usize]["count"], 6);
+    // Without flutter, no targets.
+    let still = model.to_glb(&GltfOptions { max_joints: 64, ..GltfOptions::default() });
+    assert!(json_of(&still)["meshes"][0].get("weights").is_none());
 }

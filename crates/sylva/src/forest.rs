@@ -87,24 +87,28 @@ pub fn run(cmd: ForestCommand) -> anyhow::Result<()> {
     }
     // Per tree, per sample: the rotations of its species' exported joints.
     let mut rotations: Vec<Vec<Vec<[f32; 9]>>> = vec![Vec::with_capacity(samples + 1); trees];
+    let mut flutter: Vec<Vec<[f32; 2]>> = vec![Vec::with_capacity(samples + 1); trees];
     for k in 0..=samples {
         if k > 0 {
             for _ in 0..sub {
                 forest.step(dt / sub as f32);
             }
         }
-        for (t, rot) in rotations.iter_mut().enumerate() {
+        for (t, (rot, leaves)) in rotations.iter_mut().zip(&mut flutter).enumerate() {
             let s = forest.placement(t).map_or(0, |p| p.species as usize);
             let pose = forest.tree_palettes(t, &joints[s]);
             rot.push(pose.iter().map(sylva_sway::rotation_of).collect());
+            let l = forest.tree_leaves(t).unwrap_or_default();
+            leaves.push([l.amplitude, l.phase]);
         }
     }
     let times: Vec<f32> = (0..=samples).map(|k| k as f32 * dt).collect();
     let name = format!("{} in {}", spec.name, spec.wind);
     let list: Vec<ForestTree> = rotations
         .into_iter()
+        .zip(flutter)
         .enumerate()
-        .filter_map(|(t, rotations)| {
+        .filter_map(|(t, (rotations, flutter))| {
             let p = forest.placement(t)?;
             Some(ForestTree {
                 species: p.species as usize,
@@ -117,6 +121,7 @@ pub fn run(cmd: ForestCommand) -> anyhow::Result<()> {
                     joints: joints[p.species as usize].clone(),
                     rotations,
                     max_error: a.max_error_mm / 1000.0,
+                    flutter,
                 }),
             })
         })

@@ -331,8 +331,13 @@ fn animate(a: AnimateArgs) -> anyhow::Result<()> {
     let started = Instant::now();
     let wind = PointWind::new(&a.wind, crown, a.seconds, a.seed, a.looped)?;
     let joints = model.exported_joints(a.lod, a.max_joints);
-    let settings =
-        ClipSettings { seconds: a.seconds, fps: a.fps, warmup: a.warmup, looped: a.looped };
+    let settings = ClipSettings {
+        seconds: a.seconds,
+        fps: a.fps,
+        warmup: a.warmup,
+        looped: a.looped,
+        ..Default::default()
+    };
     let params = SwayParams::for_leaves(sylva_tree::texture::is_needle(&sp));
     let clip = record(sk, params, &wind, &joints, &settings)?;
     let animation = sylva_tree::gltf::JointAnimation {
@@ -341,6 +346,7 @@ fn animate(a: AnimateArgs) -> anyhow::Result<()> {
         joints: clip.joints.clone(),
         rotations: clip.rotations(),
         max_error: a.max_error_mm / 1000.0,
+        flutter: clip.flutter_track(),
     };
     let opts = sylva_tree::gltf::GltfOptions {
         lods: vec![a.lod],
@@ -407,17 +413,48 @@ fn animate(a: AnimateArgs) -> anyhow::Result<()> {
                 Some(serde_json::json!({ "node": format!("joint{j}"), "positions": pos }))
             })
             .collect();
+        // Four leaf-card corners on exported joints: where the file's flutter targets and
+        // skin put them (the first-order flutter of sylva_tree::gltf::FLUTTER_TARGETS).
+        let clusters = &model.lods[a.lod].clusters;
+        let on_exported: Vec<usize> = (0..clusters.len())
+            .filter(|&c| exported.contains(&(clusters[c].joint as usize)))
+            .collect();
+        let leaves: Vec<serde_json::Value> = (0..4)
+            .filter_map(|i| {
+                let c = *on_exported.get(i * on_exported.len() / 4)?;
+                let cl = &clusters[c];
+                let k = slot(cl.joint as usize)?;
+                let (corners, _) = sylva_tree::gltf::leaf_quad(cl);
+                let [d0, d1] = sylva_tree::gltf::flutter_displacements(cl, &corners);
+                let pos: Vec<[f32; 3]> = clip
+                    .palettes
+                    .iter()
+                    .zip(&clip.flutter)
+                    .map(|(s, l)| {
+                        let (sn, cs) = l.phase.sin_cos();
+                        let (w0, w1) = (l.amplitude * sn, l.amplitude * cs);
+                        let q: [f32; 3] =
+                            std::array::from_fn(|e| corners[0][e] + w0 * d0[0][e] + w1 * d1[0][e]);
+                        let p = transform(&s[k], q);
+                        [p[0], p[2], -p[1]]
+                    })
+                    .collect();
+                Some(serde_json::json!({ "vertex": 4 * c, "positions": pos }))
+            })
+            .collect();
         let doc = serde_json::json!({
             "times": clip.times,
             "max_error_m": a.max_error_mm / 1000.0,
-            "joints": series
+            "joints": series,
+            "leaves": leaves
         });
         sylva_wind::io::atomic::write_atomic(path, doc.to_string().as_bytes())
             .with_context(|| format!("writing {}", path.display()))?;
         println!(
-            "wrote {} ({} joints' positions at {} times)",
+            "wrote {} ({} joints' and {} leaf corners' positions at {} times)",
             path.display(),
             picks.len(),
+            leaves.len(),
             clip.times.len()
         );
     }
