@@ -36,6 +36,13 @@ fn to_python<'py>(py: Python<'py>, f: &WindField) -> (Bound<'py, PyBytes>, Strin
 }
 
 /// Names of the wind presets.
+/// The documentation of every model parameter, from `sylva-wind`'s doc comments (JSON:
+/// key → text; see build.rs for the keys).
+#[pyfunction]
+fn param_docs() -> &'static str {
+    include_str!(concat!(env!("OUT_DIR"), "/param_docs.json"))
+}
+
 #[pyfunction]
 fn presets() -> Vec<&'static str> {
     Preset::ALL.iter().map(|p| p.name()).collect()
@@ -193,6 +200,7 @@ fn psd(
 #[pymodule]
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(presets, m)?)?;
+    m.add_function(wrap_pyfunction!(param_docs, m)?)?;
     m.add_function(wrap_pyfunction!(preset_params, m)?)?;
     m.add_function(wrap_pyfunction!(generate, m)?)?;
     m.add_function(wrap_pyfunction!(read, m)?)?;

@@ -12,9 +12,9 @@ is the same field, bit for bit.
 (256, 3, 2, 16, 16)
 >>> freqs, psd = sw.psd(f, "u", z=1)
 
-Model parameters keep their Rust names (``sw.default_params()`` lists them; see
-``WindParams`` in the Rust documentation for meaning, unit and range). Errors from the
-library are raised as ``ValueError`` with the command line's message.
+Model parameters keep their Rust names (``sw.default_params()`` lists them) and their Rust
+documentation: ``sw.describe("u_star")`` or ``sw.PARAMETER_DOCS`` give meaning, unit and
+range. Errors from the library are raised as ``ValueError`` with the command line's message.
 """
 
 from __future__ import annotations
@@ -32,6 +32,8 @@ __all__ = [
     "PRESETS",
     "COMPONENTS",
     "default_params",
+    "describe",
+    "PARAMETER_DOCS",
     "generate",
     "read",
     "write",
@@ -41,6 +43,13 @@ __all__ = [
 
 #: Names of the wind presets (calm, breeze, strong, storm).
 PRESETS: Tuple[str, ...] = tuple(_native.presets())
+
+#: The documentation of every model parameter, taken from the Rust doc comments of
+#: ``sylva-wind`` when the package is built. Keys: ``u_star`` (a top-level parameter),
+#: ``profile.z0`` (a field of a profile kind), ``profile.kind=log`` (a kind),
+#: ``spectrum=kaimal`` and ``coherence_speed=pair-mean`` (values),
+#: ``spectrum_constants[].a`` and ``coherence[].cy`` (fields of the per-component entries).
+PARAMETER_DOCS: Dict[str, str] = json.loads(_native.param_docs())
 
 #: Velocity components, in the order of the data's axis 1.
 COMPONENTS: Tuple[str, ...] = ("u", "v", "w")
@@ -111,6 +120,17 @@ def _field_from(native: Tuple[bytes, str]) -> Field:
     shape = (g["frames"], 3, len(g["zs"]), len(g["ys"]), len(g["xs"]))
     array = np.frombuffer(data, dtype="<f4").reshape(shape)
     return Field(array, g, m["params"], m["synth"], m["coherence_error"])
+
+
+def describe(name: str) -> str:
+    """The documentation of a model parameter or value (a key of ``PARAMETER_DOCS``; a
+    top-level name such as ``"profile"`` also lists its fields and kinds)."""
+    below = [k for k in PARAMETER_DOCS if k != name and k.startswith((name + ".", name + "[]", name + "="))]
+    if name not in PARAMETER_DOCS and not below:
+        raise ValueError(f"unknown wind parameter `{name}`; known: {sorted(PARAMETER_DOCS)}")
+    lines = [f"{name}: {PARAMETER_DOCS[name]}"] if name in PARAMETER_DOCS else []
+    lines += [f"  {k}: {PARAMETER_DOCS[k]}" for k in below]
+    return "\n".join(lines)
 
 
 def default_params(preset: str = "breeze") -> Dict[str, Any]:

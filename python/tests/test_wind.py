@@ -12,6 +12,9 @@ import pytest
 
 import sylva_wind as sw
 
+#: The repository's root.
+ROOT = Path(__file__).resolve().parents[2]
+
 #: The command-line binary (the CI builds it and points here).
 SYLVA = os.environ.get("SYLVA_BIN", str(Path(__file__).resolve().parents[2] / "target/debug/sylva"))
 
@@ -141,3 +144,30 @@ def test_stats_are_the_command_lines(tmp_path):
     assert abs(u["sigma_error"]) < 4 * u["sigma_scatter"] + 0.02
     with pytest.raises(ValueError, match="outside the grid"):
         sw.stats(sw.read(out), height=3)
+
+
+def test_every_model_parameter_and_value_carries_the_rust_documentation():
+    docs = sw.PARAMETER_DOCS
+    for preset in sw.PRESETS:
+        params = sw.default_params(preset)
+        for name, value in params.items():
+            assert docs.get(name), f"no documentation for `{name}`"
+            if isinstance(value, dict):  # the profile: its kind and fields
+                assert docs.get(f"{name}.kind={value['kind']}"), value
+                for field in value:
+                    if field != "kind":
+                        assert docs.get(f"{name}.{field}"), f"{name}.{field}"
+            elif isinstance(value, list):  # per component u, v, w
+                for field in value[0]:
+                    assert docs.get(f"{name}[].{field}"), f"{name}[].{field}"
+    for spectrum in ("paper", "kaimal", "von-karman"):
+        assert docs.get(f"spectrum={spectrum}")
+    for speed in ("reference", "pair-mean"):
+        assert docs.get(f"coherence_speed={speed}")
+    # The text is the Rust doc comment itself.
+    source = (ROOT / "crates" / "sylva-wind" / "src" / "params.rs").read_text()
+    assert "/// Friction velocity U* in m/s (> 0)." in source
+    assert docs["u_star"].startswith("Friction velocity U* in m/s (> 0).")
+    assert "power" in sw.describe("profile") and "z0" in sw.describe("profile")
+    with pytest.raises(ValueError, match="unknown wind parameter `u_stra`"):
+        sw.describe("u_stra")

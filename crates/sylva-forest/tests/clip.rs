@@ -382,13 +382,7 @@ fn flutter_follows_the_wind_at_the_crown_and_a_looping_clip_closes_it() {
     // turns at the model's frequency: 8 m/s → 3 Hz, so 0.1 s between samples is 0.3 cycle.
     let skeleton = &model.tree.skeleton;
     let steady = PointWind::Steady([8.0, 0.0, 0.0]);
-    let settings = ClipSettings {
-        seconds: 1.0,
-        fps: 10.0,
-        warmup: 1.0,
-        looped: false,
-        leaves,
-    };
+    let settings = ClipSettings { seconds: 1.0, fps: 10.0, warmup: 1.0, looped: false, leaves };
     let c = record(skeleton, SwayParams::default(), &steady, &joints, &settings).expect("clip");
     assert_eq!(c.flutter.len(), c.times.len());
     let tau = std::f32::consts::TAU;
