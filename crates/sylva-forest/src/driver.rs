@@ -257,6 +257,32 @@ pub struct FrameData {
     offsets: Vec<u32>,
 }
 
+impl FrameData {
+    /// The geometry level tree `t` was drawn at in the last frame built into this
+    /// `FrameData` (the finer of two while cross-fading); `None` if it has not been in view
+    /// or the geometry LOD is off.
+    pub fn level(&self, t: usize) -> Option<u32> {
+        self.lod_state.get(t).filter(|x| !x.is_nan()).map(|x| x.floor().max(0.0) as u32)
+    }
+}
+
+/// What a viewer shows of one tree ([`Forest::tree_info`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct TreeInfo {
+    /// Species name.
+    pub species: String,
+    /// Height, m.
+    pub height: f32,
+    /// Trunk diameter at its base, m.
+    pub base_diameter: f32,
+    /// Undamped natural frequency of the trunk's base joint, Hz.
+    pub trunk_frequency: f32,
+    /// Its instance group (trees of a species sharing one simulation).
+    pub group: u32,
+    /// Trees in that group.
+    pub group_size: usize,
+}
+
 /// One species of a forest: its model, simulation and instance groups.
 #[derive(Debug)]
 pub struct SpeciesRuntime {
@@ -562,6 +588,85 @@ impl Forest {
             .collect()
     }
 
+    /// Replace the wind (e.g. one [`wind_field`] synthesised in the background for a changed
+    /// scene wind); time, sway state and live controls carry on.
+    pub fn set_wind_field(&mut self, field: WindField) {
+        self.wind = OwnedPyramid::new(field);
+    }
+
+    /// The wind at world point `p` (m) now, as the trees feel it (live controls applied).
+    pub fn wind_sample(&self, p: [f64; 3]) -> [f32; 3] {
+        self.wind_at(p, self.time)
+    }
+
+    /// How far tree `t`'s trunk top has moved from rest, m (its instance group's sway).
+    pub fn trunk_top_displacement(&self, t: usize) -> Option<f32> {
+        let &(p, _) = self.trees.get(t)?;
+        let sk = &self.species[p.species as usize].model.tree.skeleton;
+        let top = sk.trunk_top();
+        let rest = sk.joints()[top].tip();
+        let m = self.tree_palettes(t, &[top]);
+        let moved = sylva_sway::transform(m.first()?, rest);
+        let d: f32 = (0..3).map(|i| (moved[i] - rest[i]).powi(2)).sum::<f32>().sqrt();
+        Some(d * p.scale)
+    }
+
+    /// What a viewer shows of tree `t`.
+    pub fn tree_info(&self, t: usize) -> Option<TreeInfo> {
+        let &(p, g) = self.trees.get(t)?;
+        let s = &self.species[p.species as usize];
+        let stats = &s.model.tree.stats;
+        Some(TreeInfo {
+            species: s.name.clone(),
+            height: stats.height * p.scale,
+            base_diameter: 2.0 * stats.trunk_radius * p.scale,
+            trunk_frequency: s.batch.species().spring(0).frequency,
+            group: g,
+            group_size: self
+                .trees
+                .iter()
+                .filter(|&&(q, h)| q.species == p.species && h == g)
+                .count(),
+        })
+    }
+
+    /// The tree whose trunk passes nearest the ray from `origin` along `dir` (world), within
+    /// a fifth of the tree's height and in front of the origin; the closest such along the
+    /// ray. A crown's bulk is not tested: the trunk axis stands for the tree.
+    pub fn pick(&self, origin: [f32; 3], dir: [f32; 3]) -> Option<usize> {
+        let n = (dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]).sqrt();
+        if n.is_nan() || n <= 0.0 {
+            return None;
+        }
+        let d = [dir[0] / n, dir[1] / n, dir[2] / n];
+        let mut best: Option<(f32, usize)> = None;
+        for (i, (p, _)) in self.trees.iter().enumerate() {
+            let h = self.species[p.species as usize].model.tree.stats.height * p.scale;
+            // Closest approach of the ray and the trunk segment (base to base + h ẑ).
+            let w =
+                [origin[0] - p.position[0], origin[1] - p.position[1], origin[2] - p.position[2]];
+            let b = d[2];
+            let (dd, e) = (d[0] * w[0] + d[1] * w[1] + d[2] * w[2], w[2]);
+            let den = 1.0 - b * b;
+            let (s, z) = if den > 1e-6 {
+                let s = (b * e - dd) / den;
+                (s, (e + s * b).clamp(0.0, h))
+            } else {
+                (-dd, 0.5 * h)
+            };
+            let s = s.max(0.0);
+            let q = [origin[0] + s * d[0], origin[1] + s * d[1], origin[2] + s * d[2]];
+            let gap = ((q[0] - p.position[0]).powi(2)
+                + (q[1] - p.position[1]).powi(2)
+                + (q[2] - p.position[2] - z).powi(2))
+            .sqrt();
+            if gap <= 0.2 * h && s > 0.0 && best.is_none_or(|(bs, _)| s < bs) {
+                best = Some((s, i));
+            }
+        }
+        best.map(|(_, i)| i)
+    }
+
     /// Leaf flutter of tree `t` (its instance group's), as the renderer draws it; `None`
     /// for an unknown tree.
     pub fn tree_leaves(&self, t: usize) -> Option<sylva_sway::LeafSway> {
@@ -806,7 +911,7 @@ pub const MAX_WIND_POINTS: usize = 96;
 /// scene's direction over a grid covering the forest ([`wind_points`] a side, two heights),
 /// looping every 51.2 s; a steady uniform wind in the scene's direction; or a wind file,
 /// which tiles the forest periodically and keeps its own direction.
-fn wind_field(spec: &SceneSpec, radius: f32) -> Result<WindField, ForestError> {
+pub fn wind_field(spec: &SceneSpec, radius: f32) -> Result<WindField, ForestError> {
     let source = spec.wind_source().map_err(|e| ForestError::Wind(e.to_string()))?;
     let preset = match source {
         WindSource::Preset(p) => p,
@@ -840,6 +945,9 @@ fn wind_field(spec: &SceneSpec, radius: f32) -> Result<WindField, ForestError> {
         WindParams { direction_deg: spec.wind_direction_deg as f64, ..preset.params() };
     if let Some(u) = spec.u_star {
         params.u_star = u;
+    }
+    if let Some(a) = spec.wind_advection {
+        params.advection = a;
     }
     let half = (radius as f64 + 30.0) * std::f64::consts::SQRT_2;
     let n = wind_points(spec, radius);

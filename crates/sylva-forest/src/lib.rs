@@ -14,7 +14,7 @@ pub mod scene;
 pub use camera::{Camera, Mat4, ViewCone};
 pub use driver::{
     Bucket, Forest, ForestError, FrameData, FrameStats, Instance, LodSettings, SpeciesRuntime,
-    blend_levels, hysteresis, lod_coordinate,
+    TreeInfo, blend_levels, hysteresis, lod_coordinate, wind_field,
 };
 pub use scene::{
     CameraKey, Lighting, LodSpec, Placement, SCENES, SceneError, SceneSpec, SwayOverrides, Terrain,

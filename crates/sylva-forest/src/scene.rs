@@ -216,6 +216,10 @@ pub struct SceneSpec {
     /// speed scale with it. Only with a preset.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub u_star: Option<f64>,
+    /// Taylor advection of the gusts (`WindParams::advection`), replacing the preset's
+    /// (on). Only with a preset.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub wind_advection: Option<bool>,
     /// Direction the wind blows towards, degrees counter-clockwise from +x. Default 20.
     #[serde(default = "wind_dir")]
     pub wind_direction_deg: f32,

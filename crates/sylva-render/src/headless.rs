@@ -69,7 +69,24 @@ impl Headless {
 
     /// Draw `frame` from `camera` and return the image, RGBA8 rows top first.
     pub fn render(&mut self, frame: &FrameData, camera: &Camera) -> Result<Vec<u8>, RenderError> {
+        self.render_with(frame, camera, |_, _| {})
+    }
+
+    /// Colour format of the captured image (sRGB RGBA8), for passes drawn over it.
+    pub fn format(&self) -> wgpu::TextureFormat {
+        FORMAT
+    }
+
+    /// As [`render`](Self::render), with `overlay` drawing over the finished frame (as the
+    /// viewer's panel does) before it is read back.
+    pub fn render_with(
+        &mut self,
+        frame: &FrameData,
+        camera: &Camera,
+        overlay: impl FnOnce(&Gpu, &wgpu::TextureView),
+    ) -> Result<Vec<u8>, RenderError> {
         self.renderer.render(&self.gpu, frame, camera, &self.view);
+        overlay(&self.gpu, &self.view);
         let mut enc = self
             .gpu
             .device

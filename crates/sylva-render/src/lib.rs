@@ -15,8 +15,10 @@ pub mod passes;
 mod renderer;
 mod shared;
 
+pub use egui;
 pub use gpu::{Gpu, RenderError};
 pub use headless::Headless;
+pub use passes::panel::{PanelFrame, PanelPass};
 pub use renderer::{Renderer, SceneAssets};
 pub use shared::{SHADERS, shader_source};
 pub use wgpu;

@@ -76,12 +76,13 @@ struct DemoArgs {
 fn demo(a: DemoArgs) -> anyhow::Result<()> {
     if !a.headless && view::display_available() {
         println!(
-            "sylva demo: scene A in the viewer (drag to orbit, WASD to move, arrows for wind)"
+            "sylva demo: scene A in the viewer (drag to orbit, WASD to move, arrows for wind, F1 for keys)"
         );
         let a = view::ViewArgs {
             scene: "A".into(),
             lod_fraction: None,
             wind: None,
+            no_panel: false,
             lod: Default::default(),
         };
         match view::view(&a) {

@@ -1,0 +1,158 @@
+//! Keys and mouse → viewer changes, from plain events (so tests can feed synthetic ones).
+//!
+//! | input | effect |
+//! |---|---|
+//! | left drag | orbit the camera |
+//! | left click (no drag) | select the tree under the cursor (click on empty ground: none) |
+//! | wheel | zoom |
+//! | W A S D, Q E | move in the ground plane, down / up |
+//! | ↑ ↓ | wind speed ×1.25 / ÷1.25 |
+//! | ← → | turn the wind 15° left / right |
+//! | Space | pause / run |
+//! | . | one substep while paused |
+//! | Tab | show / hide the panel |
+//! | F1 | show / hide this help |
+//! | F12 | screenshot (PNG) |
+//! | Esc | quit |
+
+use std::collections::HashSet;
+
+use winit::keyboard::KeyCode;
+
+use super::state::{Action, Viewer};
+
+/// Help lines: key, what it does (the F1 overlay and the README).
+pub const KEYS: [(&str, &str); 14] = [
+    ("left drag", "orbit the camera"),
+    ("left click", "select the tree under the cursor"),
+    ("wheel", "zoom"),
+    ("W A S D", "move in the ground plane"),
+    ("Q E", "move down / up"),
+    ("↑ ↓", "wind speed ×1.25 / ÷1.25"),
+    ("← →", "turn the wind 15° left / right"),
+    ("Space", "pause / run"),
+    (".", "one substep while paused"),
+    ("Tab", "show / hide the panel"),
+    ("F1", "show / hide this help"),
+    ("F12", "screenshot (PNG in the working folder)"),
+    ("Esc", "quit"),
+    ("panel", "wind, LOD, scene, figures, plots, the selected tree"),
+];
+
+/// One input event, as the window delivers it (only what the viewer reads).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Input {
+    /// A key pressed (or auto-repeated) or released.
+    Key {
+        /// Physical key.
+        code: KeyCode,
+        /// Pressed (true) or released.
+        pressed: bool,
+        /// An auto-repeat of a held key.
+        repeat: bool,
+    },
+    /// Left button pressed (true) or released.
+    Left(bool),
+    /// Cursor moved to (x, y) pixels.
+    Cursor(f64, f64),
+    /// Wheel turned by this many lines (positive: away from the user, zoom in).
+    Wheel(f32),
+}
+
+/// Pointer and held keys between events.
+#[derive(Debug, Default)]
+pub struct Controls {
+    /// Keys held down.
+    pub held: HashSet<KeyCode>,
+    dragging: bool,
+    dragged: f64,
+    cursor: Option<(f64, f64)>,
+}
+
+/// Pixels the cursor may move between press and release and still count as a click.
+const CLICK_SLOP: f64 = 4.0;
+
+impl Controls {
+    /// Turn `input` into actions on `v` (a `width × height` pixel view).
+    pub fn handle(&mut self, v: &mut Viewer, input: Input, width: f32, height: f32) {
+        match input {
+            Input::Key { code, pressed: false, .. } => {
+                self.held.remove(&code);
+            }
+            Input::Key { code, pressed: true, repeat } => {
+                self.held.insert(code);
+                if let Some(a) = key_action(v, code, repeat) {
+                    v.apply(a);
+                }
+            }
+            Input::Left(true) => {
+                self.dragging = true;
+                self.dragged = 0.0;
+            }
+            Input::Left(false) => {
+                if self.dragging
+                    && self.dragged <= CLICK_SLOP
+                    && let Some((x, y)) = self.cursor
+                {
+                    let (o, d) = v.orbit.ray(x as f32, y as f32, width, height);
+                    v.apply(Action::Select(v.forest.pick(o, d)));
+                }
+                self.dragging = false;
+            }
+            Input::Cursor(x, y) => {
+                if let Some((px, py)) = self.cursor
+                    && self.dragging
+                {
+                    self.dragged += (x - px).abs() + (y - py).abs();
+                    if self.dragged > CLICK_SLOP {
+                        v.orbit.yaw -= 0.005 * (x - px) as f32;
+                        v.orbit.pitch = (v.orbit.pitch + 0.005 * (y - py) as f32).clamp(-0.1, 1.5);
+                    }
+                }
+                self.cursor = Some((x, y));
+            }
+            Input::Wheel(lines) => {
+                v.orbit.distance = (v.orbit.distance * 0.9f32.powf(lines)).clamp(2.0, 5000.0);
+            }
+        }
+    }
+
+    /// Move the camera target for the keys held over `dt` seconds of real time.
+    pub fn fly(&self, v: &mut Viewer, dt: f32) {
+        let speed = 0.8 * v.orbit.distance.max(10.0) * dt;
+        let (fx, fy) = (-v.orbit.yaw.cos(), -v.orbit.yaw.sin());
+        let mut mv = [0.0f32; 3];
+        for k in &self.held {
+            match k {
+                KeyCode::KeyW => mv = [mv[0] + fx, mv[1] + fy, mv[2]],
+                KeyCode::KeyS => mv = [mv[0] - fx, mv[1] - fy, mv[2]],
+                KeyCode::KeyA => mv = [mv[0] - fy, mv[1] + fx, mv[2]],
+                KeyCode::KeyD => mv = [mv[0] + fy, mv[1] - fx, mv[2]],
+                KeyCode::KeyQ => mv[2] -= 1.0,
+                KeyCode::KeyE => mv[2] += 1.0,
+                _ => {}
+            }
+        }
+        for (t, m) in v.orbit.target.iter_mut().zip(mv) {
+            *t += m * speed;
+        }
+    }
+}
+
+/// The action of a key press.
+fn key_action(v: &Viewer, code: KeyCode, repeat: bool) -> Option<Action> {
+    let (gain, turn) = v.forest.wind_control();
+    Some(match code {
+        KeyCode::Escape => Action::Quit,
+        KeyCode::ArrowUp => Action::WindGain(gain * 1.25),
+        KeyCode::ArrowDown => Action::WindGain(gain / 1.25),
+        KeyCode::ArrowLeft => Action::WindTurn(turn + 15.0),
+        KeyCode::ArrowRight => Action::WindTurn(turn - 15.0),
+        KeyCode::Space if !repeat => Action::Pause(!v.settings.paused),
+        KeyCode::Period => Action::Step,
+        KeyCode::Tab if !repeat => Action::Panel(!v.panel),
+        KeyCode::F1 if !repeat => Action::Help(!v.help),
+        KeyCode::F12 if !repeat => Action::Screenshot,
+        _ => return None,
+    })
+}

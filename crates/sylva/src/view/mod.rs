@@ -1,0 +1,325 @@
+//! `sylva view`: a window onto a scene, with a control panel (egui) for the wind, the LODs,
+//! the scene, live figures and plots, and tree picking. Keys: [`input`]'s table (F1 shows it).
+//!
+//! Time is honest: the figures come from the real frame time, and the simulation keeps real
+//! time in fixed substeps of [`state::SUBSTEP`], at most [`state::MAX_SUBSTEPS`] a frame;
+//! a slower frame runs the simulation in slow motion, and the panel says so.
+//!
+//! The window layer here only moves events and pixels: the viewer's state and its changes
+//! ([`state`]), the key and mouse mapping ([`input`]) and the panel ([`panel`]) run without a
+//! window, which is how they are tested.
+
+pub mod input;
+pub mod panel;
+pub mod state;
+#[cfg(test)]
+mod tests;
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use anyhow::Context;
+use clap::Args;
+use sylva_forest::{Forest, SceneSpec};
+use sylva_render::{Gpu, PanelFrame, PanelPass, Renderer, wgpu};
+use winit::application::ApplicationHandler;
+use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, EventLoop};
+use winit::keyboard::PhysicalKey;
+use winit::window::{Window, WindowId};
+
+use input::{Controls, Input};
+use state::{Action, Finished, Viewer};
+
+#[derive(Debug, Args)]
+pub struct ViewArgs {
+    /// Scene: a built-in name (small, A, B, C, D) or a scene file (.toml).
+    #[arg(long, default_value = "A")]
+    pub scene: String,
+    /// Geometry-LOD threshold h₀ (see `sylva render --help`). Default: the scene's on a
+    /// GPU, 3 on a software rasteriser such as lavapipe.
+    #[arg(value_parser = crate::finite::<f32>, long)]
+    pub lod_fraction: Option<f32>,
+    /// Wind instead of the scene's: a preset (calm, breeze, strong, storm), a steady speed
+    /// in m/s, or a wind file (.swf, .npy, .zarr).
+    #[arg(long)]
+    pub wind: Option<sylva_forest::WindSource>,
+    /// Start without the control panel (Tab shows it; the figures then stay in the title).
+    #[arg(long)]
+    pub no_panel: bool,
+    #[command(flatten)]
+    pub lod: crate::render::LodArgs,
+}
+
+/// Whether a window can be opened here (a display server is named in the environment).
+pub fn display_available() -> bool {
+    if cfg!(any(target_os = "windows", target_os = "macos")) {
+        return true;
+    }
+    ["DISPLAY", "WAYLAND_DISPLAY"]
+        .iter()
+        .any(|v| std::env::var_os(v).is_some_and(|s| !s.is_empty()))
+}
+
+struct Surface {
+    window: Arc<Window>,
+    surface: wgpu::Surface<'static>,
+    gpu: Gpu,
+    config: wgpu::SurfaceConfiguration,
+    renderer: Renderer,
+    panel: PanelPass,
+    egui: egui_winit::State,
+}
+
+struct App {
+    viewer: Viewer,
+    controls: Controls,
+    draft: panel::Draft,
+    surface: Option<Surface>,
+    error: Option<anyhow::Error>,
+    last: Instant,
+    lod_fraction: Option<f32>,
+}
+
+impl App {
+    fn open(&mut self, el: &ActiveEventLoop) -> anyhow::Result<()> {
+        let window = Arc::new(
+            el.create_window(
+                Window::default_attributes()
+                    .with_title("sylva")
+                    .with_inner_size(winit::dpi::LogicalSize::new(1280, 800)),
+            )
+            .context("opening a window")?,
+        );
+        let instance = Gpu::instance();
+        let surface = instance.create_surface(window.clone()).context("creating a surface")?;
+        let gpu = Gpu::new(instance, Some(&surface))?;
+        let size = window.inner_size();
+        let mut config = surface
+            .get_default_config(&gpu.adapter, size.width.max(1), size.height.max(1))
+            .context("the adapter cannot present to this window")?;
+        let caps = surface.get_capabilities(&gpu.adapter);
+        if let Some(f) = caps.formats.iter().find(|f| f.is_srgb()) {
+            config.format = *f;
+        }
+        surface.configure(&gpu.device, &config);
+        let software = gpu.adapter.get_info().device_type == wgpu::DeviceType::Cpu;
+        let forest = &mut self.viewer.forest;
+        let h0 = self.lod_fraction.unwrap_or(if software { 3.0 } else { forest.lod().fraction });
+        forest.set_lod_fraction(h0);
+        let renderer =
+            Renderer::for_forest(&gpu, forest, config.format, config.width, config.height)?;
+        println!("sylva view: {} ({}× MSAA)", gpu.describe(), renderer.samples());
+        let panel = PanelPass::new(&gpu, config.format);
+        let ctx = egui::Context::default();
+        let max_side = gpu.device.limits().max_texture_dimension_2d as usize;
+        let egui = egui_winit::State::new(
+            ctx,
+            egui::ViewportId::ROOT,
+            &window,
+            Some(window.scale_factor() as f32),
+            None,
+            Some(max_side),
+        );
+        self.surface = Some(Surface { window, surface, gpu, config, renderer, panel, egui });
+        Ok(())
+    }
+
+    fn redraw(&mut self) {
+        let now = Instant::now();
+        let real_dt = now.duration_since(self.last).as_secs_f32();
+        self.last = now;
+        let v = &mut self.viewer;
+        if v.poll(false) == Finished::Scene
+            && let Some(s) = self.surface.as_mut()
+        {
+            match Renderer::for_forest(
+                &s.gpu,
+                &v.forest,
+                s.config.format,
+                s.config.width,
+                s.config.height,
+            ) {
+                Ok(r) => s.renderer = r,
+                Err(e) => v.error = Some(format!("renderer: {e}")),
+            }
+            self.draft = panel::Draft::of(v);
+        }
+        self.controls.fly(v, real_dt.min(0.2));
+        v.advance(real_dt);
+        let Some(s) = self.surface.as_mut() else { return };
+        let (w, h) = (s.config.width, s.config.height);
+        v.build_frame(w as f32 / h as f32);
+        // The panel first (its actions apply next frame, as a click lands after a draw).
+        let mut actions = Vec::new();
+        let mut panel_frame = None;
+        if v.panel || v.help || v.clock.slow {
+            let raw = s.egui.take_egui_input(&s.window);
+            let ctx = s.egui.egui_ctx().clone();
+            let full = ctx.run_ui(raw, |ui| panel::show(ui, v, &mut self.draft, &mut actions));
+            s.egui.handle_platform_output(&s.window, full.platform_output);
+            panel_frame = Some(PanelFrame {
+                primitives: ctx.tessellate(full.shapes, full.pixels_per_point),
+                textures: full.textures_delta,
+                pixels_per_point: full.pixels_per_point,
+            });
+        }
+        let texture = match s.surface.get_current_texture() {
+            wgpu::CurrentSurfaceTexture::Success(t)
+            | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
+            wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
+                s.surface.configure(&s.gpu.device, &s.config);
+                return;
+            }
+            _ => return,
+        };
+        let view = texture.texture.create_view(&wgpu::TextureViewDescriptor::default());
+        let camera = v.orbit.camera();
+        let start = Instant::now();
+        s.renderer.render(&s.gpu, &v.frame, &camera, &view);
+        if let Some(pf) = &mut panel_frame {
+            s.panel.draw(&s.gpu, &view, [w, h], pf);
+        }
+        // Wait for the GPU, so the figure is the frame's real rendering time.
+        let _ = s.gpu.device.poll(wgpu::PollType::Wait { submission_index: None, timeout: None });
+        v.figures.render_ms = 1e3 * start.elapsed().as_secs_f32();
+        s.gpu.queue.present(texture);
+        for a in actions {
+            v.apply(a);
+        }
+        if std::mem::take(&mut v.screenshot) {
+            match screenshot(v, w, h) {
+                Ok(path) => println!("wrote {path}"),
+                Err(e) => v.error = Some(format!("screenshot: {e:#}")),
+            }
+        }
+        if !v.panel {
+            let st = v.frame.stats;
+            let (gain, turn) = v.forest.wind_control();
+            s.window.set_title(&format!(
+                "sylva — {:.1} fps — {} of {} trees — {:.2} M triangles — wind ×{gain:.2} {turn:+.0}° — sim {:.1} ms{}{}",
+                v.figures.fps,
+                st.drawn,
+                st.trees,
+                st.triangles as f64 / 1e6,
+                v.figures.sim_ms,
+                if v.settings.paused { " — paused" } else { "" },
+                if v.clock.slow { " — slow motion" } else { "" }
+            ));
+        } else {
+            s.window.set_title("sylva");
+        }
+    }
+}
+
+/// Render the current frame offscreen (without the panel) and save it as
+/// `sylva-<simulated ms>.png` in the working folder.
+fn screenshot(v: &Viewer, w: u32, h: u32) -> anyhow::Result<String> {
+    let mut headless = sylva_render::Headless::new(&v.forest, w, h)?;
+    let rgba = headless.render(&v.frame, &v.orbit.camera())?;
+    let path = format!("sylva-{:08}.png", (v.forest.time() * 1e3).round() as u64);
+    crate::render::write_png(std::path::Path::new(&path), w, h, &rgba)?;
+    Ok(path)
+}
+
+impl ApplicationHandler for App {
+    fn resumed(&mut self, el: &ActiveEventLoop) {
+        if self.surface.is_none()
+            && let Err(e) = self.open(el)
+        {
+            self.error = Some(e);
+            el.exit();
+        }
+    }
+
+    fn window_event(&mut self, el: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
+        let Some(s) = self.surface.as_mut() else { return };
+        // The panel sees every event first; what it takes (a click on a slider, typing in a
+        // field) goes no further.
+        let consumed = (self.viewer.panel || self.viewer.help)
+            && s.egui.on_window_event(&s.window, &event).consumed;
+        let (w, h) = (s.config.width as f32, s.config.height as f32);
+        let input = match event {
+            WindowEvent::CloseRequested => {
+                el.exit();
+                return;
+            }
+            WindowEvent::Resized(size) => {
+                if size.width > 0 && size.height > 0 {
+                    s.config.width = size.width;
+                    s.config.height = size.height;
+                    s.surface.configure(&s.gpu.device, &s.config);
+                    s.renderer.resize(&s.gpu, size.width, size.height);
+                }
+                return;
+            }
+            WindowEvent::RedrawRequested => {
+                self.redraw();
+                if self.viewer.quit {
+                    el.exit();
+                }
+                return;
+            }
+            _ if consumed => return,
+            WindowEvent::KeyboardInput { event, .. } => {
+                let PhysicalKey::Code(code) = event.physical_key else { return };
+                Input::Key {
+                    code,
+                    pressed: event.state == ElementState::Pressed,
+                    repeat: event.repeat,
+                }
+            }
+            WindowEvent::MouseInput { state, button: MouseButton::Left, .. } => {
+                Input::Left(state == ElementState::Pressed)
+            }
+            WindowEvent::CursorMoved { position, .. } => Input::Cursor(position.x, position.y),
+            WindowEvent::MouseWheel { delta, .. } => Input::Wheel(match delta {
+                MouseScrollDelta::LineDelta(_, y) => y,
+                MouseScrollDelta::PixelDelta(p) => p.y as f32 / 40.0,
+            }),
+            _ => return,
+        };
+        self.controls.handle(&mut self.viewer, input, w, h);
+        if self.viewer.quit {
+            el.exit();
+        }
+    }
+
+    fn about_to_wait(&mut self, _el: &ActiveEventLoop) {
+        if let Some(s) = &self.surface {
+            s.window.request_redraw();
+        }
+    }
+}
+
+pub fn view(a: &ViewArgs) -> anyhow::Result<()> {
+    let mut spec = SceneSpec::load(&a.scene)?;
+    a.lod.apply(&mut spec)?;
+    if let Some(w) = &a.wind {
+        spec.set_wind(w);
+    }
+    if let Some(h0) = a.lod_fraction
+        && !(h0 > 0.0 && h0.is_finite())
+    {
+        anyhow::bail!("--lod-fraction {h0}: must be > 0");
+    }
+    let forest = Forest::new(&spec)?;
+    let mut viewer = Viewer::new(forest, &a.scene);
+    viewer.apply(Action::Panel(!a.no_panel));
+    let draft = panel::Draft::of(&viewer);
+    let event_loop = EventLoop::new().context("no window system: is a display available?")?;
+    let mut app = App {
+        viewer,
+        controls: Controls::default(),
+        draft,
+        surface: None,
+        error: None,
+        last: Instant::now(),
+        lod_fraction: a.lod_fraction,
+    };
+    event_loop.run_app(&mut app).context("window event loop")?;
+    match app.error {
+        Some(e) => Err(e),
+        None => Ok(()),
+    }
+}

@@ -1,0 +1,244 @@
+//! The control panel (egui): wind, LOD, scene, figures, plots and the selected tree. It reads
+//! the [`Viewer`] and answers with [`Action`]s; it changes nothing itself.
+
+use egui::{Color32, RichText, Ui};
+use egui_plot::{Line, Plot};
+use sylva_forest::LodSettings;
+
+use super::input::KEYS;
+use super::state::{Action, MAX_SUBSTEPS, PRESETS, SCENES, SUBSTEP, Viewer};
+
+/// What the panel edits before it is applied (the scene is rebuilt only on "Rebuild").
+#[derive(Debug, Clone, PartialEq)]
+pub struct Draft {
+    /// Scene name or file.
+    pub scene: String,
+    /// Trees.
+    pub trees: usize,
+    /// Seed.
+    pub seed: u64,
+}
+
+impl Draft {
+    /// The viewer's current scene.
+    pub fn of(v: &Viewer) -> Draft {
+        Draft { scene: v.settings.scene.clone(), trees: v.settings.trees, seed: v.settings.seed }
+    }
+}
+
+/// Draw the panel (when shown), the key help (when asked) and the slow-motion mark.
+pub fn show(ui: &mut Ui, v: &Viewer, draft: &mut Draft, out: &mut Vec<Action>) {
+    if v.panel {
+        egui::Panel::left("sylva-panel").default_size(300.0).show(ui, |ui| {
+            egui::ScrollArea::vertical().show(ui, |ui| contents(ui, v, draft, out));
+        });
+    }
+    if v.clock.slow {
+        egui::Area::new(egui::Id::unique("slow"))
+            .anchor(egui::Align2::RIGHT_TOP, [-12.0, 12.0])
+            .show(ui.ctx(), |ui| {
+                ui.label(
+                    RichText::new(format!(
+                        "slow motion: frames take over {:.0} ms; the simulation keeps {:.2} s a frame",
+                        1e3 * MAX_SUBSTEPS as f32 * SUBSTEP / v.settings.time_scale,
+                        MAX_SUBSTEPS as f32 * SUBSTEP
+                    ))
+                    .color(Color32::from_rgb(255, 200, 60))
+                    .strong(),
+                );
+            });
+    }
+    if v.help {
+        egui::Window::new("Keys (F1)").collapsible(false).resizable(false).show(ui.ctx(), |ui| {
+            egui::Grid::new("keys").striped(true).show(ui, |ui| {
+                for (key, what) in KEYS {
+                    ui.label(RichText::new(key).monospace());
+                    ui.label(what);
+                    ui.end_row();
+                }
+            });
+        });
+    }
+}
+
+fn contents(ui: &mut Ui, v: &Viewer, draft: &mut Draft, out: &mut Vec<Action>) {
+    ui.heading("sylva");
+    if let Some((what, secs)) = v.busy() {
+        ui.horizontal(|ui| {
+            ui.spinner();
+            ui.label(format!("{what}… {secs:.1} s"));
+        });
+    }
+    if let Some(e) = &v.error {
+        ui.colored_label(Color32::from_rgb(255, 120, 100), e);
+    }
+    figures(ui, v);
+    egui::CollapsingHeader::new("Wind").default_open(true).show(ui, |ui| wind(ui, v, out));
+    egui::CollapsingHeader::new("Level of detail")
+        .default_open(true)
+        .show(ui, |ui| lod(ui, v, out));
+    egui::CollapsingHeader::new("Scene")
+        .default_open(false)
+        .show(ui, |ui| scene(ui, v, draft, out));
+    egui::CollapsingHeader::new("Plots (last 30 s)").default_open(true).show(ui, |ui| plots(ui, v));
+    egui::CollapsingHeader::new("Selected tree").default_open(true).show(ui, |ui| selected(ui, v));
+}
+
+fn figures(ui: &mut Ui, v: &Viewer) {
+    let f = &v.figures;
+    let s = &v.frame.stats;
+    egui::Grid::new("figures").num_columns(2).show(ui, |ui| {
+        let mut row = |k: &str, val: String| {
+            ui.label(k);
+            ui.label(val);
+            ui.end_row();
+        };
+        row("frames per second", format!("{:.1} ({:.0} ms a frame)", f.fps, f.frame_ms));
+        row("simulation", format!("{:.1} ms ({} substeps)", f.sim_ms, f.substeps));
+        row("frame building", format!("{:.1} ms", f.build_ms));
+        row("rendering", format!("{:.1} ms", f.render_ms));
+        row("triangles", format!("{:.2} M", s.triangles as f64 / 1e6));
+        row("draw calls", s.draw_calls.to_string());
+        row("trees drawn", format!("{} of {} ({} impostors)", s.drawn, s.trees, s.impostors));
+        row("joints stepped", s.joints.to_string());
+        row("uploaded", format!("{:.2} MB a frame", s.uploaded_bytes as f64 / 1e6));
+        row("simulated time", format!("{:.1} s", v.forest.time()));
+    });
+}
+
+fn wind(ui: &mut Ui, v: &Viewer, out: &mut Vec<Action>) {
+    let mut preset = v.settings.wind.clone();
+    egui::ComboBox::from_label("wind").selected_text(&preset).show_ui(ui, |ui| {
+        for p in PRESETS {
+            ui.selectable_value(&mut preset, p.to_string(), p);
+        }
+    });
+    if preset != v.settings.wind {
+        out.push(Action::Wind(preset));
+    }
+    let is_preset = PRESETS.contains(&v.settings.wind.as_str());
+    if is_preset {
+        let params = sylva_wind::Preset::from_name(&v.settings.wind).map(|p| p.params().u_star);
+        let mut u = v.settings.u_star.or(params).unwrap_or(1.0);
+        let r = ui.add(egui::Slider::new(&mut u, 0.1..=3.0).text("U*, m/s (re-synthesised)"));
+        if r.drag_stopped() || (r.changed() && !r.dragged()) {
+            out.push(Action::UStar(u));
+        }
+    }
+    let (gain, turn) = v.forest.wind_control();
+    let (mut g, mut t) = (gain, turn);
+    if ui.add(egui::Slider::new(&mut g, 0.0..=4.0).text("speed ×")).changed() {
+        out.push(Action::WindGain(g));
+    }
+    if ui.add(egui::Slider::new(&mut t, -180.0..=180.0).text("turn, °")).changed() {
+        out.push(Action::WindTurn(t));
+    }
+    let mut adv = v.settings.advection;
+    if is_preset && ui.checkbox(&mut adv, "advection (gusts travel downwind)").changed() {
+        out.push(Action::Advection(adv));
+    }
+    let mut scale = v.settings.time_scale;
+    if ui
+        .add(egui::Slider::new(&mut scale, 0.05..=4.0).logarithmic(true).text("time scale"))
+        .changed()
+    {
+        out.push(Action::TimeScale(scale));
+    }
+    ui.horizontal(|ui| {
+        let mut paused = v.settings.paused;
+        if ui.checkbox(&mut paused, "paused").changed() {
+            out.push(Action::Pause(paused));
+        }
+        if ui.add_enabled(v.settings.paused, egui::Button::new("step")).clicked() {
+            out.push(Action::Step);
+        }
+    });
+    let w = v.frame.wind;
+    ui.label(format!("mean wind at 20 m: {:.1} m/s", (w[0] * w[0] + w[1] * w[1]).sqrt()));
+}
+
+fn lod(ui: &mut Ui, v: &Viewer, out: &mut Vec<Action>) {
+    let lod = v.forest.lod();
+    let mut l = lod;
+    ui.checkbox(&mut l.geometry, "geometry LOD (meshes → impostors)");
+    ui.add_enabled(
+        l.geometry,
+        egui::Slider::new(&mut l.fraction, 0.05..=20.0)
+            .logarithmic(true)
+            .text("h₀ (full detail above)"),
+    );
+    ui.add_enabled(l.geometry, egui::Slider::new(&mut l.band, 0.0..=1.0).text("cross-fade band"));
+    ui.add_enabled(l.geometry, egui::Slider::new(&mut l.hysteresis, 0.0..=0.5).text("hysteresis"));
+    ui.add_enabled(l.geometry, egui::Slider::new(&mut l.far_level, 1..=6).text("impostor level"));
+    ui.checkbox(&mut l.animation, "animation LOD (joints by projected size)");
+    if l != lod {
+        out.push(Action::Lod(LodSettings { ..l }));
+    }
+    let mut wind_lod = v.settings.wind_lod;
+    if ui.checkbox(&mut wind_lod, "wind-field LOD (instance groups; rebuilds)").changed() {
+        out.push(Action::WindLod(wind_lod));
+    }
+}
+
+fn scene(ui: &mut Ui, v: &Viewer, draft: &mut Draft, out: &mut Vec<Action>) {
+    ui.horizontal(|ui| {
+        egui::ComboBox::from_id_salt("scene").selected_text(&draft.scene).show_ui(ui, |ui| {
+            for s in SCENES {
+                ui.selectable_value(&mut draft.scene, s.to_string(), s);
+            }
+        });
+        ui.text_edit_singleline(&mut draft.scene).on_hover_text("a built-in name or a .toml file");
+    });
+    ui.add(egui::DragValue::new(&mut draft.trees).range(1..=200_000).prefix("trees "));
+    ui.add(egui::DragValue::new(&mut draft.seed).prefix("seed "));
+    ui.label(format!(
+        "species: {}",
+        v.forest.species.iter().map(|s| s.name.as_str()).collect::<Vec<_>>().join(", ")
+    ));
+    if ui.add_enabled(v.job.is_none(), egui::Button::new("rebuild")).clicked() {
+        out.push(Action::Scene {
+            scene: draft.scene.clone(),
+            trees: draft.trees,
+            seed: draft.seed,
+        });
+    }
+}
+
+fn plots(ui: &mut Ui, v: &Viewer) {
+    let wind: Vec<[f64; 2]> = v.history.iter().map(|&(t, w, _)| [t, w as f64]).collect();
+    let sway: Vec<[f64; 2]> = v.history.iter().map(|&(t, _, s)| [t, s as f64]).collect();
+    ui.label("wind speed at the probe, m/s");
+    Plot::new("wind").height(90.0).show(ui, |p| p.line(Line::new("wind", wind)));
+    ui.label(if v.selected.is_some() {
+        "trunk-top displacement of the selected tree, m"
+    } else {
+        "trunk-top displacement: click a tree"
+    });
+    Plot::new("sway").height(90.0).show(ui, |p| p.line(Line::new("trunk top", sway)));
+}
+
+fn selected(ui: &mut Ui, v: &Viewer) {
+    let Some(t) = v.selected else {
+        ui.label("none (click a tree)");
+        return;
+    };
+    let Some(info) = v.forest.tree_info(t) else { return };
+    egui::Grid::new("tree").num_columns(2).show(ui, |ui| {
+        let mut row = |k: &str, val: String| {
+            ui.label(k);
+            ui.label(val);
+            ui.end_row();
+        };
+        row("tree", format!("#{t}, {}", info.species));
+        row("height", format!("{:.1} m", info.height));
+        row("trunk diameter at base", format!("{:.2} m", info.base_diameter));
+        row("trunk frequency", format!("{:.2} Hz", info.trunk_frequency));
+        row("instance group", format!("{} ({} trees)", info.group, info.group_size));
+        row(
+            "drawn at level",
+            v.frame
+                .level(t)
+                .map_or("— (not in view, or geometry LOD off)".into(), |l| l.to_string()),
+        );
+    });
+}

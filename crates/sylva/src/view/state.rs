@@ -1,0 +1,511 @@
+//! The viewer without its window: the forest, the camera, the clock, the settings the panel
+//! edits and the figures it shows. Every change arrives as an [`Action`], from the panel, the
+//! keyboard or a test, so the panel's logic runs without a window or a GPU.
+
+use std::collections::VecDeque;
+use std::sync::mpsc::{Receiver, channel};
+use std::time::Instant;
+
+use sylva_forest::{Camera, Forest, FrameData, LodSettings, SceneSpec};
+
+/// Simulation substep, s: the sway advances in steps of at most this.
+pub const SUBSTEP: f32 = 1.0 / 60.0;
+/// Most substeps per frame (0.2 s of simulated time). A frame slower than that (× the time
+/// scale) leaves the simulation behind real time: the viewer shows "slow motion".
+pub const MAX_SUBSTEPS: u32 = 12;
+/// Seconds of history the plots keep.
+pub const HISTORY_S: f64 = 30.0;
+
+/// Built-in scenes the panel offers.
+pub const SCENES: [&str; 5] = ["small", "A", "B", "C", "D"];
+/// Wind presets the panel offers.
+pub const PRESETS: [&str; 4] = ["calm", "breeze", "strong", "storm"];
+
+/// One change to the viewer.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Action {
+    /// Speed multiplier (≥ 0) of the wind, live.
+    WindGain(f32),
+    /// Extra turn of the wind direction, degrees, live.
+    WindTurn(f32),
+    /// A wind preset (calm, breeze, strong, storm) or a steady speed, m/s: re-synthesised in
+    /// the background.
+    Wind(String),
+    /// Friction velocity U*, m/s, of a preset: re-synthesised in the background.
+    UStar(f64),
+    /// Taylor advection on or off: re-synthesised in the background.
+    Advection(bool),
+    /// Simulated seconds per real second (0.05 … 4).
+    TimeScale(f32),
+    /// Pause or run the simulation.
+    Pause(bool),
+    /// While paused: advance one substep.
+    Step,
+    /// Geometry and animation LOD settings, live.
+    Lod(LodSettings),
+    /// The wind-field LOD (instance groups by distance): the scene is rebuilt.
+    WindLod(bool),
+    /// Another scene (built-in name or file), tree count and seed: rebuilt in the background.
+    Scene { scene: String, trees: usize, seed: u64 },
+    /// Select a tree (or none) for the panel's figures and plot.
+    Select(Option<usize>),
+    /// Show or hide the control panel.
+    Panel(bool),
+    /// Show or hide the key help.
+    Help(bool),
+    /// Save the next frame as a PNG.
+    Screenshot,
+    /// Close the viewer.
+    Quit,
+}
+
+/// Fixed-substep clock: real time in, whole substeps out, never more than
+/// [`MAX_SUBSTEPS`] a frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Clock {
+    /// Simulated time owed and not yet stepped, s (less than one substep).
+    carry: f32,
+    /// Whether the last frame hit the cap (the simulation runs slower than real time).
+    pub slow: bool,
+}
+
+impl Default for Clock {
+    fn default() -> Self {
+        Clock { carry: 0.0, slow: false }
+    }
+}
+
+impl Clock {
+    /// Substeps of [`SUBSTEP`] to run after `real_dt` seconds at `scale` simulated seconds
+    /// per second. Time beyond the cap is dropped (and `slow` set), not carried over, so a
+    /// slow frame never makes the next one slower.
+    pub fn advance(&mut self, real_dt: f32, scale: f32) -> u32 {
+        let owed = self.carry + (real_dt.max(0.0) * scale.max(0.0)).min(1e6);
+        let whole = (owed / SUBSTEP).floor();
+        if whole > MAX_SUBSTEPS as f32 {
+            self.slow = true;
+            self.carry = 0.0;
+            MAX_SUBSTEPS
+        } else {
+            self.slow = false;
+            self.carry = owed - whole * SUBSTEP;
+            whole as u32
+        }
+    }
+}
+
+/// Orbit camera: yaw and pitch about a target, at a distance.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Orbit {
+    /// Point looked at, world m.
+    pub target: [f32; 3],
+    /// Azimuth of the eye about the target, rad.
+    pub yaw: f32,
+    /// Elevation of the eye, rad.
+    pub pitch: f32,
+    /// Eye to target, m.
+    pub distance: f32,
+    /// Vertical field of view, degrees.
+    pub fov: f32,
+    /// Far plane, m.
+    pub far: f32,
+}
+
+impl Orbit {
+    /// The orbit that sees what `c` sees.
+    pub fn from_camera(c: &Camera) -> Orbit {
+        let d = [c.eye[0] - c.target[0], c.eye[1] - c.target[1], c.eye[2] - c.target[2]];
+        let distance = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt().max(1e-3);
+        Orbit {
+            target: c.target,
+            yaw: d[1].atan2(d[0]),
+            pitch: (d[2] / distance).clamp(-1.0, 1.0).asin(),
+            distance,
+            fov: c.fov_deg,
+            far: c.far,
+        }
+    }
+
+    /// The camera.
+    pub fn camera(&self) -> Camera {
+        let (cp, sp) = (self.pitch.cos(), self.pitch.sin());
+        let eye = [
+            self.target[0] + self.distance * cp * self.yaw.cos(),
+            self.target[1] + self.distance * cp * self.yaw.sin(),
+            self.target[2] + self.distance * sp,
+        ];
+        Camera { eye, target: self.target, fov_deg: self.fov, near: 0.5, far: self.far }
+    }
+
+    /// The ray (origin, unit direction) through pixel (`x`, `y`) of a `w × h` image.
+    pub fn ray(&self, x: f32, y: f32, w: f32, h: f32) -> ([f32; 3], [f32; 3]) {
+        let c = self.camera();
+        let f = c.forward();
+        let up = [0.0, 0.0, 1.0];
+        let r = sylva_core::v3::norm(sylva_core::v3::cross(f, up));
+        let u = sylva_core::v3::cross(r, f);
+        let t = (0.5 * c.fov_deg.to_radians()).tan();
+        let (sx, sy) = ((2.0 * x / w - 1.0) * t * w / h, (1.0 - 2.0 * y / h) * t);
+        let d: [f32; 3] = std::array::from_fn(|i| f[i] + sx * r[i] + sy * u[i]);
+        (c.eye, sylva_core::v3::norm(d))
+    }
+}
+
+/// Settings the panel edits (what the forest was last asked for).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Settings {
+    /// Wind preset or steady speed.
+    pub wind: String,
+    /// U* of a preset, m/s (`None`: the preset's).
+    pub u_star: Option<f64>,
+    /// Taylor advection.
+    pub advection: bool,
+    /// Simulated seconds per real second.
+    pub time_scale: f32,
+    /// Simulation paused.
+    pub paused: bool,
+    /// Scene name or file.
+    pub scene: String,
+    /// Trees in the scene.
+    pub trees: usize,
+    /// Scene seed.
+    pub seed: u64,
+    /// Wind-field LOD (instance groups).
+    pub wind_lod: bool,
+}
+
+/// Per-frame figures, as the panel shows them.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Figures {
+    /// Frames per second from the real frame time (smoothed).
+    pub fps: f32,
+    /// Real time of the last frame, ms.
+    pub frame_ms: f32,
+    /// Simulation, ms (all substeps of the last frame).
+    pub sim_ms: f32,
+    /// Building `FrameData`, ms.
+    pub build_ms: f32,
+    /// Rendering (submitted and finished), ms.
+    pub render_ms: f32,
+    /// Substeps run in the last frame.
+    pub substeps: u32,
+}
+
+/// What the background is working on.
+#[derive(Debug)]
+pub enum Job {
+    /// A wind field for the current forest.
+    Wind(Receiver<Result<sylva_wind::WindField, String>>, Instant),
+    /// A whole forest.
+    Scene(Receiver<Result<Box<Forest>, String>>, Instant),
+}
+
+/// What [`Viewer::poll`] found finished.
+#[derive(Debug, PartialEq, Eq)]
+pub enum Finished {
+    /// Nothing.
+    Nothing,
+    /// The wind was replaced.
+    Wind,
+    /// The forest was replaced: the renderer must be rebuilt for it.
+    Scene,
+}
+
+/// The viewer's state.
+#[derive(Debug)]
+pub struct Viewer {
+    /// The forest in wind.
+    pub forest: Forest,
+    /// The last frame built.
+    pub frame: FrameData,
+    /// The camera.
+    pub orbit: Orbit,
+    /// Substep clock.
+    pub clock: Clock,
+    /// What the panel edits.
+    pub settings: Settings,
+    /// Per-frame figures.
+    pub figures: Figures,
+    /// (simulated time, wind speed at the probe m/s, selected tree's trunk-top
+    /// displacement m) over the last [`HISTORY_S`].
+    pub history: VecDeque<(f64, f32, f32)>,
+    /// The selected tree.
+    pub selected: Option<usize>,
+    /// Background work under way.
+    pub job: Option<Job>,
+    /// The last background error, shown in the panel.
+    pub error: Option<String>,
+    /// Panel shown.
+    pub panel: bool,
+    /// Key help shown.
+    pub help: bool,
+    /// A screenshot was asked for.
+    pub screenshot: bool,
+    /// Close asked for.
+    pub quit: bool,
+    /// The scene argument the current forest was built from.
+    loaded: String,
+}
+
+impl Viewer {
+    /// A viewer on `forest` (built from the scene `scene`: a built-in name or a file), from
+    /// its default viewpoint.
+    pub fn new(forest: Forest, scene: &str) -> Viewer {
+        let orbit = Orbit::from_camera(&forest.default_camera());
+        let spec = &forest.spec;
+        let settings = Settings {
+            wind: spec.wind.clone(),
+            u_star: spec.u_star,
+            advection: spec.wind_advection.unwrap_or(true),
+            time_scale: 1.0,
+            paused: false,
+            scene: scene.to_string(),
+            trees: spec.trees,
+            seed: spec.seed,
+            wind_lod: spec.lod.wind,
+        };
+        Viewer {
+            forest,
+            frame: FrameData::default(),
+            orbit,
+            clock: Clock::default(),
+            settings,
+            figures: Figures::default(),
+            history: VecDeque::new(),
+            selected: None,
+            job: None,
+            error: None,
+            panel: true,
+            help: false,
+            screenshot: false,
+            quit: false,
+            loaded: scene.to_string(),
+        }
+    }
+
+    /// Apply one change.
+    pub fn apply(&mut self, action: Action) {
+        let (gain, turn) = self.forest.wind_control();
+        match action {
+            Action::WindGain(g) => self.forest.set_wind_control(g.clamp(0.0, 20.0), turn),
+            Action::WindTurn(t) => self.forest.set_wind_control(gain, t),
+            Action::Wind(w) => {
+                if sylva_forest::WindSource::parse(&w).is_err() {
+                    self.error = Some(format!("wind `{w}`: a preset, a speed or a file"));
+                    return;
+                }
+                // U* belongs to a preset; a new wind starts from its own.
+                self.settings.wind = w;
+                self.settings.u_star = None;
+                self.resynthesise();
+            }
+            Action::UStar(u) => {
+                self.settings.u_star = Some(u.clamp(0.05, 20.0));
+                self.resynthesise();
+            }
+            Action::Advection(a) => {
+                self.settings.advection = a;
+                self.resynthesise();
+            }
+            Action::TimeScale(s) => self.settings.time_scale = s.clamp(0.05, 4.0),
+            Action::Pause(p) => self.settings.paused = p,
+            Action::Step => {
+                if self.settings.paused {
+                    self.forest.step(SUBSTEP);
+                }
+            }
+            Action::Lod(l) => self.forest.set_lod(l),
+            Action::WindLod(on) => {
+                self.settings.wind_lod = on;
+                self.rebuild();
+            }
+            Action::Scene { scene, trees, seed } => {
+                self.settings.scene = scene;
+                self.settings.trees = trees;
+                self.settings.seed = seed;
+                self.rebuild();
+            }
+            Action::Select(t) => {
+                self.selected = t.filter(|&t| t < self.forest.trees());
+                self.history.clear();
+            }
+            Action::Panel(on) => self.panel = on,
+            Action::Help(on) => self.help = on,
+            Action::Screenshot => self.screenshot = true,
+            Action::Quit => self.quit = true,
+        }
+    }
+
+    /// The scene as the settings describe it.
+    fn spec(&self) -> Result<SceneSpec, String> {
+        let mut spec = if self.settings.scene == self.loaded {
+            self.forest.spec.clone()
+        } else {
+            SceneSpec::load(&self.settings.scene).map_err(|e| e.to_string())?
+        };
+        let wind = sylva_forest::WindSource::parse(&self.settings.wind)?;
+        spec.set_wind(&wind);
+        spec.u_star = if matches!(wind, sylva_forest::WindSource::Preset(_)) {
+            self.settings.u_star
+        } else {
+            None
+        };
+        spec.wind_advection = Some(self.settings.advection).filter(|a| !a);
+        spec.trees = self.settings.trees.max(1);
+        spec.seed = self.settings.seed;
+        spec.lod.wind = self.settings.wind_lod;
+        Ok(spec)
+    }
+
+    /// Synthesise the wind of the settings for the current forest in the background.
+    fn resynthesise(&mut self) {
+        let spec = match self.spec() {
+            Ok(s) => s,
+            Err(e) => {
+                self.error = Some(e);
+                return;
+            }
+        };
+        let radius = self.forest.radius;
+        let (tx, rx) = channel();
+        std::thread::spawn(move || {
+            let _ = tx.send(sylva_forest::wind_field(&spec, radius).map_err(|e| e.to_string()));
+        });
+        self.job = Some(Job::Wind(rx, Instant::now()));
+    }
+
+    /// Build the forest of the settings in the background.
+    fn rebuild(&mut self) {
+        let spec = match self.spec() {
+            Ok(s) => s,
+            Err(e) => {
+                self.error = Some(e);
+                return;
+            }
+        };
+        let (tx, rx) = channel();
+        std::thread::spawn(move || {
+            let _ = tx.send(Forest::new(&spec).map(Box::new).map_err(|e| e.to_string()));
+        });
+        self.job = Some(Job::Scene(rx, Instant::now()));
+    }
+
+    /// Take finished background work. `wait`: block until it is done (tests).
+    pub fn poll(&mut self, wait: bool) -> Finished {
+        let done = match &self.job {
+            None => return Finished::Nothing,
+            Some(Job::Wind(rx, _)) => {
+                match if wait { rx.recv().ok() } else { rx.try_recv().ok() } {
+                    Some(Ok(field)) => {
+                        self.forest.set_wind_field(field);
+                        // The scene now carries this wind (for a later rebuild or export).
+                        if let Ok(spec) = self.spec() {
+                            self.forest.spec.wind = spec.wind;
+                            self.forest.spec.u_star = spec.u_star;
+                            self.forest.spec.wind_advection = spec.wind_advection;
+                        }
+                        Some(Finished::Wind)
+                    }
+                    Some(Err(e)) => {
+                        self.error = Some(e);
+                        Some(Finished::Nothing)
+                    }
+                    None => None,
+                }
+            }
+            Some(Job::Scene(rx, _)) => match if wait { rx.recv().ok() } else { rx.try_recv().ok() }
+            {
+                Some(Ok(forest)) => {
+                    let (gain, turn) = self.forest.wind_control();
+                    let lod = self.forest.lod();
+                    self.forest = *forest;
+                    self.loaded = self.settings.scene.clone();
+                    self.forest.set_wind_control(gain, turn);
+                    self.forest.set_lod(LodSettings { ..lod });
+                    self.frame = FrameData::default();
+                    self.orbit = Orbit::from_camera(&self.forest.default_camera());
+                    self.selected = None;
+                    self.history.clear();
+                    Some(Finished::Scene)
+                }
+                Some(Err(e)) => {
+                    self.error = Some(e);
+                    Some(Finished::Nothing)
+                }
+                None => None,
+            },
+        };
+        match done {
+            Some(f) => {
+                self.job = None;
+                if f != Finished::Nothing {
+                    self.error = None;
+                }
+                f
+            }
+            None => Finished::Nothing,
+        }
+    }
+
+    /// What the background is doing, and for how long (s), for the panel.
+    pub fn busy(&self) -> Option<(&'static str, f32)> {
+        match &self.job {
+            Some(Job::Wind(_, t)) => Some(("synthesising the wind", t.elapsed().as_secs_f32())),
+            Some(Job::Scene(_, t)) => Some(("building the scene", t.elapsed().as_secs_f32())),
+            None => None,
+        }
+    }
+
+    /// Advance by `real_dt` seconds of real time: fixed substeps (capped), then the plots'
+    /// history. Figures: frame time, FPS, simulation time.
+    pub fn advance(&mut self, real_dt: f32) {
+        self.figures.frame_ms = 1e3 * real_dt;
+        let fps = if real_dt > 0.0 { 1.0 / real_dt } else { 0.0 };
+        self.figures.fps =
+            if self.figures.fps == 0.0 { fps } else { 0.8 * self.figures.fps + 0.2 * fps };
+        let steps = if self.settings.paused {
+            self.clock.slow = false;
+            0
+        } else {
+            self.clock.advance(real_dt, self.settings.time_scale)
+        };
+        let start = Instant::now();
+        for _ in 0..steps {
+            self.forest.step(SUBSTEP);
+        }
+        self.figures.sim_ms = 1e3 * start.elapsed().as_secs_f32();
+        self.figures.substeps = steps;
+        if steps > 0 {
+            self.record();
+        }
+    }
+
+    /// Probe point of the wind plot: the selected tree's crown, else the camera target at
+    /// 20 m above ground.
+    pub fn probe(&self) -> [f64; 3] {
+        if let Some(p) = self.selected.and_then(|t| self.forest.placement(t)) {
+            let h = self.selected.and_then(|t| self.forest.tree_info(t)).map_or(15.0, |i| i.height);
+            return [p.position[0] as f64, p.position[1] as f64, (p.position[2] + 0.7 * h) as f64];
+        }
+        let [x, y, _] = self.orbit.target;
+        [x as f64, y as f64, (self.forest.terrain.height(x, y) + 20.0) as f64]
+    }
+
+    fn record(&mut self) {
+        let w = self.forest.wind_sample(self.probe());
+        let speed = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
+        let sway = self.selected.and_then(|t| self.forest.trunk_top_displacement(t)).unwrap_or(0.0);
+        let t = self.forest.time();
+        self.history.push_back((t, speed, sway));
+        while self.history.front().is_some_and(|&(t0, _, _)| t - t0 > HISTORY_S) {
+            self.history.pop_front();
+        }
+    }
+
+    /// Build this frame's `FrameData` for an image of `aspect`.
+    pub fn build_frame(&mut self, aspect: f32) {
+        let start = Instant::now();
+        self.forest.frame(&self.orbit.camera(), aspect, &mut self.frame);
+        self.figures.build_ms = 1e3 * start.elapsed().as_secs_f32();
+    }
+}
