@@ -18,6 +18,7 @@ pub use driver::{
 };
 pub use scene::{
     CameraKey, Lighting, LodSpec, Placement, SCENES, SceneError, SceneSpec, SwayOverrides, Terrain,
-    WindSource, camera_on_path, default_camera_path, layout,
+    WindSource, camera_on_path, camera_path_from_toml, camera_path_to_toml, default_camera_path,
+    layout,
 };
 pub use sylva_sway::PaletteSlot;

@@ -281,6 +281,50 @@ impl Default for LodSpec {
     }
 }
 
+/// Check a camera path: finite eyes apart from their targets, times increasing.
+fn validate_camera_path(file: &str, path: &[CameraKey]) -> Result<(), SceneError> {
+    let bad = |field, value: String, expected| SceneError::Value {
+        file: file.to_string(),
+        field,
+        value,
+        expected,
+    };
+    for (k, key) in path.iter().enumerate() {
+        let finite = key.eye.iter().chain(&key.target).all(|v| v.is_finite());
+        if !finite || key.eye == key.target || !key.t.is_finite() {
+            return Err(bad("camera_path.eye", format!("{:?}", key.eye), "finite, not the target"));
+        }
+        if k > 0 && key.t <= path[k - 1].t {
+            return Err(bad("camera_path.t", key.t.to_string(), "increasing from key to key"));
+        }
+    }
+    Ok(())
+}
+
+/// A camera path on its own: the `[[camera_path]]` entries of a scene file, which is what
+/// `sylva view` records and replays (`--camera-path`), and what a scene file takes as is.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CameraPathFile {
+    camera_path: Vec<CameraKey>,
+}
+
+/// Read a camera path from TOML text (`[[camera_path]]` entries with `t`, `eye`, `target`);
+/// `file` names it in errors.
+pub fn camera_path_from_toml(file: &str, text: &str) -> Result<Vec<CameraKey>, SceneError> {
+    let f: CameraPathFile = toml::from_str(text)
+        .map_err(|e| SceneError::Parse { file: file.to_string(), message: e.to_string() })?;
+    validate_camera_path(file, &f.camera_path)?;
+    Ok(f.camera_path)
+}
+
+/// A camera path as TOML text that [`camera_path_from_toml`] and a scene file read.
+pub fn camera_path_to_toml(path: &[CameraKey]) -> String {
+    let f = CameraPathFile { camera_path: path.to_vec() };
+    // Plain numbers and arrays: serialising cannot fail.
+    toml::to_string(&f).unwrap_or_default()
+}
+
 /// One key of a camera path.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -521,19 +565,7 @@ impl SceneSpec {
         if !(1..=6).contains(&self.lod.far_level) {
             return Err(bad("lod.far_level", self.lod.far_level.to_string(), "1 … 6"));
         }
-        for (k, key) in self.camera_path.iter().enumerate() {
-            let finite = key.eye.iter().chain(&key.target).all(|v| v.is_finite());
-            if !finite || key.eye == key.target || !key.t.is_finite() {
-                return Err(bad(
-                    "camera_path.eye",
-                    format!("{:?}", key.eye),
-                    "finite, not the target",
-                ));
-            }
-            if k > 0 && key.t <= self.camera_path[k - 1].t {
-                return Err(bad("camera_path.t", key.t.to_string(), "increasing from key to key"));
-            }
-        }
+        validate_camera_path(file, &self.camera_path)?;
         if let Some(c) = &self.camera {
             if !(1.0..=150.0).contains(&c.fov_deg) {
                 return Err(bad("camera.fov_deg", c.fov_deg.to_string(), "1 … 150"));

@@ -83,6 +83,7 @@ fn demo(a: DemoArgs) -> anyhow::Result<()> {
             lod_fraction: None,
             wind: None,
             no_panel: false,
+            camera_path: None,
             lod: Default::default(),
         };
         match view::view(&a) {

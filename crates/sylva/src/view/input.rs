@@ -13,6 +13,8 @@
 //! | Tab | show / hide the panel |
 //! | F1 | show / hide this help |
 //! | F12 | screenshot (PNG) |
+//! | R | record the camera / stop and write `camera-path.toml` |
+//! | P | replay the camera path / stop |
 //! | Esc | quit |
 
 use std::collections::HashSet;
@@ -22,7 +24,7 @@ use winit::keyboard::KeyCode;
 use super::state::{Action, Viewer};
 
 /// Help lines: key, what it does (the F1 overlay and the README).
-pub const KEYS: [(&str, &str); 14] = [
+pub const KEYS: [(&str, &str); 16] = [
     ("left drag", "orbit the camera"),
     ("left click", "select the tree under the cursor"),
     ("wheel", "zoom"),
@@ -35,6 +37,8 @@ pub const KEYS: [(&str, &str); 14] = [
     ("Tab", "show / hide the panel"),
     ("F1", "show / hide this help"),
     ("F12", "screenshot (PNG in the working folder)"),
+    ("R", "record the camera / stop and write camera-path.toml"),
+    ("P", "replay the camera path (recorded, --camera-path, or the scene's)"),
     ("Esc", "quit"),
     ("panel", "wind, LOD, scene, figures, plots, the selected tree"),
 ];
@@ -153,6 +157,8 @@ fn key_action(v: &Viewer, code: KeyCode, repeat: bool) -> Option<Action> {
         KeyCode::Tab if !repeat => Action::Panel(!v.panel),
         KeyCode::F1 if !repeat => Action::Help(!v.help),
         KeyCode::F12 if !repeat => Action::Screenshot,
+        KeyCode::KeyR if !repeat => Action::Record(v.recording.is_none()),
+        KeyCode::KeyP if !repeat => Action::Replay(v.replaying.is_none()),
         _ => return None,
     })
 }

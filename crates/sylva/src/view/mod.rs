@@ -47,6 +47,10 @@ pub struct ViewArgs {
     /// Start without the control panel (Tab shows it; the figures then stay in the title).
     #[arg(long)]
     pub no_panel: bool,
+    /// A camera path to replay with P (a TOML file of `[[camera_path]]` entries, as R
+    /// records and as scene files hold); default: the scene's.
+    #[arg(long)]
+    pub camera_path: Option<std::path::PathBuf>,
     #[command(flatten)]
     pub lod: crate::render::LodArgs,
 }
@@ -69,6 +73,16 @@ struct Surface {
     renderer: Renderer,
     panel: PanelPass,
     egui: egui_winit::State,
+    /// The panel's last output; its texture changes wait here until a frame draws them
+    /// (a frame can be skipped while the window is resized).
+    pending: PanelFrame,
+}
+
+impl Drop for Surface {
+    fn drop(&mut self) {
+        // Texture changes not yet drawn are dropped with the window, deliberately.
+        self.pending.textures.clear();
+    }
 }
 
 struct App {
@@ -121,7 +135,9 @@ impl App {
             None,
             Some(max_side),
         );
-        self.surface = Some(Surface { window, surface, gpu, config, renderer, panel, egui });
+        let pending = PanelFrame::default();
+        self.surface =
+            Some(Surface { window, surface, gpu, config, renderer, panel, egui, pending });
         Ok(())
     }
 
@@ -150,19 +166,20 @@ impl App {
         let Some(s) = self.surface.as_mut() else { return };
         let (w, h) = (s.config.width, s.config.height);
         v.build_frame(w as f32 / h as f32);
-        // The panel first (its actions apply next frame, as a click lands after a draw).
+        // The panel first; what it asks for applies now, and shows from the next frame on.
         let mut actions = Vec::new();
-        let mut panel_frame = None;
-        if v.panel || v.help || v.clock.slow {
+        let with_panel = v.panel || v.help || v.clock.slow;
+        if with_panel {
             let raw = s.egui.take_egui_input(&s.window);
             let ctx = s.egui.egui_ctx().clone();
             let full = ctx.run_ui(raw, |ui| panel::show(ui, v, &mut self.draft, &mut actions));
             s.egui.handle_platform_output(&s.window, full.platform_output);
-            panel_frame = Some(PanelFrame {
-                primitives: ctx.tessellate(full.shapes, full.pixels_per_point),
-                textures: full.textures_delta,
-                pixels_per_point: full.pixels_per_point,
-            });
+            s.pending.primitives = ctx.tessellate(full.shapes, full.pixels_per_point);
+            s.pending.textures.append(full.textures_delta);
+            s.pending.pixels_per_point = full.pixels_per_point;
+        }
+        for a in actions {
+            v.apply(a);
         }
         let texture = match s.surface.get_current_texture() {
             wgpu::CurrentSurfaceTexture::Success(t)
@@ -177,16 +194,13 @@ impl App {
         let camera = v.orbit.camera();
         let start = Instant::now();
         s.renderer.render(&s.gpu, &v.frame, &camera, &view);
-        if let Some(pf) = &mut panel_frame {
-            s.panel.draw(&s.gpu, &view, [w, h], pf);
+        if with_panel {
+            s.panel.draw(&s.gpu, &view, [w, h], &mut s.pending);
         }
         // Wait for the GPU, so the figure is the frame's real rendering time.
         let _ = s.gpu.device.poll(wgpu::PollType::Wait { submission_index: None, timeout: None });
         v.figures.render_ms = 1e3 * start.elapsed().as_secs_f32();
         s.gpu.queue.present(texture);
-        for a in actions {
-            v.apply(a);
-        }
         if std::mem::take(&mut v.screenshot) {
             match screenshot(v, w, h) {
                 Ok(path) => println!("wrote {path}"),
@@ -306,6 +320,11 @@ pub fn view(a: &ViewArgs) -> anyhow::Result<()> {
     let forest = Forest::new(&spec)?;
     let mut viewer = Viewer::new(forest, &a.scene);
     viewer.apply(Action::Panel(!a.no_panel));
+    if let Some(p) = &a.camera_path {
+        let text =
+            std::fs::read_to_string(p).with_context(|| format!("reading {}", p.display()))?;
+        viewer.path = sylva_forest::camera_path_from_toml(&p.display().to_string(), &text)?;
+    }
     let draft = panel::Draft::of(&viewer);
     let event_loop = EventLoop::new().context("no window system: is a display available?")?;
     let mut app = App {

@@ -49,7 +49,8 @@ pub fn show(ui: &mut Ui, v: &Viewer, draft: &mut Draft, out: &mut Vec<Action>) {
             });
     }
     if v.help {
-        egui::Window::new("Keys (F1)").collapsible(false).resizable(false).show(ui.ctx(), |ui| {
+        let keys = egui::Window::new("Keys (F1)").collapsible(false).resizable(false);
+        keys.anchor(egui::Align2::CENTER_CENTER, [0.0, 0.0]).show(ui.ctx(), |ui| {
             egui::Grid::new("keys").striped(true).show(ui, |ui| {
                 for (key, what) in KEYS {
                     ui.label(RichText::new(key).monospace());
@@ -80,8 +81,9 @@ fn contents(ui: &mut Ui, v: &Viewer, draft: &mut Draft, out: &mut Vec<Action>) {
     egui::CollapsingHeader::new("Scene")
         .default_open(false)
         .show(ui, |ui| scene(ui, v, draft, out));
-    egui::CollapsingHeader::new("Plots (last 30 s)").default_open(true).show(ui, |ui| plots(ui, v));
+    egui::CollapsingHeader::new("Camera").default_open(false).show(ui, |ui| camera(ui, v, out));
     egui::CollapsingHeader::new("Selected tree").default_open(true).show(ui, |ui| selected(ui, v));
+    egui::CollapsingHeader::new("Plots (last 30 s)").default_open(true).show(ui, |ui| plots(ui, v));
 }
 
 fn figures(ui: &mut Ui, v: &Viewer) {
@@ -160,7 +162,7 @@ fn wind(ui: &mut Ui, v: &Viewer, out: &mut Vec<Action>) {
 fn lod(ui: &mut Ui, v: &Viewer, out: &mut Vec<Action>) {
     let lod = v.forest.lod();
     let mut l = lod;
-    ui.checkbox(&mut l.geometry, "geometry LOD (meshes → impostors)");
+    ui.checkbox(&mut l.geometry, "geometry LOD (meshes, then impostors)");
     ui.add_enabled(
         l.geometry,
         egui::Slider::new(&mut l.fraction, 0.05..=20.0)
@@ -201,6 +203,38 @@ fn scene(ui: &mut Ui, v: &Viewer, draft: &mut Draft, out: &mut Vec<Action>) {
             trees: draft.trees,
             seed: draft.seed,
         });
+    }
+}
+
+fn camera(ui: &mut Ui, v: &Viewer, out: &mut Vec<Action>) {
+    ui.horizontal(|ui| {
+        let rec = v.recording.is_some();
+        if ui.button(if rec { "stop recording" } else { "record (R)" }).clicked() {
+            out.push(Action::Record(!rec));
+        }
+        let play = v.replaying.is_some();
+        let can = !v.path.is_empty() && !rec;
+        if ui
+            .add_enabled(can || play, egui::Button::new(if play { "stop" } else { "replay (P)" }))
+            .clicked()
+        {
+            out.push(Action::Replay(!play));
+        }
+        if ui.button("screenshot (F12)").clicked() {
+            out.push(Action::Screenshot);
+        }
+    });
+    match (&v.recording, v.replaying) {
+        (Some((keys, t)), _) => ui.label(format!("recording: {} keys, {t:.1} s", keys.len())),
+        (None, Some(t)) => {
+            ui.label(format!("replaying: {t:.1} of {:.1} s", v.path.last().map_or(0.0, |k| k.t)))
+        }
+        _ => {
+            ui.label(format!("path: {} keys (written to {})", v.path.len(), v.path_file.display()))
+        }
+    };
+    if let Some(s) = &v.status {
+        ui.label(s);
     }
 }
 

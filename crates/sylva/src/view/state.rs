@@ -6,13 +6,15 @@ use std::collections::VecDeque;
 use std::sync::mpsc::{Receiver, channel};
 use std::time::Instant;
 
-use sylva_forest::{Camera, Forest, FrameData, LodSettings, SceneSpec};
+use sylva_forest::{Camera, CameraKey, Forest, FrameData, LodSettings, SceneSpec};
 
 /// Simulation substep, s: the sway advances in steps of at most this.
 pub const SUBSTEP: f32 = 1.0 / 60.0;
 /// Most substeps per frame (0.2 s of simulated time). A frame slower than that (× the time
 /// scale) leaves the simulation behind real time: the viewer shows "slow motion".
 pub const MAX_SUBSTEPS: u32 = 12;
+/// Seconds between the keys of a recorded camera path.
+pub const RECORD_EVERY_S: f32 = 0.25;
 /// Seconds of history the plots keep.
 pub const HISTORY_S: f64 = 30.0;
 
@@ -55,6 +57,12 @@ pub enum Action {
     Help(bool),
     /// Save the next frame as a PNG.
     Screenshot,
+    /// Start (true) or stop recording the camera; stopping writes the path
+    /// ([`Viewer::path_file`]) and makes it the one to replay.
+    Record(bool),
+    /// Play (true) or stop the camera path: the recorded one, the `--camera-path` file's,
+    /// or the scene's.
+    Replay(bool),
     /// Close the viewer.
     Quit,
 }
@@ -245,6 +253,16 @@ pub struct Viewer {
     pub quit: bool,
     /// The scene argument the current forest was built from.
     loaded: String,
+    /// The camera path to replay (recorded, read, or the scene's).
+    pub path: Vec<CameraKey>,
+    /// Where a recorded path is written.
+    pub path_file: std::path::PathBuf,
+    /// Recording: the keys so far and the real time since the start, s.
+    pub recording: Option<(Vec<CameraKey>, f32)>,
+    /// Replaying: real time into the path, s.
+    pub replaying: Option<f32>,
+    /// A line for the panel (what was written, what failed).
+    pub status: Option<String>,
 }
 
 impl Viewer {
@@ -280,7 +298,19 @@ impl Viewer {
             screenshot: false,
             quit: false,
             loaded: scene.to_string(),
+            path: Vec::new(),
+            path_file: "camera-path.toml".into(),
+            recording: None,
+            replaying: None,
+            status: None,
         }
+        .with_scene_path()
+    }
+
+    /// The scene's own camera path as the one to replay (when it has one).
+    fn with_scene_path(mut self) -> Viewer {
+        self.path = self.forest.spec.camera_path.clone();
+        self
     }
 
     /// Apply one change.
@@ -332,6 +362,38 @@ impl Viewer {
             Action::Panel(on) => self.panel = on,
             Action::Help(on) => self.help = on,
             Action::Screenshot => self.screenshot = true,
+            Action::Record(true) => {
+                self.replaying = None;
+                self.recording = Some((Vec::new(), 0.0));
+                self.key_camera();
+            }
+            Action::Record(false) => {
+                let Some((keys, _)) = self.recording.take() else { return };
+                if keys.len() < 2 {
+                    self.status = Some("camera path: too short to keep (under 0.25 s)".into());
+                    return;
+                }
+                let text = sylva_forest::camera_path_to_toml(&keys);
+                self.status = Some(
+                    match sylva_wind::io::atomic::write_atomic(&self.path_file, text.as_bytes()) {
+                        Ok(()) => format!(
+                            "camera path: {} keys, {:.1} s, written to {}",
+                            keys.len(),
+                            keys.last().map_or(0.0, |k| k.t),
+                            self.path_file.display()
+                        ),
+                        Err(e) => format!("camera path: writing {}: {e}", self.path_file.display()),
+                    },
+                );
+                self.path = keys;
+            }
+            Action::Replay(on) => {
+                self.replaying = (on && !self.path.is_empty()).then_some(0.0);
+                if on && self.path.is_empty() {
+                    self.status =
+                        Some("no camera path: record one (R) or give --camera-path".into());
+                }
+            }
             Action::Quit => self.quit = true,
         }
     }
@@ -456,9 +518,40 @@ impl Viewer {
         }
     }
 
-    /// Advance by `real_dt` seconds of real time: fixed substeps (capped), then the plots'
-    /// history. Figures: frame time, FPS, simulation time.
+    /// Add a key for the camera now to the recording (if any).
+    fn key_camera(&mut self) {
+        let c = self.orbit.camera();
+        if let Some((keys, t)) = &mut self.recording
+            && keys.last().is_none_or(|k| *t > k.t)
+        {
+            keys.push(CameraKey { t: *t, eye: c.eye, target: c.target });
+        }
+    }
+
+    /// Move the camera along the path being replayed, and record; both in real time.
+    fn camera_time(&mut self, real_dt: f32) {
+        if let Some(t) = &mut self.replaying {
+            *t += real_dt;
+            let end = self.path.last().map_or(0.0, |k| k.t);
+            let c = sylva_forest::camera_on_path(&self.path, t.min(end), &self.orbit.camera());
+            self.orbit =
+                Orbit { fov: self.orbit.fov, far: self.orbit.far, ..Orbit::from_camera(&c) };
+            if *t >= end {
+                self.replaying = None;
+            }
+        }
+        if let Some((keys, t)) = &mut self.recording {
+            *t += real_dt;
+            if keys.last().is_none_or(|k| *t - k.t >= RECORD_EVERY_S) {
+                self.key_camera();
+            }
+        }
+    }
+
+    /// Advance by `real_dt` seconds of real time: the camera path, fixed substeps (capped),
+    /// then the plots' history. Figures: frame time, FPS, simulation time.
     pub fn advance(&mut self, real_dt: f32) {
+        self.camera_time(real_dt.max(0.0));
         self.figures.frame_ms = 1e3 * real_dt;
         let fps = if real_dt > 0.0 { 1.0 / real_dt } else { 0.0 };
         self.figures.fps =

@@ -356,3 +356,56 @@ fn read_png(path: &std::path::Path) -> Option<Vec<u8>> {
     r.next_frame(&mut buf).ok()?;
     Some(buf)
 }
+
+#[test]
+fn a_recorded_camera_path_is_written_read_back_and_replayed() {
+    let dir = std::env::temp_dir().join(format!("sylva-view-path-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let mut v = viewer(3);
+    v.path_file = dir.join("path.toml");
+    let mut c = Controls::default();
+    for i in key(KeyCode::KeyR) {
+        c.handle(&mut v, i, 800.0, 600.0);
+    }
+    assert!(v.recording.is_some());
+    // Two seconds of orbiting, a quarter turn, at 20 frames a second.
+    let start = v.orbit.camera();
+    for _ in 0..40 {
+        v.orbit.yaw += std::f32::consts::FRAC_PI_2 / 40.0;
+        v.advance(0.05);
+    }
+    let end = v.orbit.camera();
+    for i in key(KeyCode::KeyR) {
+        c.handle(&mut v, i, 800.0, 600.0);
+    }
+    assert!(v.recording.is_none());
+    let text = std::fs::read_to_string(&v.path_file).expect("path written");
+    let keys = sylva_forest::camera_path_from_toml("path.toml", &text).expect("a valid path");
+    assert_eq!(keys, v.path);
+    assert!((keys.len() as i32 - 9).abs() <= 1, "a key every 0.25 s over 2 s: {}", keys.len());
+    assert_eq!(keys[0].eye, start.eye);
+    // Replay: the camera starts where the recording did and ends where it ended.
+    for i in key(KeyCode::KeyP) {
+        c.handle(&mut v, i, 800.0, 600.0);
+    }
+    v.advance(0.0);
+    let near = |a: [f32; 3], b: [f32; 3], tol: f32| (0..3).all(|i| (a[i] - b[i]).abs() < tol);
+    assert!(
+        near(v.orbit.camera().eye, start.eye, 1e-2),
+        "{:?} vs {:?}",
+        v.orbit.camera().eye,
+        start.eye
+    );
+    for _ in 0..60 {
+        v.advance(0.05);
+    }
+    assert!(v.replaying.is_none(), "the replay stops at the path's end");
+    let last = keys.last().expect("keys");
+    assert!(near(v.orbit.camera().eye, last.eye, 1e-2));
+    assert!(near(last.eye, end.eye, 0.5 * v.orbit.distance), "the last key is near the end pose");
+    // A path file with times going backwards is refused, naming the key.
+    let bad = text.replacen("t = 0.25", "t = -1.0", 1);
+    let err = sylva_forest::camera_path_from_toml("bad.toml", &bad).expect_err("refused");
+    assert!(err.to_string().contains("camera_path.t"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
