@@ -85,7 +85,7 @@ pub enum ForestError {
 /// `max_state_mb`.
 pub const MAX_STATE_BYTES: usize = 6_000_000_000;
 
-/// One tree drawn this frame, as the vertex shaders read it (44 bytes; sylva-render maps
+/// One tree drawn this frame, as the vertex shaders read it (48 bytes; sylva-render maps
 /// each field to a vertex attribute by its offset).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, PartialEq, Pod, Zeroable)]
@@ -108,6 +108,10 @@ pub struct Instance {
     /// `[fade[0], fade[1])`. A tree between two levels is drawn twice with complementary
     /// ranges `[0, 1 − w)` and `[1 − w, 1)`; a tree at one level has `[0, 2)`.
     pub fade: [f32; 2],
+    /// What the renderer's colour overlay shows: bits 0–3 the geometry level of this draw
+    /// (15: an impostor), bits 4–7 the species, bits 8–31 the instance group within the
+    /// species.
+    pub tag: u32,
 }
 
 /// The geometry-LOD switch and thresholds (see the module documentation).
@@ -872,6 +876,7 @@ impl Forest {
                 leaf_phase: group.leaf.phase,
                 leaf_amplitude: group.leaf.amplitude,
                 fade,
+                tag: if far { 15 } else { level.min(14) } | (species.min(15) << 4) | (g << 8),
             });
         }
         stats.drawn = out.keys.len() - stats.fading;

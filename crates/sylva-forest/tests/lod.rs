@@ -214,3 +214,29 @@ fn switching_one_lod_off_changes_only_its_own_figures() {
     assert!(geo.triangles > 10 * all.triangles && geo.impostors == 0);
     assert_eq!(geo.simulated, all.simulated);
 }
+
+#[test]
+fn each_draw_is_tagged_with_its_level_species_and_instance_group() {
+    let spec = SceneSpec::builtin("A").expect("scene A");
+    let forest = Forest::new(&spec).expect("forest");
+    let mut frame = FrameData::default();
+    forest.frame(&forest.default_camera(), 4.0 / 3.0, &mut frame);
+    let mut levels = std::collections::BTreeSet::new();
+    for b in &frame.buckets {
+        for inst in &frame.instances[b.first as usize..(b.first + b.count) as usize] {
+            let level = inst.tag & 15;
+            // Impostors sit in the bucket one past the mesh levels and are tagged 15.
+            let chain = forest.species[b.species as usize].model.lods.len() as u32;
+            assert_eq!(level, if b.lod < chain { b.lod } else { 15 });
+            assert_eq!((inst.tag >> 4) & 15, b.species);
+            levels.insert(level);
+        }
+    }
+    assert!(levels.len() >= 2, "scene A's default view draws several levels: {levels:?}");
+    // Instance groups: many in view, each tag naming one of its species' groups.
+    let groups: std::collections::BTreeSet<u32> =
+        frame.instances.iter().map(|i| i.tag >> 4).collect();
+    assert!(groups.len() > 10, "many (species, group) pairs in view: {}", groups.len());
+    let most = (0..forest.trees()).filter_map(|t| forest.tree_info(t)).map(|i| i.group).max();
+    assert!(frame.instances.iter().all(|i| Some(i.tag >> 8) <= most));
+}

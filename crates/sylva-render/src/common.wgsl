@@ -26,7 +26,8 @@ struct Globals {
     sun_view_proj: mat4x4<f32>,
     // One shadow-map texel in texture coordinates (0: no shadow map).
     shadow_texel: f32,
-    pad5: f32,
+    // Colour overlay of the trees: 0 off, 1 geometry level, 2 instance group.
+    overlay: f32,
     pad6: f32,
     pad7: f32,
 };
@@ -127,6 +128,8 @@ struct InstanceIn {
     @location(7) palette: vec2<u32>,
     @location(8) leaf: vec2<f32>,
     @location(10) fade: vec2<f32>,
+    // Overlay tag: bits 0-3 level, 4-7 species, 8-31 instance group.
+    @location(9) tag: u32,
 };
 
 // Vertex output of the tree pipelines, and their species textures.
@@ -140,7 +143,34 @@ struct TreeOut {
     @location(4) exposure: f32,
     // Leaves: this tree's colour variation (1 for bark).
     @location(5) @interpolate(flat) tint: vec3<f32>,
+    // The instance's overlay tag.
+    @location(6) @interpolate(flat) tag: u32,
 };
+
+// The colour overlay (the viewer's): a lit colour tinted by the draw's geometry level
+// (full detail white, then yellow, orange, red, magenta, blue; impostors, tagged 15, cyan)
+// or by its
+// instance group (a colour hashed from species and group), keeping the shading.
+fn overlay(lit: vec3<f32>, tag: u32) -> vec3<f32> {
+    if (globals.overlay < 0.5) {
+        return lit;
+    }
+    var c: vec3<f32>;
+    if (globals.overlay < 1.5) {
+        let levels = array<vec3<f32>, 8>(
+            vec3<f32>(1.0, 1.0, 1.0), vec3<f32>(1.0, 0.9, 0.2), vec3<f32>(1.0, 0.55, 0.1),
+            vec3<f32>(0.95, 0.15, 0.1), vec3<f32>(0.85, 0.2, 0.85), vec3<f32>(0.25, 0.35, 1.0),
+            vec3<f32>(0.6, 0.6, 0.6), vec3<f32>(0.1, 0.9, 0.9));
+        c = levels[select(min(tag & 15u, 6u), 7u, (tag & 15u) == 15u)];
+    } else {
+        var h = (tag >> 4u) * 2654435761u;
+        h = h ^ (h >> 15u);
+        c = vec3<f32>(f32(h & 255u), f32((h >> 8u) & 255u), f32((h >> 16u) & 255u)) / 255.0;
+        c = 0.25 + 0.75 * c;
+    }
+    let grey = dot(lit, vec3<f32>(0.3, 0.6, 0.1));
+    return c * (0.4 + 2.0 * grey);
+}
 
 // Ambient occlusion inside a crown: foliage at its centre gets 40 % of the light at its
 // surface.

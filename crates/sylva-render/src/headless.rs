@@ -67,6 +67,11 @@ impl Headless {
         &self.renderer
     }
 
+    /// The renderer, to change its settings (lighting, overlay).
+    pub fn renderer_mut(&mut self) -> &mut Renderer {
+        &mut self.renderer
+    }
+
     /// Draw `frame` from `camera` and return the image, RGBA8 rows top first.
     pub fn render(&mut self, frame: &FrameData, camera: &Camera) -> Result<Vec<u8>, RenderError> {
         self.render_with(frame, camera, |_, _| {})

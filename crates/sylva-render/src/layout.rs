@@ -57,8 +57,9 @@ pub struct Globals {
     pub sun_view_proj: [[f32; 4]; 4],
     /// Side of one shadow-map texel in its texture coordinates (0: no shadow map).
     pub shadow_texel: f32,
-    /// Padding.
-    pub pad5: f32,
+    /// Colour overlay of the tree passes (`Overlay` as f32: 0 off, 1 geometry level,
+    /// 2 instance group).
+    pub overlay: f32,
     /// Padding.
     pub pad6: f32,
     /// Padding.
@@ -177,7 +178,7 @@ macro_rules! attr {
 }
 
 /// `InstanceIn` in common.wgsl, read from [`Instance`] as sylva-forest lays it out.
-pub const INSTANCE_ATTRIBUTES: [wgpu::VertexAttribute; 5] = [
+pub const INSTANCE_ATTRIBUTES: [wgpu::VertexAttribute; 6] = [
     // position (vec3) followed by yaw: read together as `base`.
     attr!(Instance, position, Float32x4, 5),
     attr!(Instance, scale, Float32, 6),
@@ -186,6 +187,7 @@ pub const INSTANCE_ATTRIBUTES: [wgpu::VertexAttribute; 5] = [
     // leaf_phase and leaf_amplitude: read together as `leaf`.
     attr!(Instance, leaf_phase, Float32x2, 8),
     attr!(Instance, fade, Float32x2, 10),
+    attr!(Instance, tag, Uint32, 9),
 ];
 
 /// `BranchIn`.

@@ -19,6 +19,6 @@ pub use egui;
 pub use gpu::{Gpu, RenderError};
 pub use headless::Headless;
 pub use passes::panel::{PanelFrame, PanelPass};
-pub use renderer::{Renderer, SceneAssets};
+pub use renderer::{Overlay, Renderer, SceneAssets};
 pub use shared::{SHADERS, shader_source};
 pub use wgpu;

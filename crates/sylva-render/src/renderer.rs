@@ -89,6 +89,20 @@ pub struct Renderer {
     msaa: Option<wgpu::TextureView>,
     depth: wgpu::TextureView,
     lighting: Lighting,
+    overlay: Overlay,
+}
+
+/// A colour overlay of the tree passes, for looking at the LODs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Overlay {
+    /// The trees as they are.
+    #[default]
+    Off,
+    /// Each draw tinted by its geometry level: full detail white, then yellow, orange, red,
+    /// magenta, blue; impostors cyan.
+    Level,
+    /// Each tree tinted by its instance group (trees sharing one simulation share a colour).
+    Group,
 }
 
 impl Renderer {
@@ -258,6 +272,7 @@ impl Renderer {
             msaa,
             depth,
             lighting: assets.lighting,
+            overlay: Overlay::Off,
         })
     }
 
@@ -280,6 +295,11 @@ impl Renderer {
     /// Sun, sky and fog in use.
     pub fn lighting(&self) -> Lighting {
         self.lighting
+    }
+
+    /// Tint the trees by their level or instance group (the viewer's overlay), or not.
+    pub fn set_overlay(&mut self, overlay: Overlay) {
+        self.overlay = overlay;
     }
 
     /// Change the sun, sky and fog.
@@ -315,6 +335,11 @@ impl Renderer {
         let dev = &gpu.device;
         let aspect = self.width as f32 / self.height as f32;
         let mut g = Globals::for_camera(camera, aspect, frame.time as f32, &self.lighting);
+        g.overlay = match self.overlay {
+            Overlay::Off => 0.0,
+            Overlay::Level => 1.0,
+            Overlay::Group => 2.0,
+        };
         let shadows = self.lighting.shadows;
         if shadows {
             g.sun_view_proj = ShadowPass::sun_matrix(camera, aspect, self.lighting.sun_unit());

@@ -68,7 +68,7 @@ fn globals_match_their_wgsl_twin() {
         exposure,
         sun_view_proj,
         shadow_texel,
-        pad5,
+        overlay,
         pad6,
         pad7
     );

@@ -303,3 +303,37 @@ fn the_fir_crown_hides_most_of_the_sky_behind_it_at_twenty_metres() {
     let open = sky as f64 / inside as f64;
     assert!(open < 0.3, "{:.0} % of the fir's crown shows sky", 100.0 * open);
 }
+
+#[test]
+fn the_level_overlay_tints_each_tree_by_the_level_it_is_drawn_at() {
+    let spec = SceneSpec::builtin("small").expect("small scene");
+    let mut forest = Forest::new(&spec).expect("forest");
+    // Coarse enough that the far trees are impostors and the near ones meshes.
+    forest.set_lod_fraction(3.0);
+    let camera = forest.default_camera();
+    let mut gpu = Headless::new(&forest, W, H).unwrap_or_else(|e| panic!("{e}"));
+    let mut frame = FrameData::default();
+    forest.frame(&camera, W as f32 / H as f32, &mut frame);
+    let plain = gpu.render(&frame, &camera).expect("render");
+    gpu.renderer_mut().set_overlay(sylva_render::Overlay::Level);
+    let tinted = gpu.render(&frame, &camera).expect("render");
+    gpu.renderer_mut().set_overlay(sylva_render::Overlay::Off);
+    assert_eq!(gpu.render(&frame, &camera).expect("render"), plain, "off is off");
+    // Tree pixels change colour; sky and ground (outside the tree passes) do not.
+    let changed = plain.chunks(4).zip(tinted.chunks(4)).filter(|(a, b)| a != b).count();
+    assert!(changed > 500, "{changed} pixels tinted");
+    let sky = px(&plain, W / 2, 2);
+    assert_eq!(sky, px(&tinted, W / 2, 2));
+    // Levels drawn here, and each level's colour found in the image: cyan for impostors,
+    // an orange-red hue for the mesh levels (red well above blue).
+    let chain = forest.species[0].model.lods.len() as u32;
+    let impostors = frame.buckets.iter().any(|b| b.lod >= chain);
+    let cyan = tinted
+        .chunks(4)
+        .filter(|p| p[1] as i32 > p[0] as i32 + 40 && p[2] as i32 > p[0] as i32 + 40)
+        .count();
+    let warm = tinted.chunks(4).filter(|p| p[0] as i32 > p[2] as i32 + 60).count();
+    let warm_before = plain.chunks(4).filter(|p| p[0] as i32 > p[2] as i32 + 60).count();
+    assert!(!impostors || cyan > 20, "impostors drawn: {impostors}, cyan pixels {cyan}");
+    assert!(warm > warm_before + 200, "mesh levels tinted warm: {warm} vs {warm_before}");
+}

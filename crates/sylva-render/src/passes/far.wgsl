@@ -30,6 +30,7 @@ struct FarOut {
     @location(2) @interpolate(flat) yaw: f32,
     @location(3) @interpolate(flat) fade: vec2<f32>,
     @location(4) @interpolate(flat) tint: vec3<f32>,
+    @location(5) @interpolate(flat) tag: u32,
 };
 
 const TAU: f32 = 6.28318530718;
@@ -67,6 +68,7 @@ fn vs_main(@builtin(vertex_index) vi: u32, inst: InstanceIn) -> FarOut {
     out.yaw = yaw;
     out.fade = inst.fade;
     out.tint = tree_tint(inst.base);
+    out.tag = inst.tag;
     return out;
 }
 
@@ -86,5 +88,5 @@ fn fs_main(in: FarOut) -> @location(0) vec4<f32> {
     let tint = mix(vec3<f32>(1.0), in.tint, baked.a);
     let sun = sun_visibility(in.world, n);
     let lit = albedo.rgb * tint * (lighting(n, sun) + sun * baked.a * translucency(in.world));
-    return finish(apply_fog(lit, in.world));
+    return finish(apply_fog(overlay(lit, in.tag), in.world));
 }

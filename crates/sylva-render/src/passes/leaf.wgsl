@@ -67,6 +67,7 @@ fn vs_main(v: LeafIn, inst: InstanceIn) -> TreeOut {
     out.fade = inst.fade;
     out.exposure = v.exposure;
     out.tint = tree_tint(inst.base);
+    out.tag = inst.tag;
     return out;
 }
 
@@ -88,7 +89,7 @@ fn fs_main(in: TreeOut) -> @location(0) vec4<f32> {
     let sun = sun_visibility(in.world, n);
     let light = lighting(n, sun) * foliage_occlusion(in.exposure);
     let lit = t.rgb * in.tint * (light + sun * translucency(in.world));
-    return finish(apply_fog(lit, in.world));
+    return finish(apply_fog(overlay(lit, in.tag), in.world));
 }
 
 // The shadow pass: only the alpha test, so light passes between the leaves.

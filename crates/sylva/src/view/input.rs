@@ -13,6 +13,7 @@
 //! | Tab | show / hide the panel |
 //! | F1 | show / hide this help |
 //! | F12 | screenshot (PNG) |
+//! | O | colour overlay: off, geometry level, instance group |
 //! | R | record the camera / stop and write `camera-path.toml` |
 //! | P | replay the camera path / stop |
 //! | Esc | quit |
@@ -22,9 +23,10 @@ use std::collections::HashSet;
 use winit::keyboard::KeyCode;
 
 use super::state::{Action, Viewer};
+use sylva_render::Overlay;
 
 /// Help lines: key, what it does (the F1 overlay and the README).
-pub const KEYS: [(&str, &str); 16] = [
+pub const KEYS: [(&str, &str); 17] = [
     ("left drag", "orbit the camera"),
     ("left click", "select the tree under the cursor"),
     ("wheel", "zoom"),
@@ -37,6 +39,7 @@ pub const KEYS: [(&str, &str); 16] = [
     ("Tab", "show / hide the panel"),
     ("F1", "show / hide this help"),
     ("F12", "screenshot (PNG in the working folder)"),
+    ("O", "colour overlay: off, geometry level, instance group"),
     ("R", "record the camera / stop and write camera-path.toml"),
     ("P", "replay the camera path (recorded, --camera-path, or the scene's)"),
     ("Esc", "quit"),
@@ -158,6 +161,11 @@ fn key_action(v: &Viewer, code: KeyCode, repeat: bool) -> Option<Action> {
         KeyCode::F1 if !repeat => Action::Help(!v.help),
         KeyCode::F12 if !repeat => Action::Screenshot,
         KeyCode::KeyR if !repeat => Action::Record(v.recording.is_none()),
+        KeyCode::KeyO if !repeat => Action::Overlay(match v.overlay {
+            Overlay::Off => Overlay::Level,
+            Overlay::Level => Overlay::Group,
+            Overlay::Group => Overlay::Off,
+        }),
         KeyCode::KeyP if !repeat => Action::Replay(v.replaying.is_none()),
         _ => return None,
     })

@@ -193,6 +193,7 @@ impl App {
         let view = texture.texture.create_view(&wgpu::TextureViewDescriptor::default());
         let camera = v.orbit.camera();
         let start = Instant::now();
+        s.renderer.set_overlay(v.overlay);
         s.renderer.render(&s.gpu, &v.frame, &camera, &view);
         if with_panel {
             s.panel.draw(&s.gpu, &view, [w, h], &mut s.pending);

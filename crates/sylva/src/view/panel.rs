@@ -176,6 +176,19 @@ fn lod(ui: &mut Ui, v: &Viewer, out: &mut Vec<Action>) {
     if l != lod {
         out.push(Action::Lod(LodSettings { ..l }));
     }
+    let mut overlay = v.overlay;
+    ui.horizontal(|ui| {
+        ui.label("overlay (O)");
+        ui.selectable_value(&mut overlay, sylva_render::Overlay::Off, "off");
+        ui.selectable_value(&mut overlay, sylva_render::Overlay::Level, "level");
+        ui.selectable_value(&mut overlay, sylva_render::Overlay::Group, "group");
+    });
+    if overlay != v.overlay {
+        out.push(Action::Overlay(overlay));
+    }
+    if v.overlay == sylva_render::Overlay::Level {
+        ui.label("full detail white, levels 1–5 yellow to blue, impostors cyan");
+    }
     let mut wind_lod = v.settings.wind_lod;
     if ui.checkbox(&mut wind_lod, "wind-field LOD (instance groups; rebuilds)").changed() {
         out.push(Action::WindLod(wind_lod));

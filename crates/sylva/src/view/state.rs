@@ -55,6 +55,8 @@ pub enum Action {
     Panel(bool),
     /// Show or hide the key help.
     Help(bool),
+    /// Tint the trees by geometry level or instance group, or not.
+    Overlay(sylva_render::Overlay),
     /// Save the next frame as a PNG.
     Screenshot,
     /// Start (true) or stop recording the camera; stopping writes the path
@@ -247,6 +249,8 @@ pub struct Viewer {
     pub panel: bool,
     /// Key help shown.
     pub help: bool,
+    /// The renderer's colour overlay.
+    pub overlay: sylva_render::Overlay,
     /// A screenshot was asked for.
     pub screenshot: bool,
     /// Close asked for.
@@ -295,6 +299,7 @@ impl Viewer {
             error: None,
             panel: true,
             help: false,
+            overlay: sylva_render::Overlay::Off,
             screenshot: false,
             quit: false,
             loaded: scene.to_string(),
@@ -361,6 +366,7 @@ impl Viewer {
             }
             Action::Panel(on) => self.panel = on,
             Action::Help(on) => self.help = on,
+            Action::Overlay(o) => self.overlay = o,
             Action::Screenshot => self.screenshot = true,
             Action::Record(true) => {
                 self.replaying = None;
