@@ -954,6 +954,9 @@ pub fn wind_field(spec: &SceneSpec, radius: f32) -> Result<WindField, ForestErro
     if let Some(a) = spec.wind_advection {
         params.advection = a;
     }
+    if let Some(p) = spec.wind_profile {
+        params.profile = p;
+    }
     let half = (radius as f64 + 30.0) * std::f64::consts::SQRT_2;
     let n = wind_points(spec, radius);
     let spacing = 2.0 * half / (n - 1) as f64;

@@ -17,8 +17,8 @@ pub use driver::{
     TreeInfo, blend_levels, hysteresis, lod_coordinate, wind_field,
 };
 pub use scene::{
-    CameraKey, Lighting, LodSpec, Placement, SCENES, SceneError, SceneSpec, SwayOverrides, Terrain,
-    WindSource, camera_on_path, camera_path_from_toml, camera_path_to_toml, default_camera_path,
-    layout,
+    CameraKey, Lighting, LodSpec, Placement, SCENES, SceneError, SceneSpec, SpeciesShare,
+    SwayOverrides, Terrain, WindSource, camera_on_path, camera_path_from_toml, camera_path_to_toml,
+    default_camera_path, layout,
 };
 pub use sylva_sway::PaletteSlot;

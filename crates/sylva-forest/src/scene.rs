@@ -220,6 +220,11 @@ pub struct SceneSpec {
     /// (on). Only with a preset.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub wind_advection: Option<bool>,
+    /// Mean wind profile replacing the preset's (a table: `kind = "log"` with `z0`, `d`, or
+    /// `kind = "power"` with `u_ref`, `z_ref`, `alpha`; see `sylva_wind::Profile`). Only
+    /// with a preset.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub wind_profile: Option<sylva_wind::Profile>,
     /// Direction the wind blows towards, degrees counter-clockwise from +x. Default 20.
     #[serde(default = "wind_dir")]
     pub wind_direction_deg: f32,
@@ -520,6 +525,15 @@ impl SceneSpec {
             }
             if !matches!(source, WindSource::Preset(_)) {
                 return Err(bad("u_star", u.to_string(), "set only with a wind preset"));
+            }
+        }
+        if let Some(p) = self.wind_profile {
+            if !matches!(source, WindSource::Preset(_)) {
+                return Err(bad("wind_profile", format!("{p:?}"), "set only with a wind preset"));
+            }
+            let params = sylva_wind::WindParams { profile: p, ..sylva_wind::WindParams::default() };
+            if let Err(e) = params.validate() {
+                return Err(bad("wind_profile", e.to_string(), "a valid profile"));
             }
         }
         if !self.wind_direction_deg.is_finite() {

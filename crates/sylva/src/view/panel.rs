@@ -17,12 +17,19 @@ pub struct Draft {
     pub trees: usize,
     /// Seed.
     pub seed: u64,
+    /// Species mix: names and weights.
+    pub species: Vec<sylva_forest::SpeciesShare>,
 }
 
 impl Draft {
     /// The viewer's current scene.
     pub fn of(v: &Viewer) -> Draft {
-        Draft { scene: v.settings.scene.clone(), trees: v.settings.trees, seed: v.settings.seed }
+        Draft {
+            scene: v.settings.scene.clone(),
+            trees: v.settings.trees,
+            seed: v.settings.seed,
+            species: v.forest.spec.species.clone(),
+        }
     }
 }
 
@@ -135,6 +142,9 @@ fn wind(ui: &mut Ui, v: &Viewer, out: &mut Vec<Action>) {
     if ui.add(egui::Slider::new(&mut t, -180.0..=180.0).text("turn, °")).changed() {
         out.push(Action::WindTurn(t));
     }
+    if is_preset {
+        profile(ui, v, out);
+    }
     let mut adv = v.settings.advection;
     if is_preset && ui.checkbox(&mut adv, "advection (gusts travel downwind)").changed() {
         out.push(Action::Advection(adv));
@@ -157,6 +167,35 @@ fn wind(ui: &mut Ui, v: &Viewer, out: &mut Vec<Action>) {
     });
     let w = v.frame.wind;
     ui.label(format!("mean wind at 20 m: {:.1} m/s", (w[0] * w[0] + w[1] * w[1]).sqrt()));
+}
+
+/// The mean profile's parameters (applied, and re-synthesised, when a drag ends).
+fn profile(ui: &mut Ui, v: &Viewer, out: &mut Vec<Action>) {
+    use sylva_wind::Profile;
+    let preset = sylva_wind::Preset::from_name(&v.settings.wind).map(|p| p.params().profile);
+    let Some(mut p) = v.settings.profile.or(preset) else { return };
+    let mut done = false;
+    let mut slider =
+        |ui: &mut Ui, value: &mut f64, range: std::ops::RangeInclusive<f64>, text: &str| {
+            let r = ui.add(egui::Slider::new(value, range).text(text));
+            done |= r.drag_stopped() || (r.changed() && !r.dragged());
+        };
+    match &mut p {
+        Profile::Log { z0, d } => {
+            ui.label("log-law profile");
+            slider(ui, z0, 0.05..=5.0, "z0, m");
+            slider(ui, d, 0.0..=30.0, "d, m");
+        }
+        Profile::Power { u_ref, z_ref, alpha } => {
+            ui.label("power-law profile");
+            slider(ui, u_ref, 0.5..=60.0, "U_ref, m/s");
+            slider(ui, z_ref, 2.0..=100.0, "z_ref, m");
+            slider(ui, alpha, 0.0..=1.0, "exponent");
+        }
+    }
+    if done {
+        out.push(Action::Profile(p));
+    }
 }
 
 fn lod(ui: &mut Ui, v: &Viewer, out: &mut Vec<Action>) {
@@ -206,15 +245,31 @@ fn scene(ui: &mut Ui, v: &Viewer, draft: &mut Draft, out: &mut Vec<Action>) {
     });
     ui.add(egui::DragValue::new(&mut draft.trees).range(1..=200_000).prefix("trees "));
     ui.add(egui::DragValue::new(&mut draft.seed).prefix("seed "));
-    ui.label(format!(
-        "species: {}",
-        v.forest.species.iter().map(|s| s.name.as_str()).collect::<Vec<_>>().join(", ")
-    ));
+    ui.label("species mix (weight 0 leaves one out)");
+    egui::Grid::new("species").num_columns(2).show(ui, |ui| {
+        for s in &mut draft.species {
+            ui.label(&s.name);
+            ui.add(egui::DragValue::new(&mut s.weight).range(0.0..=100.0).speed(0.05));
+            ui.end_row();
+        }
+    });
+    let mut add = String::new();
+    egui::ComboBox::from_id_salt("add species").selected_text("add a species").show_ui(ui, |ui| {
+        for (name, _) in sylva_tree::PRESETS {
+            if !draft.species.iter().any(|s| s.name == *name) {
+                ui.selectable_value(&mut add, name.to_string(), *name);
+            }
+        }
+    });
+    if !add.is_empty() {
+        draft.species.push(sylva_forest::SpeciesShare { name: add, weight: 1.0 });
+    }
     if ui.add_enabled(v.job.is_none(), egui::Button::new("rebuild")).clicked() {
         out.push(Action::Scene {
             scene: draft.scene.clone(),
             trees: draft.trees,
             seed: draft.seed,
+            species: draft.species.clone(),
         });
     }
 }

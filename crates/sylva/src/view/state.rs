@@ -37,6 +37,8 @@ pub enum Action {
     UStar(f64),
     /// Taylor advection on or off: re-synthesised in the background.
     Advection(bool),
+    /// The mean wind profile of a preset: re-synthesised in the background.
+    Profile(sylva_wind::Profile),
     /// Simulated seconds per real second (0.05 … 4).
     TimeScale(f32),
     /// Pause or run the simulation.
@@ -47,8 +49,9 @@ pub enum Action {
     Lod(LodSettings),
     /// The wind-field LOD (instance groups by distance): the scene is rebuilt.
     WindLod(bool),
-    /// Another scene (built-in name or file), tree count and seed: rebuilt in the background.
-    Scene { scene: String, trees: usize, seed: u64 },
+    /// Another scene (built-in name or file), tree count, seed and species mix (empty: the
+    /// scene's own): rebuilt in the background.
+    Scene { scene: String, trees: usize, seed: u64, species: Vec<sylva_forest::SpeciesShare> },
     /// Select a tree (or none) for the panel's figures and plot.
     Select(Option<usize>),
     /// Show or hide the control panel.
@@ -170,6 +173,8 @@ pub struct Settings {
     pub u_star: Option<f64>,
     /// Taylor advection.
     pub advection: bool,
+    /// Mean profile replacing the preset's (`None`: the preset's).
+    pub profile: Option<sylva_wind::Profile>,
     /// Simulated seconds per real second.
     pub time_scale: f32,
     /// Simulation paused.
@@ -180,6 +185,8 @@ pub struct Settings {
     pub trees: usize,
     /// Scene seed.
     pub seed: u64,
+    /// Species mix (empty: the scene's own).
+    pub species: Vec<sylva_forest::SpeciesShare>,
     /// Wind-field LOD (instance groups).
     pub wind_lod: bool,
 }
@@ -279,11 +286,13 @@ impl Viewer {
             wind: spec.wind.clone(),
             u_star: spec.u_star,
             advection: spec.wind_advection.unwrap_or(true),
+            profile: spec.wind_profile,
             time_scale: 1.0,
             paused: false,
             scene: scene.to_string(),
             trees: spec.trees,
             seed: spec.seed,
+            species: Vec::new(),
             wind_lod: spec.lod.wind,
         };
         Viewer {
@@ -329,9 +338,10 @@ impl Viewer {
                     self.error = Some(format!("wind `{w}`: a preset, a speed or a file"));
                     return;
                 }
-                // U* belongs to a preset; a new wind starts from its own.
+                // U* and the profile belong to a preset; a new wind starts from its own.
                 self.settings.wind = w;
                 self.settings.u_star = None;
+                self.settings.profile = None;
                 self.resynthesise();
             }
             Action::UStar(u) => {
@@ -340,6 +350,15 @@ impl Viewer {
             }
             Action::Advection(a) => {
                 self.settings.advection = a;
+                self.resynthesise();
+            }
+            Action::Profile(p) => {
+                let check = sylva_wind::WindParams { profile: p, ..Default::default() };
+                if let Err(e) = check.validate() {
+                    self.error = Some(format!("wind profile: {e}"));
+                    return;
+                }
+                self.settings.profile = Some(p);
                 self.resynthesise();
             }
             Action::TimeScale(s) => self.settings.time_scale = s.clamp(0.05, 4.0),
@@ -354,10 +373,15 @@ impl Viewer {
                 self.settings.wind_lod = on;
                 self.rebuild();
             }
-            Action::Scene { scene, trees, seed } => {
+            Action::Scene { scene, trees, seed, species } => {
+                if !species.is_empty() && !species.iter().any(|s| s.weight > 0.0) {
+                    self.error = Some("species mix: give some species a weight above 0".into());
+                    return;
+                }
                 self.settings.scene = scene;
                 self.settings.trees = trees;
                 self.settings.seed = seed;
+                self.settings.species = species.into_iter().filter(|s| s.weight > 0.0).collect();
                 self.rebuild();
             }
             Action::Select(t) => {
@@ -418,8 +442,13 @@ impl Viewer {
         } else {
             None
         };
-        spec.wind_advection = Some(self.settings.advection).filter(|a| !a);
+        let preset = matches!(wind, sylva_forest::WindSource::Preset(_));
+        spec.wind_advection = Some(self.settings.advection).filter(|a| !a && preset);
+        spec.wind_profile = self.settings.profile.filter(|_| preset);
         spec.trees = self.settings.trees.max(1);
+        if !self.settings.species.is_empty() {
+            spec.species = self.settings.species.clone();
+        }
         spec.seed = self.settings.seed;
         spec.lod.wind = self.settings.wind_lod;
         Ok(spec)
@@ -471,6 +500,7 @@ impl Viewer {
                             self.forest.spec.wind = spec.wind;
                             self.forest.spec.u_star = spec.u_star;
                             self.forest.spec.wind_advection = spec.wind_advection;
+                            self.forest.spec.wind_profile = spec.wind_profile;
                         }
                         Some(Finished::Wind)
                     }

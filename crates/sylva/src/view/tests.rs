@@ -66,6 +66,26 @@ fn a_wind_change_reaches_the_simulation() {
     let ratio = 0.5 / sylva_wind::Preset::Storm.u_star();
     let got = (calmer / storm) as f64;
     assert!((got / ratio - 1.0).abs() < 0.03, "U* 0.5: {calmer} m/s vs the storm's {storm}");
+    // The mean profile: a smoother canopy (z0 1.5 → 0.3 m) speeds the wind up as the log
+    // law says, between the field's two heights as the forest interpolates them.
+    let z = v.probe()[2];
+    let at = |p: sylva_wind::Profile| {
+        let params = sylva_wind::WindParams { u_star: 0.5, profile: p, ..Default::default() };
+        let w = ((z - 8.0) / 14.0).clamp(0.0, 1.0);
+        (1.0 - w) * params.mean_speed(8.0) + w * params.mean_speed(22.0)
+    };
+    let rough = sylva_wind::Profile::Log { z0: 1.5, d: 10.0 };
+    let smooth = sylva_wind::Profile::Log { z0: 0.3, d: 10.0 };
+    assert_eq!(v.forest.spec.wind_profile, None);
+    v.apply(Action::Profile(smooth));
+    assert_eq!(v.poll(true), Finished::Wind);
+    assert_eq!(v.forest.spec.wind_profile, Some(smooth));
+    let faster = mean_speed(&mut v);
+    let want = at(smooth) / at(rough);
+    let got = (faster / calmer) as f64;
+    assert!(want > 1.2 && (got / want - 1.0).abs() < 0.03, "profile: ×{got}, log law ×{want}");
+    v.apply(Action::Profile(sylva_wind::Profile::Log { z0: -1.0, d: 10.0 }));
+    assert!(v.error.as_deref().is_some_and(|e| e.contains("z0")) && v.job.is_none());
     // A bad wind is refused with a message, and nothing is started.
     v.apply(Action::Wind("gale".into()));
     assert!(v.error.as_deref().is_some_and(|e| e.contains("gale")) && v.job.is_none());
@@ -95,12 +115,14 @@ fn a_lod_switch_reaches_frame_data() {
 #[test]
 fn a_scene_change_rebuilds_in_the_background() {
     let mut v = viewer(5);
-    v.apply(Action::Scene { scene: "small".into(), trees: 3, seed: 9 });
+    let mix = vec![sylva_forest::SpeciesShare { name: "douglas_fir".into(), weight: 1.0 }];
+    v.apply(Action::Scene { scene: "small".into(), trees: 3, seed: 9, species: mix });
     assert_eq!(v.busy().map(|b| b.0), Some("building the scene"));
     assert_eq!(v.poll(true), Finished::Scene);
     assert_eq!((v.forest.trees(), v.forest.spec.seed), (3, 9));
+    assert!((0..3).all(|t| v.forest.tree_info(t).expect("tree").species == "douglas_fir"));
     assert!(v.job.is_none() && v.error.is_none());
-    v.apply(Action::Scene { scene: "no-such-scene".into(), trees: 3, seed: 9 });
+    v.apply(Action::Scene { scene: "no-such-scene".into(), trees: 3, seed: 9, species: vec![] });
     assert!(v.error.is_some() && v.job.is_none(), "an unknown scene is an error, not a job");
     assert_eq!(v.forest.trees(), 3, "and the forest stays");
 }
@@ -273,7 +295,7 @@ fn clicking_a_tree_selects_it_and_dragging_orbits_instead() {
 #[test]
 fn the_panel_renders_headless_like_its_golden_image() {
     const W: u32 = 640;
-    const H: u32 = 400;
+    const H: u32 = 720;
     let mut v = viewer(5);
     for _ in 0..30 {
         v.advance(1.0 / 30.0);
