@@ -177,6 +177,94 @@ pub struct RenderReport {
     pub mp4: Option<PathBuf>,
 }
 
+/// A clip as `sylva render` writes it: numbered PNG frames (`frame_0000.png` …), a looping
+/// GIF at most 480 px wide (`forest.gif`), and an MP4 through ffmpeg when it is installed
+/// (`forest.mp4`, at the clip's mean frame rate).
+pub struct ClipWriter {
+    dir: std::path::PathBuf,
+    w: u32,
+    h: u32,
+    k: u32,
+    gif: Option<gif::Encoder<AtomicFile>>,
+    frames: usize,
+    seconds: f64,
+}
+
+impl ClipWriter {
+    /// Start a clip of `w × h` frames in `dir` (created), with a GIF unless `gif` is false.
+    pub fn new(dir: &Path, w: u32, h: u32, gif: bool) -> anyhow::Result<ClipWriter> {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        let k = (w / 480).max(1);
+        let gif = if gif {
+            let path = dir.join("forest.gif");
+            let f = AtomicFile::create(&path)
+                .with_context(|| format!("creating {}", path.display()))?;
+            let mut e = gif::Encoder::new(f, (w / k) as u16, (h / k) as u16, &[])?;
+            e.set_repeat(gif::Repeat::Infinite)?;
+            Some(e)
+        } else {
+            None
+        };
+        Ok(ClipWriter { dir: dir.to_path_buf(), w, h, k, gif, frames: 0, seconds: 0.0 })
+    }
+
+    /// Add a frame (RGBA8, rows top first) shown for `seconds`.
+    pub fn frame(&mut self, rgba: &[u8], seconds: f64) -> anyhow::Result<()> {
+        let (w, h) = (self.w, self.h);
+        write_png(&self.dir.join(format!("frame_{:04}.png", self.frames)), w, h, rgba)?;
+        if let Some(e) = self.gif.as_mut() {
+            let (mut small, sw, sh) = shrink(rgba, w, h, self.k);
+            let mut f = gif::Frame::from_rgba_speed(sw as u16, sh as u16, &mut small, 20);
+            f.delay = (100.0 * seconds).round().clamp(1.0, 65535.0) as u16;
+            e.write_frame(&f)?;
+        }
+        self.frames += 1;
+        self.seconds += seconds;
+        Ok(())
+    }
+
+    /// Frames written so far.
+    pub fn frames(&self) -> usize {
+        self.frames
+    }
+
+    /// Close the GIF and encode the MP4: the paths of those written.
+    pub fn finish(
+        self,
+    ) -> anyhow::Result<(Option<std::path::PathBuf>, Option<std::path::PathBuf>)> {
+        let gif_path = self.dir.join("forest.gif");
+        let gif = match self.gif {
+            Some(e) => {
+                let f =
+                    e.into_inner().with_context(|| format!("writing {}", gif_path.display()))?;
+                f.commit().with_context(|| format!("writing {}", gif_path.display()))?;
+                Some(gif_path)
+            }
+            None => None,
+        };
+        if self.frames == 0 {
+            return Ok((gif, None));
+        }
+        // ffmpeg writes to the temporary name (with the container named by `-f`); the clip
+        // replaces forest.mp4 only when the encoder succeeded.
+        let fps = self.frames as f64 / self.seconds.max(1e-3);
+        let mp4 = self.dir.join("forest.mp4");
+        let mp4_file =
+            AtomicFile::create(&mp4).with_context(|| format!("creating {}", mp4.display()))?;
+        let made = std::process::Command::new("ffmpeg")
+            .args(["-y", "-loglevel", "error", "-framerate"])
+            .arg(format!("{fps}"))
+            .arg("-i")
+            .arg(self.dir.join("frame_%04d.png"))
+            .args(["-pix_fmt", "yuv420p", "-vf", "scale=trunc(iw/2)*2:trunc(ih/2)*2", "-f", "mp4"])
+            .arg(mp4_file.temp_path())
+            .status()
+            .map(|s| s.success())
+            .unwrap_or(false);
+        Ok((gif, (made && mp4_file.commit().is_ok()).then_some(mp4)))
+    }
+}
+
 pub fn render(a: &RenderArgs) -> anyhow::Result<RenderReport> {
     let mut spec = SceneSpec::load(&a.scene)?;
     if let Some(w) = &a.wind {
@@ -214,17 +302,7 @@ pub fn render(a: &RenderArgs) -> anyhow::Result<RenderReport> {
     let fixed = forest.default_camera();
     let frames = (a.seconds * a.fps).round().max(1.0) as usize;
     let dt = (1.0 / a.fps) as f32;
-    let gif_path = a.out.join("forest.gif");
-    let k = (w / 480).max(1);
-    let mut gif = if a.no_gif {
-        None
-    } else {
-        let f = AtomicFile::create(&gif_path)
-            .with_context(|| format!("creating {}", gif_path.display()))?;
-        let mut e = gif::Encoder::new(f, (w / k) as u16, (h / k) as u16, &[])?;
-        e.set_repeat(gif::Repeat::Infinite)?;
-        Some(e)
-    };
+    let mut clip = ClipWriter::new(&a.out, w, h, !a.no_gif)?;
     let mut frame = FrameData::default();
     let (mut sim, mut draw, mut tris) = (Vec::new(), Vec::new(), 0.0);
     let mut step = Vec::new();
@@ -241,36 +319,11 @@ pub fn render(a: &RenderArgs) -> anyhow::Result<RenderReport> {
         let rgba = gpu.render(&frame, &camera)?;
         draw.push(t.elapsed().as_secs_f64() * 1e3);
         tris += frame.stats.triangles as f64;
-        write_png(&a.out.join(format!("frame_{i:04}.png")), w, h, &rgba)?;
-        if let Some(e) = gif.as_mut() {
-            let (mut small, sw, sh) = shrink(&rgba, w, h, k);
-            let mut f = gif::Frame::from_rgba_speed(sw as u16, sh as u16, &mut small, 20);
-            f.delay = (100.0 / a.fps).round() as u16;
-            e.write_frame(&f)?;
-        }
+        clip.frame(&rgba, dt as f64)?;
         bar.inc(1);
     }
     bar.finish_and_clear();
-    if let Some(e) = gif {
-        let f = e.into_inner().with_context(|| format!("writing {}", gif_path.display()))?;
-        f.commit().with_context(|| format!("writing {}", gif_path.display()))?;
-    }
-    // ffmpeg writes to the temporary name (with the container named by `-f`); the clip
-    // replaces forest.mp4 only when the encoder succeeded.
-    let mp4 = a.out.join("forest.mp4");
-    let mp4_file =
-        AtomicFile::create(&mp4).with_context(|| format!("creating {}", mp4.display()))?;
-    let made_mp4 = std::process::Command::new("ffmpeg")
-        .args(["-y", "-loglevel", "error", "-framerate"])
-        .arg(format!("{}", a.fps))
-        .arg("-i")
-        .arg(a.out.join("frame_%04d.png"))
-        .args(["-pix_fmt", "yuv420p", "-vf", "scale=trunc(iw/2)*2:trunc(ih/2)*2", "-f", "mp4"])
-        .arg(mp4_file.temp_path())
-        .status()
-        .map(|s| s.success())
-        .unwrap_or(false);
-    let made_mp4 = made_mp4 && mp4_file.commit().is_ok();
+    let (gif, mp4) = clip.finish()?;
     Ok(RenderReport {
         frames,
         sim_ms: median(&mut sim),
@@ -280,8 +333,8 @@ pub fn render(a: &RenderArgs) -> anyhow::Result<RenderReport> {
         simulated: frame.stats.simulated,
         joints: frame.stats.joints,
         adapter,
-        gif: (!a.no_gif).then_some(gif_path),
-        mp4: made_mp4.then_some(mp4),
+        gif,
+        mp4,
     })
 }
 

@@ -14,6 +14,7 @@
 //! | F1 | show / hide this help |
 //! | F12 | screenshot (PNG) |
 //! | O | colour overlay: off, geometry level, instance group |
+//! | C | record a clip (PNG frames, GIF, MP4) / stop |
 //! | R | record the camera / stop and write `camera-path.toml` |
 //! | P | replay the camera path / stop |
 //! | Esc | quit |
@@ -26,7 +27,7 @@ use super::state::{Action, Viewer};
 use sylva_render::Overlay;
 
 /// Help lines: key, what it does (the F1 overlay and the README).
-pub const KEYS: [(&str, &str); 17] = [
+pub const KEYS: [(&str, &str); 18] = [
     ("left drag", "orbit the camera"),
     ("left click", "select the tree under the cursor"),
     ("wheel", "zoom"),
@@ -40,6 +41,7 @@ pub const KEYS: [(&str, &str); 17] = [
     ("F1", "show / hide this help"),
     ("F12", "screenshot (PNG in the working folder)"),
     ("O", "colour overlay: off, geometry level, instance group"),
+    ("C", "record a clip (PNG frames, GIF, MP4 in clip-…/) / stop"),
     ("R", "record the camera / stop and write camera-path.toml"),
     ("P", "replay the camera path (recorded, --camera-path, or the scene's)"),
     ("Esc", "quit"),
@@ -161,6 +163,7 @@ fn key_action(v: &Viewer, code: KeyCode, repeat: bool) -> Option<Action> {
         KeyCode::F1 if !repeat => Action::Help(!v.help),
         KeyCode::F12 if !repeat => Action::Screenshot,
         KeyCode::KeyR if !repeat => Action::Record(v.recording.is_none()),
+        KeyCode::KeyC if !repeat => Action::Clip(!v.clip),
         KeyCode::KeyO if !repeat => Action::Overlay(match v.overlay {
             Overlay::Off => Overlay::Level,
             Overlay::Level => Overlay::Group,

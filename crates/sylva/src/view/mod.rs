@@ -85,7 +85,15 @@ impl Drop for Surface {
     }
 }
 
+/// A clip being recorded: its own offscreen renderer and `sylva render`'s writer.
+struct Clip {
+    headless: sylva_render::Headless,
+    writer: crate::render::ClipWriter,
+    dir: std::path::PathBuf,
+}
+
 struct App {
+    clip: Option<Clip>,
     viewer: Viewer,
     controls: Controls,
     draft: panel::Draft,
@@ -224,6 +232,65 @@ impl App {
         } else {
             s.window.set_title("sylva");
         }
+        self.clip_frame(w, h);
+    }
+}
+
+impl App {
+    /// Start, feed or finish the clip the viewer asks for: each frame rendered offscreen
+    /// (without the panel) and shown for the simulated time it advanced.
+    fn clip_frame(&mut self, w: u32, h: u32) {
+        let v = &mut self.viewer;
+        match (&mut self.clip, v.clip) {
+            (None, true) => {
+                let dir = std::path::PathBuf::from(format!(
+                    "clip-{:08}",
+                    (v.forest.time() * 1e3).round() as u64
+                ));
+                let started = sylva_render::Headless::new(&v.forest, w, h)
+                    .map_err(anyhow::Error::from)
+                    .and_then(|headless| {
+                        let writer = crate::render::ClipWriter::new(&dir, w, h, true)?;
+                        Ok(Clip { headless, writer, dir: dir.clone() })
+                    });
+                match started {
+                    Ok(c) => {
+                        v.status = Some(format!("recording a clip into {}", dir.display()));
+                        self.clip = Some(c);
+                    }
+                    Err(e) => {
+                        v.error = Some(format!("clip: {e:#}"));
+                        v.clip = false;
+                    }
+                }
+            }
+            (Some(c), true) => {
+                let seconds = (v.figures.substeps as f32 * state::SUBSTEP).max(1.0 / 60.0);
+                let frame = c.headless.render(&v.frame, &v.orbit.camera());
+                if let Err(e) = frame
+                    .map_err(anyhow::Error::from)
+                    .and_then(|rgba| c.writer.frame(&rgba, seconds as f64))
+                {
+                    v.error = Some(format!("clip: {e:#}"));
+                    v.clip = false;
+                }
+            }
+            (Some(_), false) => {
+                if let Some(c) = self.clip.take() {
+                    let frames = c.writer.frames();
+                    v.status = Some(match c.writer.finish() {
+                        Ok((gif, mp4)) => format!(
+                            "clip: {frames} frames in {}{}{}",
+                            c.dir.display(),
+                            gif.map_or(String::new(), |p| format!(", {}", p.display())),
+                            mp4.map_or(String::new(), |p| format!(", {}", p.display()))
+                        ),
+                        Err(e) => format!("clip: {e:#}"),
+                    });
+                }
+            }
+            (None, false) => {}
+        }
     }
 }
 
@@ -329,6 +396,7 @@ pub fn view(a: &ViewArgs) -> anyhow::Result<()> {
     let draft = panel::Draft::of(&viewer);
     let event_loop = EventLoop::new().context("no window system: is a display available?")?;
     let mut app = App {
+        clip: None,
         viewer,
         controls: Controls::default(),
         draft,

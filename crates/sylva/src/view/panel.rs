@@ -292,6 +292,9 @@ fn camera(ui: &mut Ui, v: &Viewer, out: &mut Vec<Action>) {
             out.push(Action::Screenshot);
         }
     });
+    if ui.button(if v.clip { "stop the clip" } else { "record a clip (C)" }).clicked() {
+        out.push(Action::Clip(!v.clip));
+    }
     match (&v.recording, v.replaying) {
         (Some((keys, t)), _) => ui.label(format!("recording: {} keys, {t:.1} s", keys.len())),
         (None, Some(t)) => {

@@ -62,6 +62,9 @@ pub enum Action {
     Overlay(sylva_render::Overlay),
     /// Save the next frame as a PNG.
     Screenshot,
+    /// Start (true) or stop recording a clip of the 3-D view (PNG frames, GIF, MP4 through
+    /// ffmpeg: `sylva render`'s encoder) into a new `clip-<simulated ms>` folder.
+    Clip(bool),
     /// Start (true) or stop recording the camera; stopping writes the path
     /// ([`Viewer::path_file`]) and makes it the one to replay.
     Record(bool),
@@ -260,6 +263,8 @@ pub struct Viewer {
     pub overlay: sylva_render::Overlay,
     /// A screenshot was asked for.
     pub screenshot: bool,
+    /// A clip is being recorded (the window layer renders and writes its frames).
+    pub clip: bool,
     /// Close asked for.
     pub quit: bool,
     /// The scene argument the current forest was built from.
@@ -310,6 +315,7 @@ impl Viewer {
             help: false,
             overlay: sylva_render::Overlay::Off,
             screenshot: false,
+            clip: false,
             quit: false,
             loaded: scene.to_string(),
             path: Vec::new(),
@@ -392,6 +398,7 @@ impl Viewer {
             Action::Help(on) => self.help = on,
             Action::Overlay(o) => self.overlay = o,
             Action::Screenshot => self.screenshot = true,
+            Action::Clip(on) => self.clip = on,
             Action::Record(true) => {
                 self.replaying = None;
                 self.recording = Some((Vec::new(), 0.0));
