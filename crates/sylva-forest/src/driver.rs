@@ -277,8 +277,9 @@ pub struct TreeInfo {
     pub species: String,
     /// Height, m.
     pub height: f32,
-    /// Trunk diameter at its base, m.
-    pub base_diameter: f32,
+    /// Trunk diameter at breast height (1.3 m up the trunk of the unscaled tree, then
+    /// scaled with it), m.
+    pub dbh: f32,
     /// Undamped natural frequency of the trunk's base joint, Hz.
     pub trunk_frequency: f32,
     /// Its instance group (trees of a species sharing one simulation).
@@ -623,7 +624,7 @@ impl Forest {
         Some(TreeInfo {
             species: s.name.clone(),
             height: stats.height * p.scale,
-            base_diameter: 2.0 * stats.trunk_radius * p.scale,
+            dbh: s.model.tree.skeleton.dbh() * p.scale,
             trunk_frequency: s.batch.species().spring(0).frequency,
             group: g,
             group_size: self

@@ -191,6 +191,29 @@ impl Skeleton {
             .max_by(|&a, &b| self.carried[a].total_cmp(&self.carried[b]))
     }
 
+    /// Trunk diameter at breast height (1.3 m above the trunk's base, along the trunk), m:
+    /// the segments' base radii interpolated linearly; a trunk shorter than that gives its
+    /// top's.
+    pub fn dbh(&self) -> f32 {
+        const BREAST: f32 = 1.3;
+        if self.joints.is_empty() {
+            return 0.0;
+        }
+        let mut i = 0;
+        let mut climbed = 0.0;
+        loop {
+            let j = &self.joints[i];
+            let next = self.continuation(i);
+            let r_end = next.map_or(0.0, |n| self.joints[n].radius);
+            if climbed + j.length >= BREAST || next.is_none() {
+                let f = ((BREAST - climbed) / j.length.max(1e-6)).clamp(0.0, 1.0);
+                return 2.0 * (j.radius + f * (r_end - j.radius));
+            }
+            climbed += j.length;
+            i = next.unwrap_or(i);
+        }
+    }
+
     /// The last segment of the stem that starts at (or passes through) joint `i`,
     /// following the heaviest continuation at splits.
     pub fn stem_end(&self, mut i: usize) -> usize {
@@ -248,6 +271,22 @@ mod tests {
             leaf_mass: 0.5,
             continues: parent != NO_PARENT,
         }
+    }
+
+    #[test]
+    fn dbh_is_the_trunk_diameter_interpolated_at_one_point_three_metres() {
+        // A trunk of 1 m segments tapering 0.30 → 0.20 → 0.10 m in radius: at 1.3 m, 30 %
+        // of the way up the second segment, the radius is 0.20 − 0.3 × 0.10 = 0.17 m.
+        let mut js =
+            vec![joint(NO_PARENT, 0.0, 1.0, 1.0), joint(0, 1.0, 1.0, 1.0), joint(1, 2.0, 1.0, 1.0)];
+        for (j, r) in js.iter_mut().zip([0.3, 0.2, 0.1]) {
+            j.radius = r;
+        }
+        let s = Skeleton::new(js).expect("valid");
+        assert!((s.dbh() - 0.34).abs() < 1e-6, "{}", s.dbh());
+        // A trunk shorter than breast height: the diameter near its top.
+        let short = Skeleton::new(vec![joint(NO_PARENT, 0.0, 1.0, 1.0)]).expect("valid");
+        assert!((short.dbh() - 0.0).abs() < 1e-6, "tapers to nothing at its tip");
     }
 
     #[test]

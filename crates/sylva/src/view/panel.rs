@@ -336,7 +336,7 @@ fn selected(ui: &mut Ui, v: &Viewer) {
         };
         row("tree", format!("#{t}, {}", info.species));
         row("height", format!("{:.1} m", info.height));
-        row("trunk diameter at base", format!("{:.2} m", info.base_diameter));
+        row("DBH (1.3 m)", format!("{:.2} m", info.dbh));
         row("trunk frequency", format!("{:.2} Hz", info.trunk_frequency));
         row("instance group", format!("{} ({} trees)", info.group, info.group_size));
         row(
