@@ -461,37 +461,44 @@ impl Viewer {
         Ok(spec)
     }
 
-    /// Synthesise the wind of the settings for the current forest in the background.
-    fn resynthesise(&mut self) {
-        let spec = match self.spec() {
-            Ok(s) => s,
+    /// Run `work` on the scene the settings describe in a background thread; `None` (and
+    /// the error shown) when the settings do not describe one.
+    fn spawn<T: Send + 'static>(
+        &mut self,
+        work: impl FnOnce(SceneSpec) -> Result<T, String> + Send + 'static,
+    ) -> Option<Receiver<Result<T, String>>> {
+        match self.spec() {
+            Ok(spec) => {
+                let (tx, rx) = channel();
+                std::thread::spawn(move || {
+                    let _ = tx.send(work(spec));
+                });
+                Some(rx)
+            }
             Err(e) => {
                 self.error = Some(e);
-                return;
+                None
             }
-        };
+        }
+    }
+
+    /// Synthesise the wind of the settings for the current forest in the background.
+    fn resynthesise(&mut self) {
         let radius = self.forest.radius;
-        let (tx, rx) = channel();
-        std::thread::spawn(move || {
-            let _ = tx.send(sylva_forest::wind_field(&spec, radius).map_err(|e| e.to_string()));
-        });
-        self.job = Some(Job::Wind(rx, Instant::now()));
+        let field = move |spec: SceneSpec| {
+            sylva_forest::wind_field(&spec, radius).map_err(|e| e.to_string())
+        };
+        if let Some(rx) = self.spawn(field) {
+            self.job = Some(Job::Wind(rx, Instant::now()));
+        }
     }
 
     /// Build the forest of the settings in the background.
     fn rebuild(&mut self) {
-        let spec = match self.spec() {
-            Ok(s) => s,
-            Err(e) => {
-                self.error = Some(e);
-                return;
-            }
-        };
-        let (tx, rx) = channel();
-        std::thread::spawn(move || {
-            let _ = tx.send(Forest::new(&spec).map(Box::new).map_err(|e| e.to_string()));
-        });
-        self.job = Some(Job::Scene(rx, Instant::now()));
+        let build = |spec: SceneSpec| Forest::new(&spec).map(Box::new).map_err(|e| e.to_string());
+        if let Some(rx) = self.spawn(build) {
+            self.job = Some(Job::Scene(rx, Instant::now()));
+        }
     }
 
     /// Take finished background work. `wait`: block until it is done (tests).
