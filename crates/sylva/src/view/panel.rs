@@ -3,7 +3,6 @@
 
 use egui::{Color32, RichText, Ui};
 use egui_plot::{Line, Plot};
-use sylva_forest::LodSettings;
 
 use super::input::KEYS;
 use super::state::{Action, MAX_SUBSTEPS, PRESETS, SCENES, SUBSTEP, Viewer};
@@ -213,7 +212,7 @@ fn lod(ui: &mut Ui, v: &Viewer, out: &mut Vec<Action>) {
     ui.add_enabled(l.geometry, egui::Slider::new(&mut l.far_level, 1..=6).text("impostor level"));
     ui.checkbox(&mut l.animation, "animation LOD (joints by projected size)");
     if l != lod {
-        out.push(Action::Lod(LodSettings { ..l }));
+        out.push(Action::Lod(l));
     }
     let mut overlay = v.overlay;
     ui.horizontal(|ui| {

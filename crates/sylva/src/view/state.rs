@@ -533,7 +533,7 @@ impl Viewer {
                     self.forest = *forest;
                     self.loaded = self.settings.scene.clone();
                     self.forest.set_wind_control(gain, turn);
-                    self.forest.set_lod(LodSettings { ..lod });
+                    self.forest.set_lod(lod);
                     self.frame = FrameData::default();
                     self.orbit = Orbit::from_camera(&self.forest.default_camera());
                     self.selected = None;
