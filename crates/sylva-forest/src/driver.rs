@@ -4,9 +4,18 @@
 //! **Instance groups.** Each species runs one [`SwayBatch`]; a scene's
 //! `sim_joint_budget` (joint updates per frame) is shared among species in proportion to
 //! their tree counts, and a species whose trees do not all fit shares simulations: its
-//! trees, in Morton order of position (so neighbours together), are cut into as many runs
-//! as fit, and each run is one simulated instance, driven by the wind at the run's centre.
-//! Trees that share a simulation share its yaw, so the wind bends them all downwind.
+//! trees are cut into as many groups as fit, each one simulated instance driven by the wind
+//! at the group's centre. Groups are formed by distance from the camera (squares of a
+//! quadtree split while they fit, those that look largest first: see `groups.rs`), so
+//! trees near the camera are simulated one by one and groups grow with distance. Trees
+//! that share a simulation share its yaw, so the wind bends them all downwind.
+//!
+//! **Regrouping.** [`Forest::frame`] records where the camera is; once it has travelled
+//! [`REGROUP_TRAVEL`] from where the groups were last formed, the next [`Forest::step`]
+//! forms them again (at most once per [`REGROUP_FADE`]). Each new group keeps the simulated
+//! instance most of its trees already follow, so most trees do not change; a tree that does
+//! is drawn with both its old and its new simulation for [`REGROUP_FADE`] seconds,
+//! cross-faded per pixel like a level change, so no tree jumps to its new group's pose.
 //!
 //! **Wind-field LOD.** Besides the instance groups, the field is kept as a mip pyramid;
 //! simulations whose trees are all impostors (or out of view) read level
@@ -33,6 +42,7 @@
 //! joints beyond are not stepped at all (their drag is felt as a lumped static load by the
 //! simulated ones, see `sylva_sway::batch`), and blend in from rest when switched back on.
 
+use std::sync::Mutex;
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::time::Instant;
 
@@ -46,6 +56,7 @@ use sylva_wind::{FieldView, Grid, OwnedPyramid, SynthParams, WindField, WindPara
 use thiserror::Error;
 
 use crate::camera::Camera;
+use crate::groups::{assign_slots, morton, partition};
 use crate::scene::{
     Placement, SceneSpec, Terrain, WindSource, camera_on_path, default_camera, default_camera_path,
     layout,
@@ -106,7 +117,9 @@ pub struct Instance {
     pub leaf_amplitude: f32,
     /// Cross-fade: the draw keeps the pixels whose dither value d ∈ [0, 1) lies in
     /// `[fade[0], fade[1])`. A tree between two levels is drawn twice with complementary
-    /// ranges `[0, 1 − w)` and `[1 − w, 1)`; a tree at one level has `[0, 2)`.
+    /// ranges `[0, 1 − w)` and `[1 − w, 1)`; a tree at one level has `[0, 2)`. A tree that
+    /// changed instance group is also drawn with its old group over `[0, 1 − v)` and its new
+    /// one over `[1 − v, 1)`, each range split between two levels the same way.
     pub fade: [f32; 2],
     /// What the renderer's colour overlay shows: bits 0–3 the geometry level of this draw
     /// (15: an impostor), bits 4–7 the species, bits 8–31 the instance group within the
@@ -133,6 +146,13 @@ pub struct LodSettings {
     /// Off: every joint of every simulated tree, every step.
     pub animation: bool,
 }
+
+/// Seconds over which a tree that changes instance group cross-fades from its old
+/// simulation to its new one; also the shortest time between two regroupings.
+pub const REGROUP_FADE: f32 = 1.0;
+
+/// Camera travel, m, after which instance groups are formed again for the new viewpoint.
+pub const REGROUP_TRAVEL: f32 = 2.0;
 
 /// Pyramid level the wind of far groups is read from: averages of 4 × 4 grid points.
 pub const FAR_WIND_LEVEL: usize = 2;
@@ -214,6 +234,8 @@ pub struct FrameStats {
     pub impostors: usize,
     /// Trees drawn at two levels (cross-fading).
     pub fading: usize,
+    /// Trees drawn with two instance groups (cross-fading after a regroup).
+    pub regrouping: usize,
     /// Trees whose level changed since the previous frame of this view.
     pub level_changes: usize,
     /// Simulated instances that read the wind pyramid's coarse level in the last step.
@@ -299,6 +321,9 @@ pub struct SpeciesRuntime {
     /// Per group: wind sample point (world), yaw, leaf flutter.
     groups: Vec<Group>,
     winds: Vec<[f32; 3]>,
+    /// Its trees, in Morton order of position, and their Morton codes.
+    members: Vec<usize>,
+    codes: Vec<u64>,
     /// Index of this species' first lane group in the forest's list of lane groups.
     lane_base: usize,
     /// The skeleton's LOD order: joints each level uses, joints of the trunk.
@@ -354,22 +379,65 @@ pub struct Forest {
     lane_groups: usize,
     /// Per lane group: joints to simulate, as the last frame asked (animation LOD).
     simulate: Vec<AtomicU32>,
+    /// Per tree: the instance group it is fading out of, if it changed group lately.
+    switches: Vec<Switch>,
+    /// Where the last frame's camera was.
+    eye: Mutex<Option<[f32; 3]>>,
+    /// Where the camera was, and when, the last time groups were formed.
+    grouped: ([f32; 3], f64),
+}
+
+/// A tree's last change of instance group: the group it left (`u32::MAX`: none) and when.
+#[derive(Debug, Clone, Copy)]
+struct Switch {
+    from: u32,
+    at: f64,
+}
+
+impl Switch {
+    const NONE: Switch = Switch { from: u32::MAX, at: 0.0 };
+
+    /// Weight of the new group at time `t` and the old group, while fading.
+    fn fading(&self, t: f64) -> Option<(f32, u32)> {
+        let w = ((t - self.at) / REGROUP_FADE as f64) as f32;
+        (self.from != u32::MAX && w < 1.0).then_some((w.max(0.0), self.from))
+    }
+}
+
+/// Put the trees of `runs` (over `members`) in the instance groups `slots`, move each
+/// group's wind sample point to its trees' crowns, and report each tree that changed group
+/// to `moved(tree, old group)`. Groups without a run keep their sample point.
+fn regroup_species(
+    trees: &mut [(Placement, u32)],
+    groups: &mut [Group],
+    members: &[usize],
+    runs: &[(usize, usize)],
+    slots: &[u32],
+    height: f32,
+    mut moved: impl FnMut(usize, u32),
+) {
+    for (&(lo, hi), &g) in runs.iter().zip(slots) {
+        let group = &mut groups[g as usize];
+        let mut c = [0.0f64; 3];
+        for &t in &members[lo..hi] {
+            let old = trees[t].1;
+            if old != g {
+                moved(t, old);
+            }
+            trees[t].1 = g;
+            trees[t].0.yaw = group.yaw;
+            let p = trees[t].0;
+            c[0] += p.position[0] as f64;
+            c[1] += p.position[1] as f64;
+            c[2] += (p.position[2] + 0.7 * height * p.scale) as f64;
+        }
+        let k = (hi - lo).max(1) as f64;
+        group.sample = [c[0] / k, c[1] / k, c[2] / k];
+    }
 }
 
 /// Default image-height fraction above which a tree is drawn at full detail.
 pub const DEFAULT_LOD_FRACTION: f32 = 1.0;
-
-fn morton(x: f32, y: f32, side: f32) -> u64 {
-    let q = |v: f32| (((v / side + 0.5).clamp(0.0, 1.0)) * 65535.0) as u64;
-    let spread = |mut v: u64| {
-        v &= 0xffff;
-        v = (v | (v << 8)) & 0x00ff_00ff;
-        v = (v | (v << 4)) & 0x0f0f_0f0f;
-        v = (v | (v << 2)) & 0x3333_3333;
-        (v | (v << 1)) & 0x5555_5555
-    };
-    spread(q(x)) | (spread(q(y)) << 1)
-}
 
 impl Forest {
     /// Build the forest of `spec`: layout, tree models, simulations and wind field.
@@ -398,6 +466,8 @@ impl Forest {
         let mut species = Vec::with_capacity(models.len());
         let mut trees: Vec<(Placement, u32)> = placements.iter().map(|&p| (p, 0)).collect();
         let total = trees.len().max(1);
+        // Groups are first formed for where the camera starts.
+        let eye = start_camera(spec, radius).eye;
         let side = spec.side();
         let mut lane_base = 0;
         let mut state_bytes = 0usize;
@@ -415,6 +485,10 @@ impl Forest {
             members.sort_by_key(|&t| {
                 (morton(trees[t].0.position[0], trees[t].0.position[1], side), t)
             });
+            let codes: Vec<u64> = members
+                .iter()
+                .map(|&t| morton(trees[t].0.position[0], trees[t].0.position[1], side))
+                .collect();
             let share = spec.sim_joint_budget as f64 * members.len() as f64 / total as f64;
             let n_groups = if spec.lod.wind {
                 ((share / joints as f64) as usize).clamp(1, members.len().max(1))
@@ -428,27 +502,20 @@ impl Forest {
                 return Err(ForestError::TooLarge { bytes: state_bytes, limit });
             }
             let height = model.tree.stats.height;
+            // The first groups, by distance from where the camera starts; each simulated
+            // instance keeps the yaw of its first group's first tree.
+            let runs = partition(&codes, side, eye, height, n_groups);
             let mut groups = Vec::with_capacity(n_groups);
             for g in 0..n_groups {
-                let run =
-                    &members[g * members.len() / n_groups..(g + 1) * members.len() / n_groups];
-                let yaw = run.first().map(|&t| trees[t].0.yaw).unwrap_or(0.0);
-                let mut c = [0.0f64; 3];
-                for &t in run {
-                    trees[t].1 = g as u32;
-                    trees[t].0.yaw = yaw;
-                    let p = trees[t].0;
-                    c[0] += p.position[0] as f64;
-                    c[1] += p.position[1] as f64;
-                    c[2] += (p.position[2] + 0.7 * height * p.scale) as f64;
-                }
-                let k = run.len().max(1) as f64;
-                groups.push(Group {
-                    sample: [c[0] / k, c[1] / k, c[2] / k],
-                    yaw,
-                    leaf: LeafSway::default(),
-                });
+                let yaw = runs
+                    .get(g)
+                    .map(|r| trees[members[r.0]].0.yaw)
+                    .or(members.get(g).map(|&t| trees[t].0.yaw))
+                    .unwrap_or(0.0);
+                groups.push(Group { sample: [0.0; 3], yaw, leaf: LeafSway::default() });
             }
+            let slots: Vec<u32> = (0..runs.len() as u32).collect();
+            regroup_species(&mut trees, &mut groups, &members, &runs, &slots, height, |_, _| {});
             let sway = SwaySpecies::new(
                 &model.tree.skeleton,
                 spec.sway.apply(SwayParams::for_leaves(model.leaves.needles)),
@@ -467,6 +534,8 @@ impl Forest {
                 batch,
                 winds: vec![[0.0; 3]; n_groups],
                 groups,
+                members,
+                codes,
                 lane_base,
                 order,
                 coarse_wind: 0,
@@ -474,6 +543,7 @@ impl Forest {
             lane_base += n_groups.div_ceil(LANES);
         }
         let wind = OwnedPyramid::new(wind_field(spec, radius)?);
+        let n_trees = trees.len();
         Ok(Forest {
             spec: spec.clone(),
             terrain,
@@ -495,12 +565,48 @@ impl Forest {
             },
             lane_groups: lane_base,
             simulate: (0..lane_base).map(|_| AtomicU32::new(u32::MAX)).collect(),
+            switches: vec![Switch::NONE; n_trees],
+            eye: Mutex::new(None),
+            grouped: (eye, 0.0),
         })
     }
 
     /// The scene's default viewpoint.
     pub fn default_camera(&self) -> Camera {
         default_camera(&self.spec, self.radius)
+    }
+
+    /// Form the instance groups again if the camera has moved on (see the module
+    /// documentation): called by [`Forest::step`].
+    fn regroup(&mut self) {
+        let Some(eye) = *self.eye.lock().unwrap_or_else(|e| e.into_inner()) else { return };
+        let (at, when) = self.grouped;
+        let travel = (0..3).map(|i| (eye[i] - at[i]).powi(2)).sum::<f32>().sqrt();
+        if !self.spec.lod.wind || travel < REGROUP_TRAVEL || self.time - when < REGROUP_FADE as f64
+        {
+            return;
+        }
+        self.grouped = (eye, self.time);
+        let side = self.spec.side();
+        let (now, switches) = (self.time, &mut self.switches);
+        for s in &mut self.species {
+            if s.groups.len() >= s.members.len() {
+                continue;
+            }
+            let height = s.model.tree.stats.height;
+            let runs = partition(&s.codes, side, eye, height, s.groups.len());
+            let trees = &self.trees;
+            let slots = assign_slots(&runs, &s.members, |t| trees[t].1, s.groups.len());
+            regroup_species(
+                &mut self.trees,
+                &mut s.groups,
+                &s.members,
+                &runs,
+                &slots,
+                height,
+                |t, from| switches[t] = Switch { from, at: now },
+            );
+        }
     }
 
     /// The camera at time `t` on the scene's camera path, or on the default fly-in
@@ -690,6 +796,7 @@ impl Forest {
         }
         let start = Instant::now();
         self.time += dt as f64;
+        self.regroup();
         let t = self.time;
         let leaf = self.leaf_params;
         let (pyramid, gain, turn) = (&self.wind, self.gain, self.turn);
@@ -726,6 +833,7 @@ impl Forest {
     /// while `out`'s arrays grow. `out` keeps the per-tree LOD history (hysteresis) of this
     /// view: use one `FrameData` per view.
     pub fn frame(&self, camera: &Camera, aspect: f32, out: &mut FrameData) {
+        *self.eye.lock().unwrap_or_else(|e| e.into_inner()) = Some(camera.eye);
         out.time = self.time;
         out.keys.clear();
         if out.lod_state.len() != self.trees.len() {
@@ -765,12 +873,18 @@ impl Forest {
             } else {
                 (0, 0, 0)
             };
-            let lane = sp.lane_base + *g as usize / LANES;
-            out.upload[lane] = out.upload[lane].max(joints(a) as u32);
-            out.simulate[lane] = out.simulate[lane].max(joints(sim) as u32);
-            for level in a..=b {
-                out.keys.push(((p.species << 8) | level, i as u32));
+            // The tree's group, and the one it is fading out of after a regroup.
+            let switch = self.switches[i].fading(self.time);
+            for (group, old) in [(*g, false)].into_iter().chain(switch.map(|(_, f)| (f, true))) {
+                let lane = sp.lane_base + group as usize / LANES;
+                out.upload[lane] = out.upload[lane].max(joints(a) as u32);
+                out.simulate[lane] = out.simulate[lane].max(joints(sim) as u32);
+                for level in a..=b {
+                    out.keys.push(((p.species << 8) | level, i as u32 | (old as u32) << 31));
+                }
             }
+            stats.drawn += 1;
+            stats.regrouping += switch.is_some() as usize;
             stats.fading += (a != b) as usize;
             stats.impostors += (lod.geometry && b >= lod.far_level.min(chain)) as usize;
         }
@@ -829,8 +943,16 @@ impl Forest {
         }
         out.instances.clear();
         out.buckets.clear();
-        for &(key, i) in &out.keys {
-            let (p, g) = self.trees[i as usize];
+        for &(key, tagged) in &out.keys {
+            let (i, old) = (tagged & !(1 << 31), tagged >> 31 == 1);
+            let (p, now) = self.trees[i as usize];
+            // Share of the dither range this draw's group keeps: after a regroup the old
+            // group's draws keep [0, 1 − v) and the new one's [1 − v, 1).
+            let (g, lo, hi) = match self.switches[i as usize].fading(self.time) {
+                Some((v, from)) if old => (from, 0.0, 1.0 - v),
+                Some((v, _)) => (now, 1.0 - v, 1.0),
+                None => (now, 0.0, 1.0),
+            };
             let sp = &self.species[p.species as usize];
             let group = &sp.groups[g as usize];
             let (species, level) = (key >> 8, key & 0xff);
@@ -851,24 +973,32 @@ impl Forest {
                 }
             }
             stats.triangles += if far { 2 } else { sp.model.lods[level as usize].triangles() };
-            let fade = if lod.geometry {
+            // Within the group's share, two levels split it as [lo, lo + (1 − w)(hi − lo))
+            // and the rest; a range reaching 1 is written open to 2.
+            let w = if lod.geometry {
                 let (a, b, w) =
                     blend_levels(out.lod_state[i as usize], lod.far_level.min(chain), lod.band);
                 match (a == b, level == a) {
-                    (true, _) => [0.0, 2.0],
-                    (false, true) => [0.0, 1.0 - w],
-                    (false, false) => [1.0 - w, 2.0],
+                    (true, _) => None,
+                    (false, true) => Some((true, w)),
+                    (false, false) => Some((false, w)),
                 }
             } else {
-                [0.0, 2.0]
+                None
             };
+            let (lo, hi) = match w {
+                None => (lo, hi),
+                Some((true, w)) => (lo, lo + (1.0 - w) * (hi - lo)),
+                Some((false, w)) => (lo + (1.0 - w) * (hi - lo), hi),
+            };
+            let fade = [lo, if hi >= 1.0 { 2.0 } else { hi }];
             // Lane group of this simulated instance: its palette block and its width.
             let first_lane = g as usize / LANES * LANES;
             let used = (sp.groups.len() - first_lane).min(LANES);
             let block = out.offsets[sp.lane_base + g as usize / LANES];
             out.instances.push(Instance {
                 position: p.position,
-                yaw: p.yaw,
+                yaw: group.yaw,
                 scale: p.scale,
                 palette: PaletteSlot {
                     base: block + (g as usize % LANES) as u32,
@@ -880,7 +1010,6 @@ impl Forest {
                 tag: if far { 15 } else { level.min(14) } | (species.min(15) << 4) | (g << 8),
             });
         }
-        stats.drawn = out.keys.len() - stats.fading;
         stats.uploaded_bytes =
             4 * out.palettes.len() + std::mem::size_of::<Instance>() * out.instances.len();
         stats.sim_ms = self.last_sim_ms;
@@ -888,6 +1017,12 @@ impl Forest {
         out.wind = w;
         out.stats = stats;
     }
+}
+
+/// Where the camera starts: the scene's path at time 0, or its default viewpoint.
+fn start_camera(spec: &SceneSpec, radius: f32) -> Camera {
+    let base = default_camera(spec, radius);
+    if spec.camera_path.is_empty() { base } else { camera_on_path(&spec.camera_path, 0.0, &base) }
 }
 
 /// Wind at world point `p` and time `t` on `view`, scaled by `gain` and turned by `turn`
