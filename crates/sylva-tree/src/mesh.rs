@@ -209,7 +209,20 @@ struct MeshBuilder<'a> {
     lobes: (u32, f32),
     /// Lobes of the ring being built (the trunk's, or none).
     ring_lobes: (u32, f32),
+    /// WP95 Flare of the trunk base.
+    flare: f32,
 }
+
+/// WP95's trunk flare: the radius factor at relative height z ∈ [0, 1] of the trunk,
+/// `1 + Flare · (100^y − 1) / 100` with `y = max(0, 1 − 8 z)`.
+pub fn flare_factor(flare: f32, z: f32) -> f32 {
+    let y = (1.0 - 8.0 * z).max(0.0);
+    1.0 + flare * (100f32.powf(y) - 1.0) / 100.0
+}
+
+/// Heights of the extra rings at the trunk's base, as fractions of the trunk's length: the
+/// flare widens over the first eighth, most of it in the first 2 %.
+const FLARE_RINGS: [f32; 4] = [0.0, 0.012, 0.03, 0.065];
 
 impl MeshBuilder<'_> {
     /// Append a ring and return its first vertex.
@@ -242,6 +255,43 @@ impl MeshBuilder<'_> {
             self.mesh.weights.push([w0, w1, 0.0, 0.0]);
         }
         first
+    }
+
+    /// The trunk's first segment from the ground up to its last flare ring (WP95's Flare,
+    /// which the one radius per joint cannot show): rings at [`FLARE_RINGS`] of the trunk's
+    /// length, skinned to joint `i`. Returns the last ring, which the segment's strip to its
+    /// tip starts from.
+    fn flared_base(&mut self, i: usize, refv: V3, n: u32) -> u32 {
+        let js = self.sk.joints();
+        let j = &js[i];
+        // The trunk's length: its chain of level-0 segments.
+        let (mut length, mut k) = (0.0, i as u32);
+        while k != NO_PARENT && self.topo.level[k as usize] == 0 {
+            length += js[k as usize].length;
+            k = self.topo.next[k as usize];
+        }
+        let length = length.max(1e-6);
+        // The joint's radius is the stem's at the segment's middle, flare included there.
+        let core = j.radius / flare_factor(self.flare, 0.5 * j.length / length);
+        let circumference = TAU * j.radius.max(1e-4);
+        let mut last = u32::MAX;
+        for &z in FLARE_RINGS.iter().filter(|&&z| z * length < 0.8 * j.length) {
+            let h = z * length;
+            let ring = self.ring(
+                add(j.origin, scale(j.axis, h)),
+                j.axis,
+                refv,
+                core * flare_factor(self.flare, z),
+                h / circumference,
+                [(i as u32, 1.0), (i as u32, 0.0)],
+                n,
+            );
+            if last != u32::MAX {
+                self.strip(last, ring, n);
+            }
+            last = ring;
+        }
+        last
     }
 
     fn strip(&mut self, a: u32, b: u32, n: u32) {
@@ -281,7 +331,11 @@ impl MeshBuilder<'_> {
                     [(i as u32, 1.0), (i as u32, 0.0)]
                 };
                 self.v_base[i] = 0.0;
-                (self.ring(j.origin, j.axis, refv, j.radius, 0.0, weights, n), refv)
+                if j.parent == NO_PARENT && level == 0 && self.flare > 0.0 {
+                    (self.flared_base(i, refv, n), refv)
+                } else {
+                    (self.ring(j.origin, j.axis, refv, j.radius, 0.0, weights, n), refv)
+                }
             };
             // Tip ring: shared with the next segment of the stem when it is kept.
             let next = self.topo.next[i];
@@ -320,6 +374,7 @@ fn branch_mesh(
     lod: usize,
     kept: &[bool],
     lobes: (u32, f32),
+    flare: f32,
 ) -> BranchMesh {
     let n = sk.len();
     MeshBuilder {
@@ -333,6 +388,7 @@ fn branch_mesh(
         v_base: vec![0.0; n],
         lobes,
         ring_lobes: (0, 0.0),
+        flare,
     }
     .build()
 }
@@ -578,7 +634,8 @@ pub fn lod_levels(
             r_min = radii.get(lo).copied().unwrap_or(f32::INFINITY);
             kept_joints(sk, &topo, r_min, &mut kept);
         }
-        let branches = branch_mesh(sk, &topo, lod, &kept, (species.lobes, species.lobe_depth));
+        let branches =
+            branch_mesh(sk, &topo, lod, &kept, (species.lobes, species.lobe_depth), species.flare);
         // Re-hang clusters of dropped joints on the nearest kept ancestor, then merge.
         let mut rehung: Vec<LeafCluster> = base_clusters
             .iter()

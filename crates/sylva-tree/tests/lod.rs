@@ -155,6 +155,7 @@ fn trunk_cross_section_carries_the_lobes() {
     let mut sp = Species::preset("sugar_maple").expect("preset");
     sp.lobes = 4;
     sp.lobe_depth = 0.2;
+    sp.flare = 0.0; // the flare's own test is below
     let m = sp.model(1, 1).expect("tree");
     let r0 = m.tree.skeleton.joints()[0].radius;
     let b = &m.lods[0].branches;
@@ -167,6 +168,44 @@ fn trunk_cross_section_carries_the_lobes() {
     let round = sp.model(1, 1).expect("tree");
     let p = &round.lods[0].branches.positions[..sides];
     assert!(p.iter().all(|p| ((p[0] * p[0] + p[1] * p[1]).sqrt() / r0 - 1.0).abs() < 1e-4));
+}
+
+#[test]
+fn the_trunk_base_flares_as_wp95_says_and_narrows_upward() {
+    // WP95: the trunk radius × (1 + Flare (100^y − 1) / 100), y = 1 − 8 z, over the lowest
+    // eighth of the trunk. The aspen's Flare 0.6 makes its foot 1.59 times the trunk above.
+    let mut sp = Species::preset("quaking_aspen").expect("preset");
+    sp.lobe_depth = 0.0;
+    let m = sp.model(1, 1).expect("tree");
+    let j0 = m.tree.skeleton.joints()[0];
+    let trunk: f32 = m.tree.stats.height;
+    let core = j0.radius / sylva_tree::mesh::flare_factor(sp.flare, 0.5 * j0.length / trunk);
+    let sides = sylva_tree::mesh::SIDES[0] as usize + 1;
+    let b = &m.lods[0].branches;
+    // The first rings, bottom up: their mean radius and height.
+    let rings: Vec<(f32, f32)> = b.positions[..4 * sides]
+        .chunks(sides)
+        .map(|ring| {
+            let r = ring.iter().map(|p| (p[0] * p[0] + p[1] * p[1]).sqrt()).sum::<f32>();
+            (r / sides as f32, ring[0][2])
+        })
+        .collect();
+    let foot = rings[0].0 / core;
+    assert!((foot - 1.594).abs() < 0.03, "foot {foot} × the trunk radius, WP95 says 1.594");
+    assert!(
+        rings.windows(2).all(|w| w[1].1 > w[0].1 && w[1].0 < w[0].0),
+        "rings rise and narrow: {rings:?}"
+    );
+    // Without Flare the trunk starts at its own radius.
+    sp.flare = 0.0;
+    let plain = sp.model(1, 1).expect("tree");
+    let r: f32 = plain.lods[0].branches.positions[..sides - 1]
+        .iter()
+        .map(|p| (p[0] * p[0] + p[1] * p[1]).sqrt())
+        .sum::<f32>()
+        / (sides - 1) as f32;
+    let r0 = plain.tree.skeleton.joints()[0].radius;
+    assert!((r / r0 - 1.0).abs() < 1e-3, "{r} vs {r0}");
 }
 
 #[test]
