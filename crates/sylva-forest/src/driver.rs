@@ -675,6 +675,30 @@ impl Forest {
         self.trees.len()
     }
 
+    /// Each tree's crown as seen from above: trunk position x, y and the crown's radius, m
+    /// (the species' leaf clusters at full detail: the distance from the trunk within which
+    /// 90 % of them hang, plus half a card, times the tree's scale).
+    pub fn crowns(&self) -> Vec<[f32; 3]> {
+        let radii: Vec<f32> = self
+            .species
+            .iter()
+            .map(|s| {
+                let clusters = s.model.lods.first().map(|l| &l.clusters[..]).unwrap_or(&[]);
+                let mut d: Vec<f32> = clusters
+                    .iter()
+                    .map(|c| (c.center[0] * c.center[0] + c.center[1] * c.center[1]).sqrt())
+                    .collect();
+                d.sort_by(f32::total_cmp);
+                let card = clusters.first().map(|c| 0.5 * c.size).unwrap_or(0.0);
+                d.get(d.len() * 9 / 10).copied().unwrap_or(0.0) + card
+            })
+            .collect();
+        self.trees
+            .iter()
+            .map(|(p, _)| [p.position[0], p.position[1], radii[p.species as usize] * p.scale])
+            .collect()
+    }
+
     /// Placement of tree `t` (species, trunk base, yaw, scale), if there is such a tree.
     pub fn placement(&self, t: usize) -> Option<Placement> {
         self.trees.get(t).map(|&(p, _)| p)

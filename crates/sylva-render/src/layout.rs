@@ -147,6 +147,8 @@ pub struct GroundVertex {
     pub position: [f32; 3],
     /// Unit normal.
     pub normal: [f32; 3],
+    /// Sky the ground sees past the crowns above it (1: open ground).
+    pub open: f32,
 }
 
 /// `FarSpecies` in far.wgsl: one species' impostor (uniform).
@@ -214,8 +216,11 @@ pub const LEAF_ATTRIBUTES: [wgpu::VertexAttribute; 10] = [
 ];
 
 /// `GroundIn`.
-pub const GROUND_ATTRIBUTES: [wgpu::VertexAttribute; 2] =
-    [attr!(GroundVertex, position, Float32x3, 0), attr!(GroundVertex, normal, Float32x3, 1)];
+pub const GROUND_ATTRIBUTES: [wgpu::VertexAttribute; 3] = [
+    attr!(GroundVertex, position, Float32x3, 0),
+    attr!(GroundVertex, normal, Float32x3, 1),
+    attr!(GroundVertex, open, Float32, 2),
+];
 
 /// The per-instance buffer layout of every tree pipeline.
 pub fn instance_layout() -> wgpu::VertexBufferLayout<'static> {

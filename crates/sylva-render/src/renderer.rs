@@ -29,6 +29,8 @@ pub struct SceneAssets<'a> {
     pub terrain: &'a Terrain,
     /// Half side of the ground mesh, m.
     pub ground_extent: f32,
+    /// Crowns the ground lies under: x, y and radius, m ([`Forest::crowns`]).
+    pub crowns: &'a [[f32; 3]],
     /// Sun, sky and fog.
     pub lighting: Lighting,
 }
@@ -116,7 +118,9 @@ impl Renderer {
         height: u32,
     ) -> Result<Renderer, RenderError> {
         let models: Vec<&TreeModel> = forest.species.iter().map(|s| &s.model).collect();
+        let crowns = forest.crowns();
         let assets = SceneAssets {
+            crowns: &crowns,
             models: &models,
             terrain: &forest.terrain,
             ground_extent: 3.0 * forest.radius + GROUND_MARGIN,
@@ -157,6 +161,7 @@ impl Renderer {
             samples,
             assets.terrain,
             assets.ground_extent,
+            assets.crowns,
         );
         let branch = BranchPass::new(dev, &tree_layout, format, samples, &BAKE_TARGETS);
         let leaf = LeafPass::new(dev, &tree_layout, format, samples, &BAKE_TARGETS);

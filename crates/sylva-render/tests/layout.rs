@@ -153,7 +153,7 @@ fn check_attributes(file: &str, input: &str, attrs: &[wgpu::VertexAttribute], st
 fn vertex_attributes_match_the_shader_inputs() {
     check_attributes("branch.wgsl", "BranchIn", &BRANCH_ATTRIBUTES, size_of::<BranchVertex>());
     check_attributes("leaf.wgsl", "LeafIn", &LEAF_ATTRIBUTES, size_of::<LeafVertex>());
-    check_attributes("ground.wgsl", "GroundIn", &GROUND_ATTRIBUTES, 24);
+    check_attributes("ground.wgsl", "GroundIn", &GROUND_ATTRIBUTES, 28);
     check_attributes("common.wgsl", "InstanceIn", &INSTANCE_ATTRIBUTES, size_of::<Instance>());
 }
 

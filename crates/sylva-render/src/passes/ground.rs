@@ -1,6 +1,8 @@
 //! Ground: the terrain as a grid mesh, denser near the centre where the trees stand, and a
 //! flat skirt around it out to the horizon;
-//! grass and soil mixed by value noise, lit and fogged (`ground.wgsl`).
+//! grass and soil mixed by value noise, lit and fogged (`ground.wgsl`). Each vertex carries
+//! how much sky it sees past the crowns above it ([`open_sky`]), so the forest floor is
+//! darker than the clearing.
 
 use sylva_forest::Terrain;
 
@@ -29,6 +31,7 @@ impl GroundPass {
         samples: u32,
         terrain: &Terrain,
         extent: f32,
+        crowns: &[[f32; 3]],
     ) -> GroundPass {
         let spec = PipelineSpec {
             shader: "ground.wgsl",
@@ -43,7 +46,7 @@ impl GroundPass {
         };
         GroundPass {
             pipeline: pipeline(&gpu.device, &spec),
-            mesh: ground_mesh(gpu, terrain, extent),
+            mesh: ground_mesh(gpu, terrain, extent, crowns),
         }
     }
 
@@ -54,8 +57,87 @@ impl GroundPass {
     }
 }
 
-fn ground_mesh(gpu: &Gpu, terrain: &Terrain, extent: f32) -> Mesh {
+/// Share of the sky a crown of radius R hides from the ground below its centre; it falls
+/// smoothly to nothing at 1.3 R.
+const CROWN_OCCLUSION: f32 = 0.45;
+
+/// Sky seen from ground point (x, y) past `crowns` (x, y, radius; looked up through `grid`):
+/// the product over crowns of 1 − CROWN_OCCLUSION · s(d / 1.3 R), s falling from 1 at the
+/// centre to 0 at the edge (smoothstep).
+pub fn open_sky(x: f32, y: f32, crowns: &[[f32; 3]], grid: &CrownGrid) -> f32 {
+    let mut open = 1.0;
+    grid.near(x, y, |k| {
+        let [cx, cy, r] = crowns[k];
+        let reach = 1.3 * r.max(1e-3);
+        let d = ((x - cx).powi(2) + (y - cy).powi(2)).sqrt() / reach;
+        if d < 1.0 {
+            let s = 1.0 - d * d * (3.0 - 2.0 * d);
+            open *= 1.0 - CROWN_OCCLUSION * s;
+        }
+    });
+    open
+}
+
+/// Crowns binned on a square grid of cells as wide as the widest crown's reach.
+#[derive(Debug)]
+pub struct CrownGrid {
+    cell: f32,
+    origin: [f32; 2],
+    side: usize,
+    bins: Vec<Vec<u32>>,
+}
+
+impl CrownGrid {
+    /// Bin `crowns` (x, y, radius).
+    pub fn new(crowns: &[[f32; 3]]) -> CrownGrid {
+        let cell = crowns.iter().map(|c| 1.3 * c[2]).fold(1.0f32, f32::max);
+        let (mut lo, mut hi) = ([f32::MAX; 2], [f32::MIN; 2]);
+        for c in crowns {
+            for i in 0..2 {
+                lo[i] = lo[i].min(c[i]);
+                hi[i] = hi[i].max(c[i]);
+            }
+        }
+        if crowns.is_empty() {
+            (lo, hi) = ([0.0; 2], [0.0; 2]);
+        }
+        let side = (((hi[0] - lo[0]).max(hi[1] - lo[1]) / cell) as usize + 1).min(4096);
+        let cell = cell.max((hi[0] - lo[0]).max(hi[1] - lo[1]) / side as f32);
+        let mut grid = CrownGrid { cell, origin: lo, side, bins: vec![Vec::new(); side * side] };
+        for (k, c) in crowns.iter().enumerate() {
+            if let Some(b) = grid.bin(c[0], c[1]) {
+                grid.bins[b].push(k as u32);
+            }
+        }
+        grid
+    }
+
+    fn index(&self, v: f32, axis: usize) -> isize {
+        ((v - self.origin[axis]) / self.cell).floor() as isize
+    }
+
+    fn bin(&self, x: f32, y: f32) -> Option<usize> {
+        let (i, j) = (self.index(x, 0), self.index(y, 1));
+        let n = self.side as isize;
+        (i >= 0 && j >= 0 && i < n && j < n).then(|| (j * n + i) as usize)
+    }
+
+    /// Call `f` with every crown binned in the cells next to (x, y).
+    fn near(&self, x: f32, y: f32, mut f: impl FnMut(usize)) {
+        let (i, j, n) = (self.index(x, 0), self.index(y, 1), self.side as isize);
+        for b in (j - 1).max(0)..=(j + 1).min(n - 1) {
+            for a in (i - 1).max(0)..=(i + 1).min(n - 1) {
+                for &k in &self.bins[(b * n + a) as usize] {
+                    f(k as usize);
+                }
+            }
+        }
+    }
+}
+
+fn ground_mesh(gpu: &Gpu, terrain: &Terrain, extent: f32, crowns: &[[f32; 3]]) -> Mesh {
     let n = CELLS;
+    let grid = CrownGrid::new(crowns);
     let mut verts = Vec::with_capacity(((n + 1) * (n + 1)) as usize);
     for j in 0..=n {
         for i in 0..=n {
@@ -68,6 +150,7 @@ fn ground_mesh(gpu: &Gpu, terrain: &Terrain, extent: f32) -> Mesh {
             verts.push(GroundVertex {
                 position: [x, y, terrain.height(x, y)],
                 normal: terrain.normal(x, y),
+                open: open_sky(x, y, crowns, &grid),
             });
         }
     }
@@ -92,6 +175,7 @@ fn ground_mesh(gpu: &Gpu, terrain: &Terrain, extent: f32) -> Mesh {
         verts.push(GroundVertex {
             position: [p[0] * HORIZON, p[1] * HORIZON, p[2]],
             normal: [0.0, 0.0, 1.0],
+            open: 1.0,
         });
     }
     let m = edge.len() as u32;
@@ -101,4 +185,29 @@ fn ground_mesh(gpu: &Gpu, terrain: &Terrain, extent: f32) -> Mesh {
         indices.extend_from_slice(&[a, fa, fb, a, fb, b]);
     }
     Mesh::new(gpu, "ground", &verts, &indices)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_floor_under_crowns_sees_less_sky_than_the_clearing() {
+        let crowns = [[0.0, 0.0, 4.0], [3.0, 0.0, 4.0], [40.0, 40.0, 2.0]];
+        let grid = CrownGrid::new(&crowns);
+        let open = |x, y| open_sky(x, y, &crowns, &grid);
+        // In the clearing: the whole sky.
+        assert_eq!(open(-20.0, 30.0), 1.0);
+        // Under a lone crown's centre: CROWN_OCCLUSION of it hidden.
+        assert!((open(40.0, 40.0) - (1.0 - CROWN_OCCLUSION)).abs() < 1e-6);
+        // Darker towards the centre, open again past 1.3 R.
+        assert!(open(40.0, 41.0) > open(40.0, 40.0) && open(40.0, 41.0) < 1.0);
+        assert_eq!(open(40.0, 42.7), 1.0);
+        // Where two crowns overlap each hides its share of what the other leaves.
+        let (a, b) = (open_sky(1.5, 0.0, &crowns[..1], &CrownGrid::new(&crowns[..1])), {
+            let one = [crowns[1]];
+            open_sky(1.5, 0.0, &one, &CrownGrid::new(&one))
+        });
+        assert!((open(1.5, 0.0) - a * b).abs() < 1e-6 && open(1.5, 0.0) < a.min(b));
+    }
 }

@@ -1,15 +1,18 @@
 // Ground: the terrain mesh, grass and soil mixed by value noise, lit (trees' shadows from
-// the shadow map) and fogged into the sky at the horizon.
+// the shadow map, the sky it sees past the crowns above) and fogged into the sky at the
+// horizon.
 
 struct GroundIn {
     @location(0) position: vec3<f32>,
     @location(1) normal: vec3<f32>,
+    @location(2) open: f32,
 };
 
 struct GroundOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) world: vec3<f32>,
     @location(1) normal: vec3<f32>,
+    @location(2) open: f32,
 };
 
 @vertex
@@ -18,6 +21,7 @@ fn vs_main(v: GroundIn) -> GroundOut {
     out.clip = globals.view_proj * vec4<f32>(v.position, 1.0);
     out.world = v.position;
     out.normal = v.normal;
+    out.open = v.open;
     return out;
 }
 
@@ -44,6 +48,8 @@ fn fs_main(in: GroundOut) -> @location(0) vec4<f32> {
     let dry = vec3<f32>(0.17, 0.16, 0.07);
     let albedo = mix(grass, dry, smoothstep(0.35, 0.75, n));
     let normal = normalize(in.normal);
-    let lit = albedo * lighting(normal, sun_visibility(in.world, normal));
+    // Under the crowns the floor sees less sky: darker than the clearing, and, past the
+    // shadow map's reach, shaded by the canopy it lies under.
+    let lit = albedo * lighting(normal, sun_visibility(in.world, normal)) * in.open;
     return finish(apply_fog(lit, in.world));
 }
