@@ -839,4 +839,43 @@ mod tests {
         assert_eq!(bounded_scale(10.0, 10.0, 0.5), 15.0);
         assert_eq!(bounded_scale(25.0, 5.0, -1.0), 20.0);
     }
+
+    #[test]
+    fn the_douglas_fir_has_a_firs_proportions() {
+        // Proportions of open-grown Douglas-fir as photographs show them: a crown that
+        // reaches most of the way down the trunk (live crown 60–95 % of the height), a
+        // narrow cone (widest spread 30–55 % of the height, widest in its lower half) and
+        // first-order branches leaving the trunk near the horizontal (median 60–110° from
+        // the vertical). Checked over seeds, so every tree of the preset holds.
+        let sp = Species::preset("douglas_fir").expect("preset");
+        for seed in 0..6 {
+            let t = sp.generate(seed).expect("valid");
+            let js = t.skeleton.joints();
+            let lv = levels(&t.skeleton);
+            let h = t.stats.height;
+            let leafy: Vec<&crate::skeleton::Joint> =
+                js.iter().filter(|j| j.leaf_area > 0.0).collect();
+            let base = leafy.iter().map(|j| j.origin[2]).fold(f32::INFINITY, f32::min);
+            let crown = (h - base) / h;
+            assert!((0.6..=0.95).contains(&crown), "seed {seed}: crown ratio {crown}");
+            let reach = |j: &crate::skeleton::Joint| j.tip()[0].hypot(j.tip()[1]);
+            let mut spread: Vec<(f32, f32)> =
+                leafy.iter().map(|j| (reach(j), j.tip()[2])).collect();
+            spread.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let (r, z) = spread[spread.len() * 95 / 100];
+            let width = 2.0 * r / h;
+            assert!((0.3..=0.55).contains(&width), "seed {seed}: width {width} of the height");
+            assert!(z < base + 0.5 * (h - base), "seed {seed}: widest at {z} m of {h} m");
+            // First-order branches: stems whose parent is on the trunk.
+            let mut angles: Vec<f32> = js
+                .iter()
+                .enumerate()
+                .filter(|(i, j)| lv[*i] == 1 && lv[j.parent as usize] == 0)
+                .map(|(_, j)| j.axis[2].clamp(-1.0, 1.0).acos().to_degrees())
+                .collect();
+            angles.sort_by(f32::total_cmp);
+            let median = angles[angles.len() / 2];
+            assert!((60.0..=110.0).contains(&median), "seed {seed}: branches at {median}°");
+        }
+    }
 }
