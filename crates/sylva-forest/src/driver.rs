@@ -14,7 +14,8 @@
 //! [`REGROUP_TRAVEL`] from where the groups were last formed, the next [`Forest::step`]
 //! forms them again (at most once per [`REGROUP_FADE`]). Each new group keeps the simulated
 //! instance most of its trees already follow, so most trees do not change; a tree that does
-//! is drawn with both its old and its new simulation for [`REGROUP_FADE`] seconds,
+//! is drawn with both its old and its new simulation for [`REGROUP_FADE`] seconds
+//! ([`Forest::set_regroup_fade`]),
 //! cross-faded per pixel like a level change, so no tree jumps to its new group's pose.
 //!
 //! **Wind-field LOD.** Besides the instance groups, the field is kept as a mip pyramid;
@@ -236,6 +237,8 @@ pub struct FrameStats {
     pub fading: usize,
     /// Trees drawn with two instance groups (cross-fading after a regroup).
     pub regrouping: usize,
+    /// Trees in view that changed instance group since the previous frame of this view.
+    pub group_changes: usize,
     /// Trees whose level changed since the previous frame of this view.
     pub level_changes: usize,
     /// Simulated instances that read the wind pyramid's coarse level in the last step.
@@ -385,6 +388,8 @@ pub struct Forest {
     eye: Mutex<Option<[f32; 3]>>,
     /// Where the camera was, and when, the last time groups were formed.
     grouped: ([f32; 3], f64),
+    /// Seconds a tree that changed group cross-fades (0: it switches at once).
+    regroup_fade: f32,
 }
 
 /// A tree's last change of instance group: the group it left (`u32::MAX`: none) and when.
@@ -397,9 +402,9 @@ struct Switch {
 impl Switch {
     const NONE: Switch = Switch { from: u32::MAX, at: 0.0 };
 
-    /// Weight of the new group at time `t` and the old group, while fading.
-    fn fading(&self, t: f64) -> Option<(f32, u32)> {
-        let w = ((t - self.at) / REGROUP_FADE as f64) as f32;
+    /// Weight of the new group at time `t` and the old group, while fading over `fade` s.
+    fn fading(&self, t: f64, fade: f32) -> Option<(f32, u32)> {
+        let w = if fade > 0.0 { ((t - self.at) / fade as f64) as f32 } else { 1.0 };
         (self.from != u32::MAX && w < 1.0).then_some((w.max(0.0), self.from))
     }
 }
@@ -568,6 +573,7 @@ impl Forest {
             switches: vec![Switch::NONE; n_trees],
             eye: Mutex::new(None),
             grouped: (eye, 0.0),
+            regroup_fade: REGROUP_FADE,
         })
     }
 
@@ -607,6 +613,14 @@ impl Forest {
                 |t, from| switches[t] = Switch { from, at: now },
             );
         }
+    }
+
+    /// Seconds over which a tree that changes instance group cross-fades from its old
+    /// simulation to its new one (default [`REGROUP_FADE`]; 0 switches at once, as a
+    /// comparison for measuring popping). Clamped to 0 … 10.
+    pub fn set_regroup_fade(&mut self, seconds: f32) {
+        self.regroup_fade =
+            if seconds.is_finite() { seconds.clamp(0.0, 10.0) } else { REGROUP_FADE };
     }
 
     /// The camera at time `t` on the scene's camera path, or on the default fly-in
@@ -858,6 +872,7 @@ impl Forest {
     /// view: use one `FrameData` per view.
     pub fn frame(&self, camera: &Camera, aspect: f32, out: &mut FrameData) {
         *self.eye.lock().unwrap_or_else(|e| e.into_inner()) = Some(camera.eye);
+        let previous = out.time;
         out.time = self.time;
         out.keys.clear();
         if out.lod_state.len() != self.trees.len() {
@@ -898,7 +913,10 @@ impl Forest {
                 (0, 0, 0)
             };
             // The tree's group, and the one it is fading out of after a regroup.
-            let switch = self.switches[i].fading(self.time);
+            let switch = self.switches[i].fading(self.time, self.regroup_fade);
+            let sw = self.switches[i];
+            stats.group_changes +=
+                (sw.from != u32::MAX && sw.at > previous && sw.at <= self.time) as usize;
             for (group, old) in [(*g, false)].into_iter().chain(switch.map(|(_, f)| (f, true))) {
                 let lane = sp.lane_base + group as usize / LANES;
                 out.upload[lane] = out.upload[lane].max(joints(a) as u32);
@@ -972,7 +990,7 @@ impl Forest {
             let (p, now) = self.trees[i as usize];
             // Share of the dither range this draw's group keeps: after a regroup the old
             // group's draws keep [0, 1 − v) and the new one's [1 − v, 1).
-            let (g, lo, hi) = match self.switches[i as usize].fading(self.time) {
+            let (g, lo, hi) = match self.switches[i as usize].fading(self.time, self.regroup_fade) {
                 Some((v, from)) if old => (from, 0.0, 1.0 - v),
                 Some((v, _)) => (now, 1.0 - v, 1.0),
                 None => (now, 0.0, 1.0),

@@ -340,6 +340,9 @@ fn groups_form_by_distance_and_regrouping_cross_fades_instead_of_jumping() {
         }
         if k == 1 {
             assert!(f.stats.regrouping > 0, "moving across the forest regroups some trees");
+            assert!(f.stats.group_changes > 0);
+        } else {
+            assert_eq!(f.stats.group_changes, 0, "frame {k}: groups formed once per move");
         }
     }
     assert!(watched.is_some(), "some tree was drawn with two groups");
@@ -353,4 +356,14 @@ fn groups_form_by_distance_and_regrouping_cross_fades_instead_of_jumping() {
     let moved =
         (0..forest.trees()).filter(|&t| forest.tree_info(t).expect("tree").group != groups_a[t]);
     assert!(moved.count() < forest.trees(), "groups keep the instance most of their trees had");
+    // Without the fade (the comparison popping is measured against) trees switch at once.
+    forest.set_regroup_fade(0.0);
+    let mut changed = 0;
+    for _ in 0..2 {
+        forest.step(1.0 / 30.0);
+        forest.frame(&a, 4.0 / 3.0, &mut f);
+        changed += f.stats.group_changes;
+        assert_eq!(f.stats.regrouping, 0, "an instant switch draws no tree twice");
+    }
+    assert!(changed > 0, "back at the first corner, trees changed group");
 }
