@@ -329,37 +329,54 @@ fn popping(a: &Table3Bench) -> anyhow::Result<String> {
         let gpu = gpu.as_mut().context("renderer")?;
         let camera = forest.default_camera();
         let mut frame = FrameData::default();
-        let mut prev: Option<Vec<u8>> = None;
-        let (mut calm, mut switching) = (Vec::new(), Vec::new());
+        let mut diffs = FrameDiffs::default();
         for i in 0..n {
             let h0 = 0.3 * 10f32.powf(i as f32 / (n - 1) as f32);
             forest.set_lod(sylva_forest::LodSettings { fraction: h0, ..forest.lod() });
             forest.step(0.1);
             forest.frame(&camera, w as f32 / h as f32, &mut frame);
-            let img = gpu.render(&frame, &camera)?;
-            if let Some(p) = &prev {
-                let d = p
-                    .iter()
-                    .zip(&img)
-                    .map(|(x, y)| (*x as i32 - *y as i32).unsigned_abs() as f64)
-                    .sum::<f64>()
-                    / p.len() as f64;
-                if frame.stats.level_changes > 0 { switching.push(d) } else { calm.push(d) }
-            }
-            prev = Some(img);
+            diffs.push(gpu.render(&frame, &camera)?, frame.stats.level_changes > 0);
         }
-        let (cm, cx) = median_max(&mut calm);
-        let (sm, sx) = median_max(&mut switching);
-        let _ = writeln!(
-            md,
-            "| {label} | {cm:.2} / {cx:.2} ({} frames) | {sm:.2} / {sx:.2} ({} frames) |",
-            calm.len(),
-            switching.len()
-        );
+        diffs.row(&mut md, label);
     }
     regroup_popping(a, &mut md, gpu.as_mut().context("renderer")?)?;
     println!("{md}");
     Ok(md)
+}
+
+/// Mean |Δ| between consecutive frames, split by whether something switched in the frame.
+#[derive(Default)]
+struct FrameDiffs {
+    prev: Option<Vec<u8>>,
+    calm: Vec<f64>,
+    switching: Vec<f64>,
+}
+
+impl FrameDiffs {
+    fn push(&mut self, img: Vec<u8>, switched: bool) {
+        if let Some(p) = &self.prev {
+            let d = p
+                .iter()
+                .zip(&img)
+                .map(|(x, y)| (*x as i32 - *y as i32).unsigned_abs() as f64)
+                .sum::<f64>()
+                / p.len() as f64;
+            if switched { self.switching.push(d) } else { self.calm.push(d) }
+        }
+        self.prev = Some(img);
+    }
+
+    /// A Markdown row: median / max without and with a switch, and the frame counts.
+    fn row(&mut self, md: &mut String, label: &str) {
+        let (cm, cx) = median_max(&mut self.calm);
+        let (sm, sx) = median_max(&mut self.switching);
+        let _ = writeln!(
+            md,
+            "| {label} | {cm:.2} / {cx:.2} ({} frames) | {sm:.2} / {sx:.2} ({} frames) |",
+            self.calm.len(),
+            self.switching.len()
+        );
+    }
 }
 
 /// Popping when instance groups are re-formed: scene `small` grown to 60 trees in a breeze
@@ -398,8 +415,7 @@ fn regroup_popping(a: &Table3Bench, md: &mut String, gpu: &mut Headless) -> anyh
             (camera.target[0] + k * back[0], camera.target[1] + k * back[1]);
         camera.eye[2] = camera.target[2] + 0.6 * r;
         let mut frame = FrameData::default();
-        let mut prev: Option<Vec<u8>> = None;
-        let (mut calm, mut switching) = (Vec::new(), Vec::new());
+        let mut diffs = FrameDiffs::default();
         // Sideways: across the line of sight, horizontally.
         let f = [camera.target[0] - camera.eye[0], camera.target[1] - camera.eye[1]];
         let norm = (f[0] * f[0] + f[1] * f[1]).sqrt().max(1e-6);
@@ -411,26 +427,9 @@ fn regroup_popping(a: &Table3Bench, md: &mut String, gpu: &mut Headless) -> anyh
             }
             forest.step(0.1);
             forest.frame(&camera, w as f32 / h as f32, &mut frame);
-            let img = gpu.render(&frame, &camera)?;
-            if let Some(p) = &prev {
-                let d = p
-                    .iter()
-                    .zip(&img)
-                    .map(|(x, y)| (*x as i32 - *y as i32).unsigned_abs() as f64)
-                    .sum::<f64>()
-                    / p.len() as f64;
-                if frame.stats.group_changes > 0 { switching.push(d) } else { calm.push(d) }
-            }
-            prev = Some(img);
+            diffs.push(gpu.render(&frame, &camera)?, frame.stats.group_changes > 0);
         }
-        let (cm, cx) = median_max(&mut calm);
-        let (sm, sx) = median_max(&mut switching);
-        let _ = writeln!(
-            md,
-            "| {label} | {cm:.2} / {cx:.2} ({} frames) | {sm:.2} / {sx:.2} ({} frames) |",
-            calm.len(),
-            switching.len()
-        );
+        diffs.row(md, label);
     }
     Ok(())
 }
