@@ -693,8 +693,16 @@ impl Forest {
     /// (the species' leaf clusters at full detail: the distance from the trunk within which
     /// 90 % of them hang, plus half a card, times the tree's scale).
     pub fn crowns(&self) -> Vec<[f32; 3]> {
-        let radii: Vec<f32> = self
-            .species
+        let radii = self.crown_radii();
+        self.trees
+            .iter()
+            .map(|(p, _)| [p.position[0], p.position[1], radii[p.species as usize] * p.scale])
+            .collect()
+    }
+
+    /// Per species: the crown radius of the unscaled tree (see [`Forest::crowns`]), m.
+    fn crown_radii(&self) -> Vec<f32> {
+        self.species
             .iter()
             .map(|s| {
                 let clusters = s.model.lods.first().map(|l| &l.clusters[..]).unwrap_or(&[]);
@@ -706,10 +714,6 @@ impl Forest {
                 let card = clusters.first().map(|c| 0.5 * c.size).unwrap_or(0.0);
                 d.get(d.len() * 9 / 10).copied().unwrap_or(0.0) + card
             })
-            .collect();
-        self.trees
-            .iter()
-            .map(|(p, _)| [p.position[0], p.position[1], radii[p.species as usize] * p.scale])
             .collect()
     }
 
@@ -779,15 +783,17 @@ impl Forest {
         })
     }
 
-    /// The tree whose trunk passes nearest the ray from `origin` along `dir` (world), within
-    /// a fifth of the tree's height and in front of the origin; the closest such along the
-    /// ray. A crown's bulk is not tested: the trunk axis stands for the tree.
+    /// The tree the ray from `origin` along `dir` (world) hits first: one whose axis it
+    /// passes within its crown's radius ([`Forest::crowns`]) above a third of its height,
+    /// or within a fifth of its height lower down (the trunk), in front of the origin; the
+    /// closest such along the ray. The crown stands as a cylinder about the trunk.
     pub fn pick(&self, origin: [f32; 3], dir: [f32; 3]) -> Option<usize> {
         let n = (dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]).sqrt();
         if n.is_nan() || n <= 0.0 {
             return None;
         }
         let d = [dir[0] / n, dir[1] / n, dir[2] / n];
+        let radii = self.crown_radii();
         let mut best: Option<(f32, usize)> = None;
         for (i, (p, _)) in self.trees.iter().enumerate() {
             let h = self.species[p.species as usize].model.tree.stats.height * p.scale;
@@ -809,7 +815,12 @@ impl Forest {
                 + (q[1] - p.position[1]).powi(2)
                 + (q[2] - p.position[2] - z).powi(2))
             .sqrt();
-            if gap <= 0.2 * h && s > 0.0 && best.is_none_or(|(bs, _)| s < bs) {
+            let reach = if z >= h / 3.0 {
+                (radii[p.species as usize] * p.scale).max(0.2 * h)
+            } else {
+                0.2 * h
+            };
+            if gap <= reach && s > 0.0 && best.is_none_or(|(bs, _)| s < bs) {
                 best = Some((s, i));
             }
         }

@@ -277,3 +277,30 @@ fn scene_sway_and_leaf_tables_reach_the_simulation() {
         assert!(e.contains(needle), "{table}: {e}");
     }
 }
+
+#[test]
+fn a_click_on_a_crown_picks_its_tree_and_one_beside_the_trunk_below_does_not() {
+    let spec = SceneSpec::builtin("small").expect("small");
+    let forest = Forest::new(&spec).expect("forest");
+    let crowns = forest.crowns();
+    for t in 0..forest.trees() {
+        let p = forest.placement(t).expect("tree").position;
+        let [_, _, r] = crowns[t];
+        let h = forest.tree_info(t).expect("tree").height;
+        assert!(
+            r > 0.2 * h,
+            "tree {t}: a crown of {r} m on a {h} m tree is wider than the trunk's reach"
+        );
+        // Rays along +y from 60 m before the tree, passing its axis halfway between the
+        // trunk's reach (a fifth of the height) and the crown's radius.
+        let side = 0.5 * (0.2 * h + r);
+        let ray = |z: f32| {
+            let o = [p[0] + side, p[1] - 60.0, p[2] + z];
+            forest.pick(o, [0.0, 1.0, 0.0])
+        };
+        let hit = ray(0.6 * h).expect("the crown is hit");
+        let q = forest.placement(hit).expect("tree").position;
+        assert!(hit == t || q[1] < p[1], "tree {t}: picked {hit}, behind it");
+        assert_ne!(ray(0.1 * h), Some(t), "tree {t}: beside the bare trunk is not the tree");
+    }
+}
