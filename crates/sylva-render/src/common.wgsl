@@ -30,6 +30,8 @@ struct Globals {
     overlay: f32,
     pad6: f32,
     pad7: f32,
+    // World -> the far cascade's clip space (zero: none).
+    sun_view_proj_far: mat4x4<f32>,
 };
 
 @group(0) @binding(0) var<uniform> globals: Globals;
@@ -38,7 +40,8 @@ struct Globals {
 // stride come with the instance (up to 16 instances' palettes are interleaved).
 @group(0) @binding(1) var<storage, read> palettes: array<f32>;
 @group(0) @binding(2) var linear_sampler: sampler;
-// The sun's shadow map (passes/shadow.rs) and its comparison sampler.
+// The sun's shadow map (passes/shadow.rs: two cascades side by side, near on the left) and
+// its comparison sampler.
 @group(0) @binding(3) var shadow_map: texture_depth_2d;
 @group(0) @binding(4) var shadow_sampler: sampler_comparison;
 
@@ -62,27 +65,41 @@ fn towards_viewer(world: vec3<f32>) -> vec3<f32> {
     return normalize(globals.eye - world);
 }
 
-// Share of the sun reaching `world` (1 lit, 0 in shadow): percentage-closer filtering of
-// the shadow map (four bilinear comparisons); 1 outside it, fading to 1 over its outer tenth.
+// Percentage-closer filtering in one cascade (`half`: 0 near, 0.5 far) at its clip-space
+// point `p`: four bilinear comparisons half a texel apart, a 3 x 3 texel footprint.
+fn cascade_visibility(p: vec4<f32>, half: f32) -> f32 {
+    let uv = vec2<f32>(0.25 + 0.25 * p.x + half, 0.5 - 0.5 * p.y);
+    var lit = 0.0;
+    for (var k = 0; k < 4; k = k + 1) {
+        let o = (vec2<f32>(f32(k & 1), f32(k >> 1u)) - 0.5) * vec2<f32>(0.5, 1.0) * globals.shadow_texel;
+        lit = lit + textureSampleCompareLevel(shadow_map, shadow_sampler, uv + o, p.z);
+    }
+    return lit / 4.0;
+}
+
+// Whether clip-space point `p` lies inside its cascade.
+fn in_cascade(p: vec4<f32>) -> bool {
+    return max(abs(p.x), abs(p.y)) < 1.0 && p.z > 0.0 && p.z < 1.0;
+}
+
+// Share of the sun reaching `world` (1 lit, 0 in shadow) from the shadow map's two
+// cascades: the near one where it reaches, blending into the far one over its outer fifth,
+// and the far one fading to 1 over its own outer tenth.
 fn sun_visibility(world: vec3<f32>, normal: vec3<f32>) -> f32 {
     if (globals.shadow_texel <= 0.0) {
         return 1.0;
     }
     // Offset along the normal by about a texel against self-shadowing.
+    let f = globals.sun_view_proj_far * vec4<f32>(world + normal * 0.25, 1.0);
+    var far = 1.0;
+    if (in_cascade(f)) {
+        far = mix(cascade_visibility(f, 0.5), 1.0, smoothstep(0.9, 1.0, max(abs(f.x), abs(f.y))));
+    }
     let p = globals.sun_view_proj * vec4<f32>(world + normal * 0.06, 1.0);
-    let uv = vec2<f32>(0.5 + 0.5 * p.x, 0.5 - 0.5 * p.y);
-    let edge = max(abs(p.x), abs(p.y));
-    if (edge >= 1.0 || p.z <= 0.0 || p.z >= 1.0) {
-        return 1.0;
+    if (!in_cascade(p)) {
+        return far;
     }
-    // Four bilinear comparisons half a texel apart: a 3 x 3 texel footprint, smoothly
-    // weighted.
-    var lit = 0.0;
-    for (var k = 0; k < 4; k = k + 1) {
-        let o = (vec2<f32>(f32(k & 1), f32(k >> 1u)) - 0.5) * globals.shadow_texel;
-        lit = lit + textureSampleCompareLevel(shadow_map, shadow_sampler, uv + o, p.z);
-    }
-    return mix(lit / 4.0, 1.0, smoothstep(0.9, 1.0, edge));
+    return mix(cascade_visibility(p, 0.0), far, smoothstep(0.8, 1.0, max(abs(p.x), abs(p.y))));
 }
 
 // Filmic tone map of linear HDR colour (Narkowicz's fit of the ACES curve, 2015), after

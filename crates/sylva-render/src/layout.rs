@@ -53,7 +53,8 @@ pub struct Globals {
     pub sky_horizon: [f32; 3],
     /// Exposure multiplying the linear colour before the filmic tone map.
     pub exposure: f32,
-    /// World → the sun's shadow-map clip space (all zero: no shadow map).
+    /// World → the near cascade's shadow-map clip space (all zero: no shadow map); while
+    /// the far cascade is drawn, the far one's.
     pub sun_view_proj: [[f32; 4]; 4],
     /// Side of one shadow-map texel in its texture coordinates (0: no shadow map).
     pub shadow_texel: f32,
@@ -64,6 +65,8 @@ pub struct Globals {
     pub pad6: f32,
     /// Padding.
     pub pad7: f32,
+    /// World → the far cascade's shadow-map clip space (all zero: no far cascade).
+    pub sun_view_proj_far: [[f32; 4]; 4],
 }
 
 /// Exposure before the filmic tone map (common.wgsl `finish`).

@@ -14,8 +14,8 @@ use crate::passes::leaf::{self, LeafPass};
 use crate::passes::shadow::{SHADOW_SIZE, ShadowPass};
 use crate::passes::sky::SkyPass;
 use crate::shared::{
-    DEPTH, Mesh, box_mips, globals_group, globals_layout, instance_buffer, palette_buffer,
-    pipeline_layout, texture_entry, upload_mips,
+    DEPTH, GlobalsBinding, Mesh, box_mips, globals_group, globals_layout, instance_buffer,
+    palette_buffer, pipeline_layout, texture_entry, upload_mips,
 };
 
 /// What the renderer draws a scene with: tree models (in the scene's species order, as
@@ -79,6 +79,10 @@ pub struct Renderer {
     windows: Vec<wgpu::BindGroup>,
     /// The same for the shadow pass (the map's placeholder in its place).
     shadow_windows: Vec<wgpu::BindGroup>,
+    /// The same with the far cascade's globals (`globals_far`), for drawing that cascade.
+    shadow_windows_far: Vec<wgpu::BindGroup>,
+    /// The globals with the far cascade's sun matrix in `sun_view_proj`.
+    globals_far: wgpu::Buffer,
     /// Offset (floats) of each palette window.
     window_offsets: Vec<u64>,
     /// Window of each instance of the frame.
@@ -176,17 +180,22 @@ impl Renderer {
             mipmap_filter: wgpu::MipmapFilterMode::Linear,
             ..Default::default()
         });
-        let globals = dev.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("globals"),
-            size: std::mem::size_of::<Globals>() as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+        let uniform = |label| {
+            dev.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: std::mem::size_of::<Globals>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        };
+        let (globals, globals_far) = (uniform("globals"), uniform("globals, far cascade"));
         let palettes = palette_buffer(dev, 48 * 1024);
         let instances = instance_buffer(dev, 1024);
         let (lit, unlit) = shadow.bindings(&globals, &sampler);
         let windows = vec![globals_group(dev, &globals_layout, &lit, &palettes)];
         let shadow_windows = vec![globals_group(dev, &globals_layout, &unlit, &palettes)];
+        let far_unlit = GlobalsBinding { globals: &globals_far, ..unlit };
+        let shadow_windows_far = vec![globals_group(dev, &globals_layout, &far_unlit, &palettes)];
         let bake = BakeContext {
             branch: &branch.bake,
             leaf: &leaf.bake,
@@ -269,6 +278,8 @@ impl Renderer {
             instances,
             windows,
             shadow_windows,
+            shadow_windows_far,
+            globals_far,
             window_offsets: vec![0],
             window_of: Vec::new(),
             staged: Vec::new(),
@@ -347,18 +358,29 @@ impl Renderer {
         };
         let shadows = self.lighting.shadows;
         if shadows {
-            g.sun_view_proj = ShadowPass::sun_matrix(camera, aspect, self.lighting.sun_unit());
+            let sun = self.lighting.sun_unit();
+            g.sun_view_proj = ShadowPass::sun_matrix(camera, aspect, sun);
+            g.sun_view_proj_far =
+                ShadowPass::sun_matrix_reaching(camera, aspect, sun, ShadowPass::far_reach(camera));
             g.shadow_texel = 1.0 / SHADOW_SIZE as f32;
+            let far = Globals { sun_view_proj: g.sun_view_proj_far, ..g };
+            gpu.queue.write_buffer(&self.globals_far, 0, bytemuck::bytes_of(&far));
         }
         gpu.queue.write_buffer(&self.globals, 0, bytemuck::bytes_of(&g));
         self.upload(gpu, frame);
         let mut enc =
             dev.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
         if shadows {
-            // The sun's shadow map: every tree drawn as a mesh casts.
+            // The sun's shadow map: every tree casts, meshes and impostors, into each
+            // cascade (the far one with meshes one level coarser again).
             let mut pass = self.shadow.begin(&mut enc);
-            pass.set_vertex_buffer(1, self.instances.slice(..));
-            self.draw_trees(&mut pass, frame, [&self.shadow.branch, &self.shadow.leaf], true);
+            for (k, windows) in [(0, &self.shadow_windows), (1, &self.shadow_windows_far)] {
+                ShadowPass::viewport(&mut pass, k);
+                pass.set_vertex_buffer(1, self.instances.slice(..));
+                let casters = [&self.shadow.branch, &self.shadow.leaf];
+                self.draw_trees(&mut pass, frame, casters, Some((windows, k as usize)));
+                self.draw_impostors(&mut pass, frame, windows, true);
+            }
         }
         {
             let (view, resolve) = match &self.msaa {
@@ -385,24 +407,40 @@ impl Renderer {
             self.sky.draw(&mut pass);
             self.ground.draw(&mut pass);
             pass.set_vertex_buffer(1, self.instances.slice(..));
-            self.draw_trees(&mut pass, frame, [&self.branch.draw, &self.leaf.draw], false);
-            // Impostors: buckets one past the species' last mesh level.
-            pass.set_vertex_buffer(0, self.instances.slice(..));
-            self.far.begin(&mut pass);
-            for &(bucket, window, first, count) in &self.draws {
-                let b = &frame.buckets[bucket];
-                let Some(sp) = self.species.get(b.species as usize) else { continue };
-                if b.lod as usize == sp.lods.len() {
-                    pass.set_bind_group(0, &self.windows[window], &[]);
-                    self.far.draw(&mut pass, &sp.far, first..first + count);
-                }
-            }
+            self.draw_trees(&mut pass, frame, [&self.branch.draw, &self.leaf.draw], None);
+            self.draw_impostors(&mut pass, frame, &self.windows, false);
         }
         gpu.queue.submit([enc.finish()]);
     }
 }
 
 impl Renderer {
+    /// Draw the impostors (buckets one past their species' last mesh level) through
+    /// `windows`: the frame's, or (`shadow`) a cascade's, into the shadow map, turned to
+    /// the sun.
+    fn draw_impostors(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        frame: &FrameData,
+        windows: &[wgpu::BindGroup],
+        shadow: bool,
+    ) {
+        pass.set_vertex_buffer(0, self.instances.slice(..));
+        if shadow {
+            self.far.begin_shadow(pass)
+        } else {
+            self.far.begin(pass)
+        }
+        for &(bucket, window, first, count) in &self.draws {
+            let b = &frame.buckets[bucket];
+            let Some(sp) = self.species.get(b.species as usize) else { continue };
+            if b.lod as usize == sp.lods.len() {
+                pass.set_bind_group(0, &windows[window], &[]);
+                self.far.draw(pass, &sp.far, first..first + count);
+            }
+        }
+    }
+
     /// Draw every tree drawn as a mesh (not the impostors) with `pipelines` (branches,
     /// leaves), bound through the frame's palette windows. `shadow`: into the shadow map,
     /// through the shadow pass's windows and one mesh level coarser than the tree is drawn
@@ -413,16 +451,17 @@ impl Renderer {
         pass: &mut wgpu::RenderPass<'_>,
         frame: &FrameData,
         pipelines: [&wgpu::RenderPipeline; 2],
-        shadow: bool,
+        shadow: Option<(&Vec<wgpu::BindGroup>, usize)>,
     ) {
-        let windows = if shadow { &self.shadow_windows } else { &self.windows };
+        let windows = shadow.map_or(&self.windows, |s| s.0);
         for (pipeline, leaves) in [(pipelines[0], false), (pipelines[1], true)] {
             pass.set_pipeline(pipeline);
             for &(bucket, window, first, count) in &self.draws {
                 let b = &frame.buckets[bucket];
                 let Some(sp) = self.species.get(b.species as usize) else { continue };
-                let level = if shadow {
-                    (b.lod as usize + SHADOW_COARSER).min(sp.lods.len().saturating_sub(1))
+                let level = if let Some((_, cascade)) = shadow {
+                    let coarser = SHADOW_COARSER + cascade;
+                    (b.lod as usize + coarser).min(sp.lods.len().saturating_sub(1))
                 } else {
                     b.lod as usize
                 };
@@ -491,11 +530,17 @@ impl Renderer {
         if grown || offsets != self.window_offsets {
             self.windows.clear();
             self.shadow_windows.clear();
+            self.shadow_windows_far.clear();
             let (lit, unlit) = self.shadow.bindings(&self.globals, &self.sampler);
+            let far_unlit = GlobalsBinding { globals: &self.globals_far, ..unlit };
             for &o in &offsets {
                 let offset = 4 * o;
                 let size = (self.palettes.size() - offset).min(max_binding);
-                for (with, to) in [(&lit, &mut self.windows), (&unlit, &mut self.shadow_windows)] {
+                for (with, to) in [
+                    (&lit, &mut self.windows),
+                    (&unlit, &mut self.shadow_windows),
+                    (&far_unlit, &mut self.shadow_windows_far),
+                ] {
                     to.push(crate::shared::globals_window(
                         dev,
                         &self.globals_layout,

@@ -70,7 +70,8 @@ fn globals_match_their_wgsl_twin() {
         shadow_texel,
         overlay,
         pad6,
-        pad7
+        pad7,
+        sun_view_proj_far
     );
     check_struct("common.wgsl", "Globals", size_of::<Globals>(), &fields);
 }

@@ -234,14 +234,45 @@ fn brightness(img: &[u8], (x, y): (u32, u32)) -> f64 {
 
 #[test]
 fn crowns_cast_shadows_on_the_ground_where_the_sun_puts_them() {
-    // The ground a crown hides from the sun is darker with shadows than without; ground
-    // the same distance towards the sun (nothing between it and the sun) is not.
-    let spec = SceneSpec::builtin("small").expect("small scene");
+    check_shadows(&SceneSpec::builtin("small").expect("small scene"), false, None);
+}
+
+#[test]
+fn the_far_cascade_shadows_ground_beyond_the_near_ones_reach() {
+    // Looking at a point 30 m off, the near cascade reaches 40 m; the trees 150 m ahead lie
+    // in the far cascade only, and their shadows still fall where the sun puts them.
+    let camera = Camera {
+        eye: [-150.0, -10.0, 14.0],
+        target: [-120.0, -8.0, 12.0],
+        fov_deg: 14.0,
+        near: 0.5,
+        far: 8000.0,
+    };
+    check_shadows(&SceneSpec::builtin("small").expect("small scene"), false, Some(camera));
+}
+
+#[test]
+fn impostors_cast_shadows_too() {
+    // Every tree an impostor (h₀ = 100: trees under 11 image heights): their quads, turned
+    // to the sun in the shadow map, shade the ground behind them.
+    let mut spec = SceneSpec::builtin("small").expect("small scene");
+    spec.lod.fraction = 100.0;
+    check_shadows(&spec, true, None);
+}
+
+/// The ground a crown hides from the sun is darker with shadows than without; ground the
+/// same distance towards the sun (nothing between it and the sun) is not. `impostors`: every
+/// tree in view must be drawn as one.
+fn check_shadows(spec: &SceneSpec, impostors: bool, camera: Option<Camera>) {
+    let spec = spec.clone();
     let mut off = spec.clone();
     off.lighting.shadows = false;
-    let (lit, frame, camera) = render_spec(&spec, None);
+    let (lit, frame, camera) = render_spec(&spec, camera);
     let (flat, _, _) = render_spec(&off, Some(camera));
     let sun = spec.lighting.sun_unit();
+    if impostors {
+        assert!(frame.instances.iter().all(|i| i.tag & 15 == 15), "all impostors");
+    }
     let (mut shaded, mut kept, mut trees) = (0, 0, 0);
     for inst in &frame.instances {
         let base = inst.position;

@@ -43,6 +43,8 @@ pub const BAKE_TARGETS: [wgpu::TextureFormat; 2] =
 #[derive(Debug)]
 pub struct FarPass {
     pipeline: wgpu::RenderPipeline,
+    /// Impostors into the sun's shadow map: the quad turned to the sun, alpha-tested.
+    shadow: wgpu::RenderPipeline,
     /// Group 1 of the pipeline: albedo, normals, [`FarSpecies`].
     pub species_layout: wgpu::BindGroupLayout,
 }
@@ -111,7 +113,9 @@ impl FarPass {
             targets: &[format],
             shadow: false,
         };
-        FarPass { pipeline: pipeline(dev, &spec), species_layout }
+        let shadow =
+            PipelineSpec { fragment: "fs_shadow", samples: 1, targets: &[], shadow: true, ..spec };
+        FarPass { pipeline: pipeline(dev, &spec), shadow: pipeline(dev, &shadow), species_layout }
     }
 
     /// Bake `model`'s impostor: render its views, read them back, build the mip chains and
@@ -281,6 +285,11 @@ impl FarPass {
     /// caller's).
     pub fn begin(&self, pass: &mut wgpu::RenderPass<'_>) {
         pass.set_pipeline(&self.pipeline);
+    }
+
+    /// Bind the shadow-map pipeline instead (same bindings as [`FarPass::begin`]).
+    pub fn begin_shadow(&self, pass: &mut wgpu::RenderPass<'_>) {
+        pass.set_pipeline(&self.shadow);
     }
 
     /// Draw `instances` of one species' impostor.

@@ -2,7 +2,9 @@
 // camera, showing the view of the tree (rendered once at start-up from `views` directions
 // around it, far.rs) nearest the direction it is seen from. Lit per pixel from the baked
 // tree-space normals like the near trees, swayed by its trunk-top joint: the quad shears with
-// the trunk top's displacement, in proportion to height.
+// the trunk top's displacement, in proportion to height. Into the sun's shadow map
+// (SHADOW) the quad is turned to face the sun instead, so the tree casts the shadow of the
+// view nearest the sun's azimuth.
 
 // One species' impostor: where its views lie in the atlas and how to place the quad.
 struct FarSpecies {
@@ -43,8 +45,11 @@ fn vs_main(@builtin(vertex_index) vi: u32, inst: InstanceIn) -> FarOut {
     let corner = vec2<f32>(f32(corner_index == 1u || corner_index == 2u), f32(corner_index >= 2u));
     let base = inst.base.xyz;
     let yaw = inst.base.w;
-    // Direction seen along (eye -> tree), horizontal.
+    // Direction seen along (eye -> tree, or along the sun's rays), horizontal.
     var d = base.xy - globals.eye.xy;
+    if (SHADOW) {
+        d = -globals.sun_dir.xy;
+    }
     if (dot(d, d) < 1e-8) {
         d = vec2<f32>(1.0, 0.0);
     }
@@ -62,7 +67,7 @@ fn vs_main(@builtin(vertex_index) vi: u32, inst: InstanceIn) -> FarOut {
     p = p + shift * clamp(z / max(far.tip.z, 0.1), 0.0, 1.5);
     let world = base + p;
     var out: FarOut;
-    out.clip = globals.view_proj * vec4<f32>(world, 1.0);
+    out.clip = project(world);
     out.world = world;
     out.uv = vec2<f32>((f32(k) + corner.x) / n, 1.0 - corner.y);
     out.yaw = yaw;
@@ -70,6 +75,14 @@ fn vs_main(@builtin(vertex_index) vi: u32, inst: InstanceIn) -> FarOut {
     out.tint = tree_tint(inst.base);
     out.tag = inst.tag;
     return out;
+}
+
+// Into the shadow map: where the view shows the tree.
+@fragment
+fn fs_shadow(in: FarOut) {
+    if (textureSample(far_albedo, linear_sampler, in.uv).a < 0.5) {
+        discard;
+    }
 }
 
 @fragment

@@ -1,8 +1,12 @@
-//! The sun's shadow map: the near trees' branches and leaf cards drawn from the sun into a
-//! depth texture, which every lit pass samples (`sun_visibility` in common.wgsl, four
-//! bilinear percentage-closer comparisons). One orthographic map covers a sphere around the first
-//! [`ShadowPass::reach`] metres of the view, its centre snapped to whole texels so the
-//! shadows do not shimmer as the camera moves. Trees drawn as impostors cast no shadow.
+//! The sun's shadow map: the trees' branches and leaf cards drawn from the sun into a depth
+//! texture, which every lit pass samples (`sun_visibility` in common.wgsl, four bilinear
+//! percentage-closer comparisons). Two cascades lie side by side in it, each
+//! [`SHADOW_SIZE`] texels square: the near one an orthographic view of a sphere around the
+//! first [`ShadowPass::reach`] metres of the view, the far one of the first
+//! [`ShadowPass::far_reach`]; each centre is snapped to whole texels so the shadows do not
+//! shimmer as the camera moves. Lit passes read the near cascade where it reaches and blend
+//! into the far one over its outer fifth. Trees drawn as impostors cast through
+//! `far.wgsl`'s shadow stage: their quad turned to the sun, alpha-tested.
 //!
 //! The pipelines are the branch and leaf shaders themselves with the `SHADOW` override set:
 //! the same skinning and flutter, projected with the sun's matrix, cards turned towards the
@@ -14,8 +18,11 @@ use crate::layout::{BRANCH_ATTRIBUTES, BranchVertex, LEAF_ATTRIBUTES, LeafVertex
 use crate::layout::{instance_layout, vertex_layout};
 use crate::shared::{DEPTH, GlobalsBinding, PipelineSpec, pipeline};
 
-/// Side of the shadow map, texels.
+/// Side of each cascade of the shadow map, texels.
 pub const SHADOW_SIZE: u32 = 1024;
+
+/// Cascades of the shadow map, side by side.
+pub const CASCADES: u32 = 2;
 
 /// The shadow pass: its two pipelines, the map and a placeholder bound while drawing it.
 #[derive(Debug)]
@@ -48,10 +55,14 @@ impl ShadowPass {
             [Some(vertex_layout::<BranchVertex>(&BRANCH_ATTRIBUTES)), Some(instance_layout())];
         let leaf_buffers =
             [Some(vertex_layout::<LeafVertex>(&LEAF_ATTRIBUTES)), Some(instance_layout())];
-        let depth = |size, label| {
+        let depth = |size, cascades, label| {
             dev.create_texture(&wgpu::TextureDescriptor {
                 label: Some(label),
-                size: wgpu::Extent3d { width: size, height: size, depth_or_array_layers: 1 },
+                size: wgpu::Extent3d {
+                    width: size * cascades,
+                    height: size,
+                    depth_or_array_layers: 1,
+                },
                 mip_level_count: 1,
                 sample_count: 1,
                 dimension: wgpu::TextureDimension::D2,
@@ -65,8 +76,8 @@ impl ShadowPass {
         ShadowPass {
             branch: pipeline(dev, &spec("branch.wgsl", "", &branch_buffers)),
             leaf: pipeline(dev, &spec("leaf.wgsl", "fs_shadow", &leaf_buffers)),
-            map: depth(SHADOW_SIZE, "shadow map"),
-            placeholder: depth(1, "no shadow map"),
+            map: depth(SHADOW_SIZE, CASCADES, "shadow map"),
+            placeholder: depth(1, 1, "no shadow map"),
             sampler: dev.create_sampler(&wgpu::SamplerDescriptor {
                 label: Some("shadow"),
                 mag_filter: wgpu::FilterMode::Linear,
@@ -90,7 +101,7 @@ impl ShadowPass {
         (lit, GlobalsBinding { shadow: &self.placeholder, ..lit })
     }
 
-    /// Open the pass drawing into the map (cleared).
+    /// Open the pass drawing into the map (both cascades cleared).
     pub fn begin<'e>(&self, enc: &'e mut wgpu::CommandEncoder) -> wgpu::RenderPass<'e> {
         enc.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("shadow map"),
@@ -109,19 +120,41 @@ impl ShadowPass {
         })
     }
 
-    /// How far along the view the map reaches for `camera`, m: 1.2 × the distance to the
-    /// point looked at, within 40 … 250 m.
+    /// Restrict drawing to cascade `k` (0 near, 1 far) of the map.
+    pub fn viewport(pass: &mut wgpu::RenderPass<'_>, k: u32) {
+        let s = SHADOW_SIZE as f32;
+        pass.set_viewport(k as f32 * s, 0.0, s, s, 0.0, 1.0);
+    }
+
+    /// How far along the view the far cascade reaches for `camera`, m: four times the near
+    /// one, within 160 … 1200 m.
+    pub fn far_reach(camera: &Camera) -> f32 {
+        (4.0 * ShadowPass::reach(camera)).min(1200.0)
+    }
+
+    /// How far along the view the near cascade reaches for `camera`, m: 1.2 × the distance
+    /// to the point looked at, within 40 … 250 m.
     pub fn reach(camera: &Camera) -> f32 {
         let d = (0..3).map(|k| (camera.target[k] - camera.eye[k]).powi(2)).sum::<f32>().sqrt();
         (1.2 * d).clamp(40.0, 250.0)
     }
 
-    /// World → the map's clip space for `camera` (image `aspect`) and the unit direction
-    /// towards the sun: an orthographic view along the sun's rays of the sphere around the
-    /// first [`ShadowPass::reach`] metres of the view, depth reaching 150 m beyond it so
-    /// tall trees outside still cast into it.
+    /// World → the near cascade's clip space for `camera` (image `aspect`) and the unit
+    /// direction towards the sun: an orthographic view along the sun's rays of the sphere
+    /// around the first [`ShadowPass::reach`] metres of the view, depth reaching 150 m
+    /// beyond it so tall trees outside still cast into it.
     pub fn sun_matrix(camera: &Camera, aspect: f32, sun: [f32; 3]) -> [[f32; 4]; 4] {
-        let reach = ShadowPass::reach(camera);
+        ShadowPass::sun_matrix_reaching(camera, aspect, sun, ShadowPass::reach(camera))
+    }
+
+    /// The same for the sphere around the first `reach` metres of the view (the far
+    /// cascade: [`ShadowPass::far_reach`]).
+    pub fn sun_matrix_reaching(
+        camera: &Camera,
+        aspect: f32,
+        sun: [f32; 3],
+        reach: f32,
+    ) -> [[f32; 4]; 4] {
         let dot = |a: [f32; 3], b: [f32; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
         let norm = |a: [f32; 3]| {
             let n = dot(a, a).sqrt().max(1e-9);
@@ -207,5 +240,21 @@ mod tests {
         ]);
         assert!(b[2] < a[2], "towards the sun is nearer: {} vs {}", b[2], a[2]);
         assert!((b[0] - a[0]).abs() < 1e-4 && (b[1] - a[1]).abs() < 1e-4, "along a ray");
+        // The far cascade holds what the near one does and reaches four times as far.
+        let far_reach = ShadowPass::far_reach(&camera);
+        assert_eq!(far_reach, 4.0 * ShadowPass::reach(&camera));
+        let f = ShadowPass::sun_matrix_reaching(&camera, 1.5, sun, far_reach);
+        let fwd = [30.0f32, 20.0, -3.0];
+        let n = (fwd[0] * fwd[0] + fwd[1] * fwd[1] + fwd[2] * fwd[2]).sqrt();
+        let far_point: [f32; 3] =
+            std::array::from_fn(|i| camera.eye[i] + fwd[i] / n * 0.9 * far_reach);
+        for p in [camera.target, camera.eye, far_point] {
+            let c: Vec<f32> = (0..4)
+                .map(|row| f[0][row] * p[0] + f[1][row] * p[1] + f[2][row] * p[2] + f[3][row])
+                .collect();
+            assert!(c[0].abs() < 1.0 && c[1].abs() < 1.0 && (0.0..1.0).contains(&c[2]));
+        }
+        let near_far = apply(far_point);
+        assert!(near_far[0].abs() > 1.0 || near_far[1].abs() > 1.0, "beyond the near cascade");
     }
 }
