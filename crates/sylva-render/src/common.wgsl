@@ -174,11 +174,17 @@ fn overlay(lit: vec3<f32>, tag: u32) -> vec3<f32> {
     }
     var c: vec3<f32>;
     if (globals.overlay < 1.5) {
-        let levels = array<vec3<f32>, 8>(
-            vec3<f32>(1.0, 1.0, 1.0), vec3<f32>(1.0, 0.9, 0.2), vec3<f32>(1.0, 0.55, 0.1),
-            vec3<f32>(0.95, 0.15, 0.1), vec3<f32>(0.85, 0.2, 0.85), vec3<f32>(0.25, 0.35, 1.0),
-            vec3<f32>(0.6, 0.6, 0.6), vec3<f32>(0.1, 0.9, 0.9));
-        c = levels[select(min(tag & 15u, 6u), 7u, (tag & 15u) == 15u)];
+        // A chain of selects, not an indexed array (which a CPU rasteriser keeps in memory
+        // for every pixel).
+        let l = tag & 15u;
+        c = vec3<f32>(0.6, 0.6, 0.6);
+        c = select(c, vec3<f32>(0.25, 0.35, 1.0), l == 5u);
+        c = select(c, vec3<f32>(0.85, 0.2, 0.85), l == 4u);
+        c = select(c, vec3<f32>(0.95, 0.15, 0.1), l == 3u);
+        c = select(c, vec3<f32>(1.0, 0.55, 0.1), l == 2u);
+        c = select(c, vec3<f32>(1.0, 0.9, 0.2), l == 1u);
+        c = select(c, vec3<f32>(1.0, 1.0, 1.0), l == 0u);
+        c = select(c, vec3<f32>(0.1, 0.9, 0.9), l == 15u);
     } else {
         var h = (tag >> 4u) * 2654435761u;
         h = h ^ (h >> 15u);
