@@ -367,3 +367,46 @@ fn groups_form_by_distance_and_regrouping_cross_fades_instead_of_jumping() {
     }
     assert!(changed > 0, "back at the first corner, trees changed group");
 }
+
+#[test]
+fn draws_go_finest_level_first_and_nearest_tree_first_within_each() {
+    // Drawn in this order, the near crowns fill the depth buffer before the trees they
+    // hide, whose fragments the depth test then rejects unshaded.
+    let spec = SceneSpec::builtin("A").expect("A");
+    let forest = Forest::new(&spec).expect("forest");
+    let distance =
+        |cam: &Camera, p: [f32; 3]| (0..3).map(|k| (p[k] - cam.eye[k]).powi(2)).sum::<f32>().sqrt();
+    let check = |cam: &Camera, f: &FrameData| {
+        assert!(f.buckets.len() > 2, "several levels and species");
+        let key = |b: &sylva_forest::Bucket| (b.lod, b.species);
+        assert!(f.buckets.windows(2).all(|w| key(&w[0]) < key(&w[1])), "(level, species) order");
+        for b in &f.buckets {
+            let d: Vec<f32> = f.instances[b.first as usize..(b.first + b.count) as usize]
+                .iter()
+                .map(|i| distance(cam, i.position))
+                .collect();
+            // Sorted where the view was last sorted: at most ORDER_TRAVEL out of order.
+            let slack = 2.0 * sylva_forest::ORDER_TRAVEL;
+            assert!(d.windows(2).all(|w| w[0] <= w[1] + slack), "nearest first: {d:?}");
+        }
+    };
+    let mut cam = forest.default_camera();
+    let mut f = FrameData::default();
+    forest.frame(&cam, 4.0 / 3.0, &mut f);
+    check(&cam, &f);
+    let exact = f.buckets.iter().all(|b| {
+        let d: Vec<f32> = f.instances[b.first as usize..(b.first + b.count) as usize]
+            .iter()
+            .map(|i| distance(&cam, i.position))
+            .collect();
+        d.windows(2).all(|w| w[0] <= w[1] + 0.1)
+    });
+    assert!(exact, "sorted to the decimetre for this very camera on the first frame");
+    // Walking 60 m across the forest re-sorts on the way.
+    for _ in 0..60 {
+        cam.eye[0] += 1.0;
+        cam.target[0] += 1.0;
+        forest.frame(&cam, 4.0 / 3.0, &mut f);
+        check(&cam, &f);
+    }
+}

@@ -89,17 +89,42 @@ fn sun_visibility(world: vec3<f32>, normal: vec3<f32>) -> f32 {
     if (globals.shadow_texel <= 0.0) {
         return 1.0;
     }
-    // Offset along the normal by about a texel against self-shadowing.
-    let f = globals.sun_view_proj_far * vec4<f32>(world + normal * 0.25, 1.0);
+    return cascades_visibility(shadow_near(world, normal), shadow_far(world, normal), false);
+}
+
+// `world` in the near and far cascades' clip spaces, offset along the normal by about a
+// texel against self-shadowing. The sun's projection is orthographic, so these are affine
+// in `world`: a vertex shader may compute them and let the rasteriser interpolate.
+fn shadow_near(world: vec3<f32>, normal: vec3<f32>) -> vec4<f32> {
+    return globals.sun_view_proj * vec4<f32>(world + normal * 0.06, 1.0);
+}
+
+fn shadow_far(world: vec3<f32>, normal: vec3<f32>) -> vec4<f32> {
+    return globals.sun_view_proj_far * vec4<f32>(world + normal * 0.25, 1.0);
+}
+
+// `sun_visibility` from the point's positions in the two cascades; `single` reads one
+// bilinear comparison (2 x 2 texels) per cascade instead of four.
+fn cascades_visibility(p: vec4<f32>, f: vec4<f32>, single: bool) -> f32 {
+    if (globals.shadow_texel <= 0.0) {
+        return 1.0;
+    }
     var far = 1.0;
     if (in_cascade(f)) {
-        far = mix(cascade_visibility(f, 0.5), 1.0, smoothstep(0.9, 1.0, max(abs(f.x), abs(f.y))));
+        far = mix(cascade_lookup(f, 0.5, single), 1.0, smoothstep(0.9, 1.0, max(abs(f.x), abs(f.y))));
     }
-    let p = globals.sun_view_proj * vec4<f32>(world + normal * 0.06, 1.0);
     if (!in_cascade(p)) {
         return far;
     }
-    return mix(cascade_visibility(p, 0.0), far, smoothstep(0.8, 1.0, max(abs(p.x), abs(p.y))));
+    return mix(cascade_lookup(p, 0.0, single), far, smoothstep(0.8, 1.0, max(abs(p.x), abs(p.y))));
+}
+
+fn cascade_lookup(p: vec4<f32>, half: f32, single: bool) -> f32 {
+    if (single) {
+        let uv = vec2<f32>(0.25 + 0.25 * p.x + half, 0.5 - 0.5 * p.y);
+        return textureSampleCompareLevel(shadow_map, shadow_sampler, uv, p.z);
+    }
+    return cascade_visibility(p, half);
 }
 
 // Filmic tone map of linear HDR colour (Narkowicz's fit of the ACES curve, 2015), after
@@ -162,6 +187,8 @@ struct TreeOut {
     @location(5) @interpolate(flat) tint: vec3<f32>,
     // The instance's overlay tag.
     @location(6) @interpolate(flat) tag: u32,
+    // Aerial perspective at the vertex (`fog_at`; not in the shadow pass).
+    @location(7) fog: vec4<f32>,
 };
 
 // The colour overlay (the viewer's): a lit colour tinted by the draw's geometry level
@@ -249,10 +276,21 @@ fn sky_colour(dir: vec3<f32>) -> vec3<f32> {
 // Aerial perspective: with distance the colour goes over to the sky's colour in that
 // direction (exponential in distance), so the far ground meets the sky without a line.
 fn apply_fog(colour: vec3<f32>, world: vec3<f32>) -> vec3<f32> {
+    return mix_fog(colour, fog_at(world));
+}
+
+// The aerial perspective at `world`: the sky's colour in that direction (rgb) and how much
+// of it covers the surface (a). Smooth over a triangle, so vertex shaders compute it once
+// per vertex and fragments only mix (`mix_fog`).
+fn fog_at(world: vec3<f32>) -> vec4<f32> {
     let d = distance(world, globals.eye);
     let f = 1.0 - exp(-globals.fog_density * d);
     let dir = (world - globals.eye) / max(d, 1e-3);
-    return mix(colour, sky_dome(dir), clamp(f, 0.0, 1.0));
+    return vec4<f32>(sky_dome(dir), clamp(f, 0.0, 1.0));
+}
+
+fn mix_fog(colour: vec3<f32>, fog: vec4<f32>) -> vec3<f32> {
+    return mix(colour, fog.rgb, fog.a);
 }
 
 // Ambient from the sky plus one directional light, `sun` the share of it reaching here.

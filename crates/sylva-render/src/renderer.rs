@@ -371,16 +371,18 @@ impl Renderer {
         let mut enc =
             dev.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
         if shadows {
-            // The sun's shadow map: every tree casts, meshes and impostors, into each
-            // cascade (the far one with meshes one level coarser again).
+            // The sun's shadow map: every tree casts into each cascade, into the near one
+            // as drawn (meshes a level coarser, and impostors), into the far one as an
+            // impostor: its texels span metres, and it shades only beyond the near one's
+            // reach, where the trees are small.
             let mut pass = self.shadow.begin(&mut enc);
-            for (k, windows) in [(0, &self.shadow_windows), (1, &self.shadow_windows_far)] {
-                ShadowPass::viewport(&mut pass, k);
-                pass.set_vertex_buffer(1, self.instances.slice(..));
-                let casters = [&self.shadow.branch, &self.shadow.leaf];
-                self.draw_trees(&mut pass, frame, casters, Some((windows, k as usize)));
-                self.draw_impostors(&mut pass, frame, windows, true);
-            }
+            ShadowPass::viewport(&mut pass, 0);
+            pass.set_vertex_buffer(1, self.instances.slice(..));
+            let casters = [&self.shadow.branch, &self.shadow.leaf];
+            self.draw_trees(&mut pass, frame, casters, Some(&self.shadow_windows));
+            self.draw_impostors(&mut pass, frame, &self.shadow_windows, Casting::AsDrawn);
+            ShadowPass::viewport(&mut pass, 1);
+            self.draw_impostors(&mut pass, frame, &self.shadow_windows_far, Casting::Every);
         }
         {
             let (view, resolve) = match &self.msaa {
@@ -408,33 +410,44 @@ impl Renderer {
             self.ground.draw(&mut pass);
             pass.set_vertex_buffer(1, self.instances.slice(..));
             self.draw_trees(&mut pass, frame, [&self.branch.draw, &self.leaf.draw], None);
-            self.draw_impostors(&mut pass, frame, &self.windows, false);
+            self.draw_impostors(&mut pass, frame, &self.windows, Casting::No);
         }
         gpu.queue.submit([enc.finish()]);
     }
 }
 
+/// Which trees [`Renderer::draw_impostors`] draws.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Casting {
+    /// The impostors, into the image.
+    No,
+    /// The impostors, into the shadow map.
+    AsDrawn,
+    /// Every tree as its impostor, into the shadow map.
+    Every,
+}
+
 impl Renderer {
     /// Draw the impostors (buckets one past their species' last mesh level) through
-    /// `windows`: the frame's, or (`shadow`) a cascade's, into the shadow map, turned to
+    /// `windows`: the frame's, or (casting) a cascade's, into the shadow map, turned to
     /// the sun.
     fn draw_impostors(
         &self,
         pass: &mut wgpu::RenderPass<'_>,
         frame: &FrameData,
         windows: &[wgpu::BindGroup],
-        shadow: bool,
+        casting: Casting,
     ) {
         pass.set_vertex_buffer(0, self.instances.slice(..));
-        if shadow {
-            self.far.begin_shadow(pass)
-        } else {
+        if casting == Casting::No {
             self.far.begin(pass)
+        } else {
+            self.far.begin_shadow(pass)
         }
         for &(bucket, window, first, count) in &self.draws {
             let b = &frame.buckets[bucket];
             let Some(sp) = self.species.get(b.species as usize) else { continue };
-            if b.lod as usize == sp.lods.len() {
+            if b.lod as usize == sp.lods.len() || casting == Casting::Every {
                 pass.set_bind_group(0, &windows[window], &[]);
                 self.far.draw(pass, &sp.far, first..first + count);
             }
@@ -451,17 +464,16 @@ impl Renderer {
         pass: &mut wgpu::RenderPass<'_>,
         frame: &FrameData,
         pipelines: [&wgpu::RenderPipeline; 2],
-        shadow: Option<(&Vec<wgpu::BindGroup>, usize)>,
+        shadow: Option<&Vec<wgpu::BindGroup>>,
     ) {
-        let windows = shadow.map_or(&self.windows, |s| s.0);
+        let windows = shadow.unwrap_or(&self.windows);
         for (pipeline, leaves) in [(pipelines[0], false), (pipelines[1], true)] {
             pass.set_pipeline(pipeline);
             for &(bucket, window, first, count) in &self.draws {
                 let b = &frame.buckets[bucket];
                 let Some(sp) = self.species.get(b.species as usize) else { continue };
-                let level = if let Some((_, cascade)) = shadow {
-                    let coarser = SHADOW_COARSER + cascade;
-                    (b.lod as usize + coarser).min(sp.lods.len().saturating_sub(1))
+                let level = if shadow.is_some() {
+                    (b.lod as usize + SHADOW_COARSER).min(sp.lods.len().saturating_sub(1))
                 } else {
                     b.lod as usize
                 };

@@ -33,6 +33,9 @@ fn vs_main(v: BranchIn, inst: InstanceIn) -> TreeOut {
     out.exposure = 1.0;
     out.tint = vec3<f32>(1.0);
     out.tag = inst.tag;
+    if (!SHADOW) {
+        out.fog = fog_at(world);
+    }
     return out;
 }
 
@@ -44,7 +47,7 @@ fn fs_main(in: TreeOut) -> @location(0) vec4<f32> {
     let albedo = textureSample(bark_texture, linear_sampler, in.uv).rgb;
     let n = normalize(in.normal);
     let lit = albedo * lighting(n, sun_visibility(in.world, n));
-    return finish(apply_fog(overlay(lit, in.tag), in.world));
+    return finish(mix_fog(overlay(lit, in.tag), in.fog));
 }
 
 @fragment

@@ -55,7 +55,11 @@ pub fn mesh(gpu: &Gpu, lod: &TreeLod, cells: u32) -> Option<Mesh> {
     let uv_size = 1.0 / cells as f32;
     let mut verts = Vec::with_capacity(4 * lod.clusters.len());
     let mut indices: Vec<u32> = Vec::with_capacity(6 * lod.clusters.len());
-    for c in &lod.clusters {
+    // Outer clusters first: whichever side the crown is seen from, its surface is then
+    // drawn before the clusters it hides, which the depth test rejects before shading.
+    let mut order: Vec<&_> = lod.clusters.iter().collect();
+    order.sort_by(|a, b| b.exposure.total_cmp(&a.exposure));
+    for c in order {
         let first = verts.len() as u32;
         let cell = c.atlas % (cells * cells);
         let uv_origin = [(cell % cells) as f32 * uv_size, (cell / cells) as f32 * uv_size];

@@ -24,15 +24,35 @@ struct LeafIn {
 // How far a card turns towards the viewer: its normal moves to normalize(n + TURN * view).
 const TURN: f32 = 0.8;
 
-// Rotate v about the unit axis k by angle a (Rodrigues).
-fn rotate_axis(v: vec3<f32>, k: vec3<f32>, a: f32) -> vec3<f32> {
-    let c = cos(a);
-    let s = sin(a);
+// Rotate v about the unit axis k by the angle whose cosine is c and sine s (Rodrigues).
+fn rotate_axis(v: vec3<f32>, k: vec3<f32>, c: f32, s: f32) -> vec3<f32> {
     return v * c + cross(k, v) * s + k * dot(k, v) * (1.0 - c);
 }
 
+// What a card's fragments need: TreeOut's fields, and the light that is the same across the
+// card (its normal, depth in the crown and tint are), computed once per vertex instead of
+// once per fragment of a dense, overdrawn crown.
+struct LeafOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) world: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) uv: vec2<f32>,
+    @location(3) @interpolate(flat) fade: vec2<f32>,
+    @location(4) @interpolate(flat) exposure: f32,
+    @location(6) @interpolate(flat) tag: u32,
+    // Sky light (times tint and crown occlusion), and the sun's share when fully lit
+    // (direct and through the leaf), so a fragment's light is ambient + sun * visibility.
+    @location(7) @interpolate(flat) ambient: vec3<f32>,
+    @location(8) @interpolate(flat) sun: vec3<f32>,
+    // Aerial perspective at the card (fog_at).
+    @location(9) @interpolate(flat) fog: vec4<f32>,
+    // The point in the shadow cascades (shadow_near, shadow_far).
+    @location(10) shadow_near: vec4<f32>,
+    @location(11) shadow_far: vec4<f32>,
+};
+
 @vertex
-fn vs_main(v: LeafIn, inst: InstanceIn) -> TreeOut {
+fn vs_main(v: LeafIn, inst: InstanceIn) -> LeafOut {
     let swing = inst.leaf.y * sin(inst.leaf.x + v.phase);
     let offset = v.center - v.hang;
     var axis = cross(offset, vec3<f32>(0.0, 0.0, 1.0));
@@ -40,11 +60,13 @@ fn vs_main(v: LeafIn, inst: InstanceIn) -> TreeOut {
         axis = vec3<f32>(1.0, 0.0, 0.0);
     }
     let k = normalize(axis);
-    let swung = v.hang + rotate_axis(offset, k, swing);
+    let cs = cos(swing);
+    let sn = sin(swing);
+    let swung = v.hang + rotate_axis(offset, k, cs, sn);
     let m = palette(inst.palette, v.joint);
     let c = tree_to_world(palette_apply(m, swung), inst.base, inst.scale);
-    var r = rotate_z(palette_rotate(m, rotate_axis(v.right, k, swing)), inst.base.w) * inst.scale;
-    var u = rotate_z(palette_rotate(m, rotate_axis(v.up, k, swing)), inst.base.w) * inst.scale;
+    var r = rotate_z(palette_rotate(m, rotate_axis(v.right, k, cs, sn)), inst.base.w) * inst.scale;
+    var u = rotate_z(palette_rotate(m, rotate_axis(v.up, k, cs, sn)), inst.base.w) * inst.scale;
     // Turn the card towards the viewer about the axis between its normal and the new one.
     let n = normalize(cross(r, u));
     let view = towards_viewer(c);
@@ -53,48 +75,56 @@ fn vs_main(v: LeafIn, inst: InstanceIn) -> TreeOut {
     let turn_axis = cross(ns, nt);
     let s = length(turn_axis);
     if (s > 1e-5) {
-        let a = atan2(s, dot(ns, nt));
-        r = rotate_axis(r, turn_axis / s, a);
-        u = rotate_axis(u, turn_axis / s, a);
+        // Both unit vectors: the turn's sine is |ns x nt|, its cosine ns . nt.
+        let c = dot(ns, nt);
+        r = rotate_axis(r, turn_axis / s, c, s);
+        u = rotate_axis(u, turn_axis / s, c, s);
     }
     let world = c + r * v.corner.x + u * v.corner.y;
-    var out: TreeOut;
+    var out: LeafOut;
     out.clip = project(world);
     out.world = world;
     // Shade by the card's own normal (out of the crown), whichever side is seen.
-    out.normal = n;
+    out.normal = unit_or_up(n);
     out.uv = v.uv_origin + vec2<f32>(v.corner.x + 0.5, 0.5 - v.corner.y) * v.uv_size;
     out.fade = inst.fade;
     out.exposure = v.exposure;
-    out.tint = tree_tint(inst.base);
     out.tag = inst.tag;
+    if (!SHADOW) {
+        let tint = tree_tint(inst.base) * foliage_occlusion(v.exposure);
+        out.ambient = tint * lighting(out.normal, 0.0);
+        out.sun = tint * (lighting(out.normal, 1.0) - lighting(out.normal, 0.0))
+            + tree_tint(inst.base) * translucency(world);
+        out.fog = fog_at(world);
+        out.shadow_near = shadow_near(world, out.normal);
+        out.shadow_far = shadow_far(world, out.normal);
+    }
     return out;
 }
 
-fn leaf_normal(in: TreeOut) -> vec3<f32> {
-    var n = in.normal;
+fn unit_or_up(n: vec3<f32>) -> vec3<f32> {
     if (dot(n, n) < 1e-12) {
-        n = vec3<f32>(0.0, 0.0, 1.0);
+        return vec3<f32>(0.0, 0.0, 1.0);
     }
     return normalize(n);
 }
 
 @fragment
-fn fs_main(in: TreeOut) -> @location(0) vec4<f32> {
+fn fs_main(in: LeafOut) -> @location(0) vec4<f32> {
     let t = textureSample(leaf_texture, linear_sampler, in.uv);
     if (t.a < 0.5 || !dither_keeps(in.clip.xy, in.fade)) {
         discard;
     }
-    let n = leaf_normal(in);
-    let sun = sun_visibility(in.world, n);
-    let light = lighting(n, sun) * foliage_occlusion(in.exposure);
-    let lit = t.rgb * in.tint * (light + sun * translucency(in.world));
-    return finish(apply_fog(overlay(lit, in.tag), in.world));
+    // One bilinear comparison per cascade: a leaf is small and the crown busy enough that
+    // the wider filter of bark and ground shows no difference, at a quarter of the reads.
+    let sun = cascades_visibility(in.shadow_near, in.shadow_far, true);
+    let lit = t.rgb * (in.ambient + sun * in.sun);
+    return finish(mix_fog(overlay(lit, in.tag), in.fog));
 }
 
 // The shadow pass: only the alpha test, so light passes between the leaves.
 @fragment
-fn fs_shadow(in: TreeOut) {
+fn fs_shadow(in: LeafOut) {
     let t = textureSample(leaf_texture, linear_sampler, in.uv);
     if (t.a < 0.5) {
         discard;
@@ -102,7 +132,7 @@ fn fs_shadow(in: TreeOut) {
 }
 
 @fragment
-fn fs_bake(in: TreeOut) -> BakeOut {
+fn fs_bake(in: LeafOut) -> BakeOut {
     let t = textureSample(leaf_texture, linear_sampler, in.uv);
     if (t.a < 0.5) {
         discard;
@@ -111,6 +141,6 @@ fn fs_bake(in: TreeOut) -> BakeOut {
     // The crown's inner darkening goes into the albedo the impostor shows.
     out.albedo = vec4<f32>(t.rgb * foliage_occlusion(in.exposure), 1.0);
     // Alpha 1: leaves (thin: some sun shows through).
-    out.normal = vec4<f32>(leaf_normal(in) * 0.5 + 0.5, 1.0);
+    out.normal = vec4<f32>(in.normal * 0.5 + 0.5, 1.0);
     return out;
 }
