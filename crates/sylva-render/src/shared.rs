@@ -281,7 +281,8 @@ pub struct PipelineSpec<'a> {
     pub layout: &'a wgpu::PipelineLayout,
     /// Vertex buffers.
     pub buffers: &'a [Option<wgpu::VertexBufferLayout<'a>>],
-    /// Depth test and write (else: always passes, no write).
+    /// Depth test (less) and write; else tested (less or equal) without writing: the sky,
+    /// at the far plane, drawn last, shades only the pixels nothing else covers.
     pub depth: bool,
     /// Back-face culling.
     pub cull: Option<wgpu::Face>,
@@ -332,7 +333,7 @@ pub fn pipeline(dev: &wgpu::Device, spec: &PipelineSpec<'_>) -> wgpu::RenderPipe
             depth_compare: Some(if spec.depth {
                 wgpu::CompareFunction::Less
             } else {
-                wgpu::CompareFunction::Always
+                wgpu::CompareFunction::LessEqual
             }),
             stencil: Default::default(),
             bias,

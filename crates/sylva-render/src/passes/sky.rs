@@ -1,5 +1,6 @@
 //! Sky: one full-screen triangle, a gradient from horizon to zenith with the sun's glow
-//! (`sky.wgsl`). Drawn first, without depth writes.
+//! (`sky.wgsl`). Drawn last, at the far plane and without depth writes, so only the pixels
+//! no tree or ground covers run its shader.
 
 use crate::shared::{PipelineSpec, pipeline};
 

@@ -9,7 +9,8 @@ struct SkyOut {
 fn vs_main(@builtin(vertex_index) i: u32) -> SkyOut {
     let xy = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u)) * 2.0 - 1.0;
     var out: SkyOut;
-    out.clip = vec4<f32>(xy, 0.0, 1.0);
+    // At the far plane (depth 1): drawn last, it fills what nothing nearer covers.
+    out.clip = vec4<f32>(xy, 1.0, 1.0);
     out.ndc = xy;
     return out;
 }
