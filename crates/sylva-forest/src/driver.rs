@@ -155,11 +155,6 @@ pub const REGROUP_FADE: f32 = 1.0;
 /// Camera travel, m, after which instance groups are formed again for the new viewpoint.
 pub const REGROUP_TRAVEL: f32 = 2.0;
 
-/// How far (m) the camera moves before a view's trees are sorted by distance again. The
-/// order only steers the depth test (see [`FrameData::buckets`]); a few metres' travel
-/// changes it little among trees several metres apart.
-pub const ORDER_TRAVEL: f32 = 4.0;
-
 /// Pyramid level the wind of far groups is read from: averages of 4 × 4 grid points.
 pub const FAR_WIND_LEVEL: usize = 2;
 
@@ -263,9 +258,9 @@ pub struct FrameData {
     pub time: f64,
     /// Instances, grouped by bucket.
     pub instances: Vec<Instance>,
-    /// Buckets in (LOD, species) order, and within each the trees nearest the camera
-    /// first: drawn in this order, near crowns fill the depth buffer before the ones they
-    /// hide, whose fragments the depth test then rejects before shading.
+    /// Buckets in (LOD, species) order, and within each bucket of meshes the trees nearest
+    /// the camera first: drawn in this order, near crowns fill the depth buffer before the
+    /// ones they hide, whose fragments the depth test then rejects before shading.
     pub buckets: Vec<Bucket>,
     /// Joint palettes the drawn trees use (3×4 row-major, rest → animated, tree space), as
     /// the simulation computes them: per lane group of up to 16 simulated instances, per
@@ -285,12 +280,6 @@ pub struct FrameData {
     sorted: Vec<(u32, u32)>,
     /// Per tree: continuous level after hysteresis (NaN: not seen yet).
     lod_state: Vec<f32>,
-    /// Tree indices nearest first from `order_eye`, re-sorted when the camera has moved
-    /// [`ORDER_TRAVEL`] from there.
-    order: Vec<u32>,
-    order_eye: [f32; 3],
-    /// Per tree: its sort key (distance, dm).
-    order_keys: Vec<u16>,
     /// Per lane group (all species in a row): joints to upload (a prefix; 0: not drawn).
     upload: Vec<u32>,
     /// Per lane group: joints the next step is to simulate.
@@ -911,44 +900,7 @@ impl Forest {
         let mut stats = FrameStats { trees: self.trees.len(), ..FrameStats::default() };
         let cone = camera.cone(aspect);
         let n_species = self.species.len().max(1) as u32;
-        let eye = camera.eye;
-        let moved = (0..3).map(|k| (eye[k] - out.order_eye[k]).powi(2)).sum::<f32>();
-        if out.order.len() != self.trees.len() || moved >= ORDER_TRAVEL * ORDER_TRAVEL {
-            // Distance in decimetres (to 6.5 km) as the key of a two-pass radix sort: stable,
-            // so equal keys keep the trees' order, and linear in the trees.
-            out.order_keys.clear();
-            out.order_keys.extend(self.trees.iter().map(|(p, _)| {
-                let d = (0..3).map(|k| (p.position[k] - eye[k]).powi(2)).sum::<f32>().sqrt();
-                (d * 10.0).min(65535.0) as u16
-            }));
-            let keys = &out.order_keys;
-            out.order.clear();
-            out.order.extend(0..self.trees.len() as u32);
-            out.sorted.clear();
-            out.sorted.resize(out.order.len(), (0, 0));
-            for shift in [0, 8] {
-                let digit = |t: u32| ((keys[t as usize] >> shift) & 0xff) as usize;
-                let mut at = [0u32; 257];
-                for &t in &out.order {
-                    at[digit(t) + 1] += 1;
-                }
-                for d in 0..256 {
-                    at[d + 1] += at[d];
-                }
-                for &t in &out.order {
-                    let slot = &mut at[digit(t)];
-                    out.sorted[*slot as usize].1 = t;
-                    *slot += 1;
-                }
-                for (o, s) in out.order.iter_mut().zip(&out.sorted) {
-                    *o = s.1;
-                }
-            }
-            out.order_eye = eye;
-        }
-        for &t in &out.order {
-            let i = t as usize;
-            let (p, g) = &self.trees[i];
+        for (i, (p, g)) in self.trees.iter().enumerate() {
             let sp = &self.species[p.species as usize];
             let h = sp.model.tree.stats.height * p.scale;
             let c = [p.position[0], p.position[1], p.position[2] + 0.5 * h];
@@ -992,8 +944,8 @@ impl Forest {
             stats.fading += (a != b) as usize;
             stats.impostors += (lod.geometry && b >= lod.far_level.min(chain)) as usize;
         }
-        // Into (level, species) order, trees nearest first within each: a stable counting
-        // sort, the keys being few (levels × species).
+        // Into (level, species) order, trees in order within each: a counting sort, the
+        // keys being few (levels × species).
         out.counts.clear();
         for &(key, _) in &out.keys {
             let k = key as usize;
@@ -1014,6 +966,24 @@ impl Forest {
             *slot += 1;
         }
         std::mem::swap(&mut out.keys, &mut out.sorted);
+        // Within each bucket drawn as meshes, the trees nearest the camera first (the
+        // impostors, two triangles each, are left in tree order).
+        let mut run = 0;
+        while run < out.keys.len() {
+            let key = out.keys[run].0;
+            let end = run + out.keys[run..].iter().take_while(|k| k.0 == key).count();
+            let (species, level) = (key % n_species, key / n_species);
+            let chain = self.species[species as usize].model.lods.len() as u32;
+            if !(lod.geometry && level >= lod.far_level.min(chain)) {
+                let eye = camera.eye;
+                out.keys[run..end].sort_by_cached_key(|&(_, tagged)| {
+                    let p = self.trees[(tagged & !(1 << 31)) as usize].0.position;
+                    // Squared distances are non-negative: their bits order as they do.
+                    (0..3).map(|k| (p[k] - eye[k]).powi(2)).sum::<f32>().to_bits()
+                });
+            }
+            run = end;
+        }
         // Palettes of the lane groups that are drawn: the prefix of joints their finest
         // drawn level uses (a contiguous run: the batch lays palettes out joint-major).
         out.palettes.clear();

@@ -14,9 +14,8 @@ pub mod scene;
 
 pub use camera::{Camera, Mat4, ViewCone};
 pub use driver::{
-    Bucket, Forest, ForestError, FrameData, FrameStats, Instance, LodSettings, ORDER_TRAVEL,
-    REGROUP_FADE, REGROUP_TRAVEL, SpeciesRuntime, TreeInfo, blend_levels, hysteresis,
-    lod_coordinate, wind_field,
+    Bucket, Forest, ForestError, FrameData, FrameStats, Instance, LodSettings, REGROUP_FADE,
+    REGROUP_TRAVEL, SpeciesRuntime, TreeInfo, blend_levels, hysteresis, lod_coordinate, wind_field,
 };
 pub use scene::{
     CameraKey, Lighting, LodSpec, Placement, SCENES, SceneError, SceneSpec, SpeciesShare,

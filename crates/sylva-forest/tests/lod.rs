@@ -374,39 +374,29 @@ fn draws_go_finest_level_first_and_nearest_tree_first_within_each() {
     // hide, whose fragments the depth test then rejects unshaded.
     let spec = SceneSpec::builtin("A").expect("A");
     let forest = Forest::new(&spec).expect("forest");
-    let distance =
-        |cam: &Camera, p: [f32; 3]| (0..3).map(|k| (p[k] - cam.eye[k]).powi(2)).sum::<f32>().sqrt();
-    let check = |cam: &Camera, f: &FrameData| {
+    let mut cam = forest.default_camera();
+    let mut f = FrameData::default();
+    // Along a walk across the forest, and from every frame's own camera.
+    for step in 0..12 {
+        cam.eye[0] += 5.0;
+        cam.target[0] += 5.0;
+        forest.frame(&cam, 4.0 / 3.0, &mut f);
         assert!(f.buckets.len() > 2, "several levels and species");
         let key = |b: &sylva_forest::Bucket| (b.lod, b.species);
         assert!(f.buckets.windows(2).all(|w| key(&w[0]) < key(&w[1])), "(level, species) order");
+        let mut meshes = 0;
         for b in &f.buckets {
+            let chain = forest.species[b.species as usize].model.lods.len() as u32;
+            if b.lod >= chain {
+                continue; // impostors: two triangles a tree, in tree order
+            }
             let d: Vec<f32> = f.instances[b.first as usize..(b.first + b.count) as usize]
                 .iter()
-                .map(|i| distance(cam, i.position))
+                .map(|i| (0..3).map(|k| (i.position[k] - cam.eye[k]).powi(2)).sum::<f32>())
                 .collect();
-            // Sorted where the view was last sorted: at most ORDER_TRAVEL out of order.
-            let slack = 2.0 * sylva_forest::ORDER_TRAVEL;
-            assert!(d.windows(2).all(|w| w[0] <= w[1] + slack), "nearest first: {d:?}");
+            assert!(d.windows(2).all(|w| w[0] <= w[1]), "step {step}: nearest first: {d:?}");
+            meshes += b.count;
         }
-    };
-    let mut cam = forest.default_camera();
-    let mut f = FrameData::default();
-    forest.frame(&cam, 4.0 / 3.0, &mut f);
-    check(&cam, &f);
-    let exact = f.buckets.iter().all(|b| {
-        let d: Vec<f32> = f.instances[b.first as usize..(b.first + b.count) as usize]
-            .iter()
-            .map(|i| distance(&cam, i.position))
-            .collect();
-        d.windows(2).all(|w| w[0] <= w[1] + 0.1)
-    });
-    assert!(exact, "sorted to the decimetre for this very camera on the first frame");
-    // Walking 60 m across the forest re-sorts on the way.
-    for _ in 0..60 {
-        cam.eye[0] += 1.0;
-        cam.target[0] += 1.0;
-        forest.frame(&cam, 4.0 / 3.0, &mut f);
-        check(&cam, &f);
+        assert!(meshes > 10, "meshes drawn: {meshes}");
     }
 }
