@@ -174,23 +174,6 @@ struct InstanceIn {
     @location(9) tag: u32,
 };
 
-// Vertex output of the tree pipelines, and their species textures.
-struct TreeOut {
-    @builtin(position) clip: vec4<f32>,
-    @location(0) world: vec3<f32>,
-    @location(1) normal: vec3<f32>,
-    @location(2) uv: vec2<f32>,
-    @location(3) @interpolate(flat) fade: vec2<f32>,
-    // Leaves: 1 at the crown's surface … 0 at its centre (1 for bark).
-    @location(4) exposure: f32,
-    // Leaves: this tree's colour variation (1 for bark).
-    @location(5) @interpolate(flat) tint: vec3<f32>,
-    // The instance's overlay tag.
-    @location(6) @interpolate(flat) tag: u32,
-    // Aerial perspective at the vertex (`fog_at`; not in the shadow pass).
-    @location(7) fog: vec4<f32>,
-};
-
 // The colour overlay (the viewer's): a lit colour tinted by the draw's geometry level
 // (full detail white, then yellow, orange, red, magenta, blue; impostors, tagged 15, cyan)
 // or by its
@@ -245,6 +228,7 @@ fn dither_keeps(pixel: vec2<f32>, fade: vec2<f32>) -> bool {
     return d >= fade.x && d < fade.y;
 }
 
+// The tree pipelines' species textures.
 @group(1) @binding(0) var bark_texture: texture_2d<f32>;
 @group(1) @binding(1) var leaf_texture: texture_2d<f32>;
 

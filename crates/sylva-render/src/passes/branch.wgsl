@@ -11,8 +11,20 @@ struct BranchIn {
     @location(4) weights: vec4<f32>,
 };
 
+struct BranchOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) world: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) uv: vec2<f32>,
+    @location(3) @interpolate(flat) fade: vec2<f32>,
+    // The instance's overlay tag.
+    @location(6) @interpolate(flat) tag: u32,
+    // Aerial perspective at the vertex (`fog_at`; not in the shadow pass).
+    @location(7) fog: vec4<f32>,
+};
+
 @vertex
-fn vs_main(v: BranchIn, inst: InstanceIn) -> TreeOut {
+fn vs_main(v: BranchIn, inst: InstanceIn) -> BranchOut {
     var p = vec3<f32>(0.0);
     var n = vec3<f32>(0.0);
     for (var k = 0u; k < 4u; k = k + 1u) {
@@ -24,14 +36,12 @@ fn vs_main(v: BranchIn, inst: InstanceIn) -> TreeOut {
         }
     }
     let world = tree_to_world(p, inst.base, inst.scale);
-    var out: TreeOut;
+    var out: BranchOut;
     out.clip = project(world);
     out.world = world;
     out.normal = rotate_z(n, inst.base.w);
     out.uv = v.uv;
     out.fade = inst.fade;
-    out.exposure = 1.0;
-    out.tint = vec3<f32>(1.0);
     out.tag = inst.tag;
     if (!SHADOW) {
         out.fog = fog_at(world);
@@ -40,7 +50,7 @@ fn vs_main(v: BranchIn, inst: InstanceIn) -> TreeOut {
 }
 
 @fragment
-fn fs_main(in: TreeOut) -> @location(0) vec4<f32> {
+fn fs_main(in: BranchOut) -> @location(0) vec4<f32> {
     if (!dither_keeps(in.clip.xy, in.fade)) {
         discard;
     }
@@ -51,7 +61,7 @@ fn fs_main(in: TreeOut) -> @location(0) vec4<f32> {
 }
 
 @fragment
-fn fs_bake(in: TreeOut) -> BakeOut {
+fn fs_bake(in: BranchOut) -> BakeOut {
     var out: BakeOut;
     out.albedo = vec4<f32>(textureSample(bark_texture, linear_sampler, in.uv).rgb, 1.0);
     // Alpha 0: bark (no light shows through).

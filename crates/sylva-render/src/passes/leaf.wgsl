@@ -29,12 +29,12 @@ fn rotate_axis(v: vec3<f32>, k: vec3<f32>, c: f32, s: f32) -> vec3<f32> {
     return v * c + cross(k, v) * s + k * dot(k, v) * (1.0 - c);
 }
 
-// What a card's fragments need: TreeOut's fields, and the light that is the same across the
-// card (its normal, depth in the crown and tint are), computed once per vertex instead of
-// once per fragment of a dense, overdrawn crown.
+// What a card's fragments need, with the light that is the same across the card (its
+// normal, depth in the crown and tint are) computed once per vertex instead of once per
+// fragment of a dense, overdrawn crown.
 struct LeafOut {
     @builtin(position) clip: vec4<f32>,
-    @location(0) world: vec3<f32>,
+    // The card's own normal (out of the crown).
     @location(1) normal: vec3<f32>,
     @location(2) uv: vec2<f32>,
     @location(3) @interpolate(flat) fade: vec2<f32>,
@@ -83,7 +83,6 @@ fn vs_main(v: LeafIn, inst: InstanceIn) -> LeafOut {
     let world = c + r * v.corner.x + u * v.corner.y;
     var out: LeafOut;
     out.clip = project(world);
-    out.world = world;
     // Shade by the card's own normal (out of the crown), whichever side is seen.
     out.normal = unit_or_up(n);
     out.uv = v.uv_origin + vec2<f32>(v.corner.x + 0.5, 0.5 - v.corner.y) * v.uv_size;
