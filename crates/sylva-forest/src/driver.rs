@@ -975,12 +975,19 @@ impl Forest {
             let (species, level) = (key % n_species, key / n_species);
             let chain = self.species[species as usize].model.lods.len() as u32;
             if !(lod.geometry && level >= lod.far_level.min(chain)) {
+                // (squared distance, tree) pairs in the scratch left by the counting sort:
+                // no allocation once it has grown. Squared distances are non-negative, so
+                // their bits order as they do; the pairs are distinct, the order total.
                 let eye = camera.eye;
-                out.keys[run..end].sort_by_cached_key(|&(_, tagged)| {
+                out.sorted.clear();
+                out.sorted.extend(out.keys[run..end].iter().map(|&(_, tagged)| {
                     let p = self.trees[(tagged & !(1 << 31)) as usize].0.position;
-                    // Squared distances are non-negative: their bits order as they do.
-                    (0..3).map(|k| (p[k] - eye[k]).powi(2)).sum::<f32>().to_bits()
-                });
+                    ((0..3).map(|k| (p[k] - eye[k]).powi(2)).sum::<f32>().to_bits(), tagged)
+                }));
+                out.sorted.sort_unstable();
+                for (k, &(_, tagged)) in out.keys[run..end].iter_mut().zip(&out.sorted) {
+                    k.1 = tagged;
+                }
             }
             run = end;
         }
