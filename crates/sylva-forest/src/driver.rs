@@ -899,7 +899,14 @@ impl Forest {
         let lod = self.lod;
         let mut stats = FrameStats { trees: self.trees.len(), ..FrameStats::default() };
         let cone = camera.cone(aspect);
+        // Bucket keys: level-major, so the finest levels are drawn first.
         let n_species = self.species.len().max(1) as u32;
+        let split = |key: u32| (key % n_species, key / n_species);
+        // Whether a tree of `species` at `level` is drawn as its impostor.
+        let impostor = |species: u32, level: u32| {
+            let chain = self.species[species as usize].model.lods.len() as u32;
+            lod.geometry && level >= lod.far_level.min(chain)
+        };
         for (i, (p, g)) in self.trees.iter().enumerate() {
             let sp = &self.species[p.species as usize];
             let h = sp.model.tree.stats.height * p.scale;
@@ -972,9 +979,8 @@ impl Forest {
         while run < out.keys.len() {
             let key = out.keys[run].0;
             let end = run + out.keys[run..].iter().take_while(|k| k.0 == key).count();
-            let (species, level) = (key % n_species, key / n_species);
-            let chain = self.species[species as usize].model.lods.len() as u32;
-            if !(lod.geometry && level >= lod.far_level.min(chain)) {
+            let (species, level) = split(key);
+            if !impostor(species, level) {
                 // (squared distance, tree) pairs in the scratch left by the counting sort:
                 // no allocation once it has grown. Squared distances are non-negative, so
                 // their bits order as they do; the pairs are distinct, the order total.
@@ -1036,9 +1042,9 @@ impl Forest {
             };
             let sp = &self.species[p.species as usize];
             let group = &sp.groups[g as usize];
-            let (species, level) = (key % n_species, key / n_species);
+            let (species, level) = split(key);
             let chain = sp.model.lods.len() as u32;
-            let far = lod.geometry && level >= lod.far_level.min(chain);
+            let far = impostor(species, level);
             // Impostors are bucketed as level `chain` (one past the last mesh).
             let bucket_lod = if far { chain } else { level };
             match out.buckets.last_mut() {

@@ -1,5 +1,5 @@
 //! The wgpu renderer: skinned branches, leaf-cluster billboards, impostors for far trees,
-//! ground, sky, one sun, distance fog, 4× MSAA; one instanced draw per (species, LOD)
+//! ground, sky, one sun, distance fog, 4× MSAA; one instanced draw per (LOD, species)
 //! bucket, levels cross-faded by a screen-space dither; headless capture.
 //!
 //! It reads [`sylva_forest::FrameData`] and the tree models, and never calls back into

@@ -90,10 +90,11 @@ fn vs_main(v: LeafIn, inst: InstanceIn) -> LeafOut {
     out.exposure = v.exposure;
     out.tag = inst.tag;
     if (!SHADOW) {
-        let tint = tree_tint(inst.base) * foliage_occlusion(v.exposure);
-        out.ambient = tint * lighting(out.normal, 0.0);
-        out.sun = tint * (lighting(out.normal, 1.0) - lighting(out.normal, 0.0))
-            + tree_tint(inst.base) * translucency(world);
+        let tint = tree_tint(inst.base);
+        let shaded = tint * foliage_occlusion(v.exposure);
+        let sky = lighting(out.normal, 0.0);
+        out.ambient = shaded * sky;
+        out.sun = shaded * (lighting(out.normal, 1.0) - sky) + tint * translucency(world);
         out.fog = fog_at(world);
         out.shadow_near = shadow_near(world, out.normal);
         out.shadow_far = shadow_far(world, out.normal);
