@@ -3,13 +3,14 @@
 
 use sylva_forest::{Forest, FrameData, SceneSpec};
 
-use sylva_testkit::{CountingAllocator, allocations};
+use sylva_testkit::{CountingAllocator, exclusive, allocations};
 
 #[global_allocator]
 static GLOBAL: CountingAllocator = CountingAllocator;
 
 #[test]
 fn steady_state_frames_do_not_allocate() {
+    let _one = exclusive();
     let spec = SceneSpec::builtin("small").expect("small scene");
     let mut forest = Forest::new(&spec).expect("forest");
     let camera = forest.default_camera();

@@ -4,13 +4,14 @@
 use sylva_sway::{SwayBatch, SwayParams, SwaySpecies};
 use sylva_tree::{Joint, NO_PARENT, Skeleton};
 
-use sylva_testkit::{CountingAllocator, allocations};
+use sylva_testkit::{CountingAllocator, exclusive, allocations};
 
 #[global_allocator]
 static GLOBAL: CountingAllocator = CountingAllocator;
 
 #[test]
 fn steady_state_steps_do_not_allocate() {
+    let _one = exclusive();
     let joints: Vec<Joint> = (0..20)
         .map(|i| Joint {
             parent: if i == 0 { NO_PARENT } else { (i - 1) as u32 },

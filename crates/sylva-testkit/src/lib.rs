@@ -3,13 +3,15 @@
 //! - [`CountingAllocator`]: a global allocator that forwards to the system's and counts
 //!   allocation calls, live bytes and the peak, for tests of "does not allocate" and "stays
 //!   within a memory budget". A test binary installs it with
-//!   `#[global_allocator] static A: CountingAllocator = CountingAllocator;`.
+//!   `#[global_allocator] static A: CountingAllocator = CountingAllocator;`. The counters are
+//!   process-wide, so every test of a binary that measures them holds [`exclusive`].
 //! - [`runner`]: a proptest runner with a fixed seed, so property tests draw the same cases
 //!   on every run and machine, and shrink a failure to a minimal case.
 #![warn(missing_docs)]
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Mutex, MutexGuard};
 
 use proptest::test_runner::{Config, RngAlgorithm, RngSeed, TestRunner};
 
@@ -49,9 +51,20 @@ pub fn live_bytes() -> usize {
     LIVE.load(Ordering::Relaxed)
 }
 
+static EXCLUSIVE: Mutex<()> = Mutex::new(());
+
+/// A lock for the tests of one binary: the harness runs tests on parallel threads, and the
+/// counters see every thread's allocations. Each test of a binary that measures
+/// [`peak_during`] or [`allocations`] takes it first (`let _one = exclusive();`), measuring
+/// or not, so no other test allocates while one measures. A test that panicked while
+/// holding it does not block the others.
+pub fn exclusive() -> MutexGuard<'static, ()> {
+    EXCLUSIVE.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
 /// Run `f` and return its result with the peak heap growth while it ran: the most bytes live
-/// at once above what was live before it started. Not meaningful if other threads of the
-/// test binary allocate at the same time (run such tests with one test thread or alone).
+/// at once above what was live before it started. Every thread's allocations count: hold
+/// [`exclusive`] in each test of the binary.
 pub fn peak_during<T>(f: impl FnOnce() -> T) -> (T, usize) {
     let before = LIVE.load(Ordering::Relaxed);
     PEAK.store(before, Ordering::Relaxed);

@@ -6,13 +6,14 @@ use sylva_wind::io::write_zarr_streaming;
 use sylva_wind::synth::streaming_memory_estimate;
 use sylva_wind::{Grid, Method, SynthParams, WindParams};
 
-use sylva_testkit::{CountingAllocator, peak_during};
+use sylva_testkit::{CountingAllocator, exclusive, peak_during};
 
 #[global_allocator]
 static GLOBAL: CountingAllocator = CountingAllocator;
 
 #[test]
 fn a_field_four_times_the_memory_budget_streams_within_it() {
+    let _one = exclusive();
     let budget = 40usize << 20;
     // 512 × 32 points × 3 components × 1024 frames of f32: 201 MB, 4.8× the budget.
     let grid = Grid::regular(512, 32, 4.0, &[20.0], 1024, 0.1);
