@@ -18,9 +18,13 @@
 //! ([`Forest::set_regroup_fade`]),
 //! cross-faded per pixel like a level change, so no tree jumps to its new group's pose.
 //!
-//! **Wind-field LOD.** Besides the instance groups, the field is kept as a mip pyramid;
-//! simulations whose trees are all impostors (or out of view) read level
-//! [`FAR_WIND_LEVEL`] (4 × 4 grid points averaged), the others the full field.
+//! **Wind-field LOD.** Besides the instance groups, the wind has three resolutions. Within
+//! [`NEAR_REACH`] of the camera, a forest whose field is coarser than its tree spacing reads a
+//! fine tile at the tree spacing ([`SceneWind::near`], a [`NearField`]), faded into the
+//! field over the reach's outer quarter; the other simulations read the field itself, and
+//! those whose trees are all impostors (or out of view) its mip pyramid's level
+//! [`FAR_WIND_LEVEL`] (4 × 4 grid points averaged). The tile follows the camera by where it
+//! is read, not by being made again: it is periodic and fixed in the world.
 //!
 //! **Geometry LOD** ([`LodSettings`]). A tree's continuous level is
 //! `x = 1 + log₃(h₀ / h)` (≥ 0; level ⌊x⌋), where `h` is the fraction of the image height its
@@ -49,11 +53,12 @@ use std::time::Instant;
 
 use bytemuck::{Pod, Zeroable};
 use rayon::prelude::*;
+use sylva_core::rng::mix64;
 use sylva_sway::{LANES, LeafParams, LeafSway, PaletteSlot, SwayBatch, SwayParams, SwaySpecies};
 
 use sylva_tree::mesh::{LOD_LEVELS, TreeModel};
 use sylva_tree::{LodOrder, Species, lod_order};
-use sylva_wind::{FieldView, Grid, OwnedPyramid, SynthParams, WindField, WindParams};
+use sylva_wind::{FieldView, Grid, NearField, OwnedPyramid, SynthParams, WindField, WindParams};
 use thiserror::Error;
 
 use crate::camera::Camera;
@@ -243,6 +248,8 @@ pub struct FrameStats {
     pub level_changes: usize,
     /// Simulated instances that read the wind pyramid's coarse level in the last step.
     pub coarse_wind: usize,
+    /// Simulated instances that read the near field (fully or fading) in the last step.
+    pub near_wind: usize,
     /// Bytes of palettes and instances this frame sends to the GPU.
     pub uploaded_bytes: usize,
     /// Instanced draws (per bucket: branches and leaves, or one impostor draw).
@@ -335,6 +342,8 @@ pub struct SpeciesRuntime {
     pub order: LodOrder,
     /// Simulated instances that read the coarse wind in the last step.
     coarse_wind: usize,
+    /// Simulated instances that read the near field in the last step.
+    near_wind: usize,
 }
 
 impl SpeciesRuntime {
@@ -373,6 +382,8 @@ pub struct Forest {
     trees: Vec<(Placement, u32)>,
     /// The wind field and its mip pyramid (the wind-field LOD).
     wind: OwnedPyramid,
+    /// The fine tile read near the camera, where the field is coarser than the trees.
+    near: Option<NearField>,
     leaf_params: LeafParams,
     /// Radius of the forest (trunks), m.
     pub radius: f32,
@@ -546,10 +557,12 @@ impl Forest {
                 lane_base,
                 order,
                 coarse_wind: 0,
+                near_wind: 0,
             });
             lane_base += n_groups.div_ceil(LANES);
         }
-        let wind = OwnedPyramid::new(wind_field(spec, radius)?);
+        let SceneWind { field, near } = wind_field(spec, radius)?;
+        let wind = OwnedPyramid::new(field);
         let n_trees = trees.len();
         Ok(Forest {
             spec: spec.clone(),
@@ -557,6 +570,7 @@ impl Forest {
             species,
             trees,
             wind,
+            near,
             leaf_params: spec.leaves,
             radius,
             time: 0.0,
@@ -686,6 +700,27 @@ impl Forest {
         (xs.len(), spacing)
     }
 
+    /// The near field read around the camera, if the scene's field is coarser than its
+    /// trees (see [`wind_field`]).
+    pub fn near_field(&self) -> Option<&NearField> {
+        self.near.as_ref()
+    }
+
+    /// One line on the wind's resolution: the grid, and the near tile if there is one.
+    pub fn wind_summary(&self) -> String {
+        let (n, dx) = self.wind_grid();
+        let mut line = format!("wind grid {n}×{n} at {dx:.1} m");
+        if let Some(near) = &self.near {
+            line += &format!(
+                ", near tile {m}×{m} at {:.1} m within {:.0} m of the camera",
+                near.spacing(),
+                near.reach(),
+                m = near.points()
+            );
+        }
+        line
+    }
+
     /// Number of trees.
     pub fn trees(&self) -> usize {
         self.trees.len()
@@ -745,8 +780,9 @@ impl Forest {
 
     /// Replace the wind (e.g. one [`wind_field`] synthesised in the background for a changed
     /// scene wind); time, sway state and live controls carry on.
-    pub fn set_wind_field(&mut self, field: WindField) {
-        self.wind = OwnedPyramid::new(field);
+    pub fn set_wind_field(&mut self, wind: SceneWind) {
+        self.wind = OwnedPyramid::new(wind.field);
+        self.near = wind.near;
     }
 
     /// The wind at world point `p` (m) now, as the trees feel it (live controls applied).
@@ -837,7 +873,14 @@ impl Forest {
     }
 
     fn wind_at(&self, p: [f64; 3], t: f64) -> [f32; 3] {
-        sample_wind(self.wind.level(0), self.gain, self.turn, p, t)
+        let w = wind_near(self.wind.level(0), self.near.as_ref(), self.near_centre(), p, t).0;
+        steer(w, self.gain, self.turn)
+    }
+
+    /// Where the near field is centred: the last frame's camera (before any frame, the
+    /// camera the groups were formed for).
+    fn near_centre(&self) -> [f32; 3] {
+        self.eye.lock().unwrap_or_else(|e| e.into_inner()).unwrap_or(self.grouped.0)
     }
 
     /// Advance the simulation by `dt` seconds (> 0; others are ignored).
@@ -851,6 +894,7 @@ impl Forest {
         let t = self.time;
         let leaf = self.leaf_params;
         let (pyramid, gain, turn) = (&self.wind, self.gain, self.turn);
+        let (near, centre) = (self.near.as_ref(), self.near_centre());
         let (simulate, animation) = (&self.simulate, self.lod.animation);
         let coarse_levels = self.spec.lod.wind;
         // Species in parallel; each samples the shared, read-only field for its groups.
@@ -858,6 +902,7 @@ impl Forest {
             let all = s.batch.species().len();
             let trunk = s.order.trunk;
             s.coarse_wind = 0;
+            s.near_wind = 0;
             for k in 0..s.groups.len().div_ceil(LANES) {
                 let want = simulate[s.lane_base + k].load(Ordering::Relaxed) as usize;
                 s.batch.set_active(k, if animation { want } else { all });
@@ -868,8 +913,14 @@ impl Forest {
                 let want = simulate[s.lane_base + i / LANES].load(Ordering::Relaxed) as usize;
                 let far = coarse_levels && want <= trunk;
                 s.coarse_wind += far as usize;
-                let level = if far { FAR_WIND_LEVEL } else { 0 };
-                let w = sample_wind(pyramid.level(level), gain, turn, g.sample, t);
+                let w = if far {
+                    pyramid.level(FAR_WIND_LEVEL).sample(g.sample, t)
+                } else {
+                    let (w, is_near) = wind_near(pyramid.level(0), near, centre, g.sample, t);
+                    s.near_wind += is_near as usize;
+                    w
+                };
+                let w = steer(w, gain, turn);
                 let (sn, cs) = g.yaw.sin_cos();
                 *out = [cs * w[0] + sn * w[1], -sn * w[0] + cs * w[1], w[2]];
                 let speed = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
@@ -1023,6 +1074,7 @@ impl Forest {
             }
             stats.simulated += s.groups.len();
             stats.coarse_wind += s.coarse_wind;
+            stats.near_wind += s.near_wind;
             stats.joints += s.batch.joint_updates();
         }
         for (a, &v) in self.simulate.iter().zip(&out.simulate) {
@@ -1112,10 +1164,28 @@ fn start_camera(spec: &SceneSpec, radius: f32) -> Camera {
     if spec.camera_path.is_empty() { base } else { camera_on_path(&spec.camera_path, 0.0, &base) }
 }
 
-/// Wind at world point `p` and time `t` on `view`, scaled by `gain` and turned by `turn`
-/// rad.
-fn sample_wind(view: FieldView<'_>, gain: f32, turn: f32, p: [f64; 3], t: f64) -> [f32; 3] {
-    let w = view.sample(p, t);
+/// Wind at world point `p` and time `t` from the full-resolution `view`, blended with the
+/// `near` field by the horizontal distance from `centre`; and whether the near field
+/// counted.
+fn wind_near(
+    view: FieldView<'_>,
+    near: Option<&NearField>,
+    centre: [f32; 3],
+    p: [f64; 3],
+    t: f64,
+) -> ([f64; 3], bool) {
+    let Some(near) = near else { return (view.sample(p, t), false) };
+    let d = (p[0] - centre[0] as f64).hypot(p[1] - centre[1] as f64);
+    match near.weight(d) {
+        w if w <= 0.0 => (view.sample(p, t), false),
+        // Wholly within the tile: the coarse field is not read.
+        w if w >= 1.0 => (near.sample(p, t), true),
+        w => (near.blend(view.sample(p, t), p, t, w), true),
+    }
+}
+
+/// A field velocity `w` scaled by `gain` and turned by `turn` rad (the live controls).
+fn steer(w: [f64; 3], gain: f32, turn: f32) -> [f32; 3] {
     let (s, c) = turn.sin_cos();
     [
         gain * (c * w[0] as f32 - s * w[1] as f32),
@@ -1135,11 +1205,73 @@ pub fn wind_points(spec: &SceneSpec, radius: f32) -> usize {
 /// f32: 113 MB).
 pub const MAX_WIND_POINTS: usize = 96;
 
-/// The scene's wind field ([`WindSource`]): a preset (with the scene's U* when set) in the
+/// Radius around the camera within which the near field is read, m (its outer
+/// [`NEAR_BAND`] fading out), when the tile holds it.
+pub const NEAR_REACH: f64 = 160.0;
+
+/// Width of the near field's fade, as a fraction of its reach.
+pub const NEAR_BAND: f64 = 0.25;
+
+/// Cap on the near tile's points per side (64² points × 2 heights × 3 components × 512
+/// frames of f32: 50 MB); with trees closer than 5 m the reach shrinks to half the tile.
+pub const MAX_NEAR_POINTS: usize = 64;
+
+/// A scene's wind: the field over the whole forest, and where that field is coarser than
+/// the tree spacing, a fine tile read near the camera ([`NearField`]).
+#[derive(Debug, Clone)]
+pub struct SceneWind {
+    /// The field covering the forest.
+    pub field: WindField,
+    /// The near field, at the tree spacing; `None` where the field resolves the trees
+    /// already, and for steady winds and wind files.
+    pub near: Option<NearField>,
+}
+
+/// The scene's wind ([`WindSource`]): a preset (with the scene's U* when set) in the
 /// scene's direction over a grid covering the forest ([`wind_points`] a side, two heights),
 /// looping every 51.2 s; a steady uniform wind in the scene's direction; or a wind file,
 /// which tiles the forest periodically and keeps its own direction.
-pub fn wind_field(spec: &SceneSpec, radius: f32) -> Result<WindField, ForestError> {
+///
+/// For a preset whose grid is coarser than the tree spacing (every scene but the smallest:
+/// the grid resolves twice the spacing, and has at most [`MAX_WIND_POINTS`] a side), a
+/// second realisation of the same model at the tree spacing is made as well, a tile of up to
+/// [`MAX_NEAR_POINTS`] a side (seed derived from the scene's) read within [`NEAR_REACH`] of
+/// the camera: near trees feel gusts of their own size rather than a bilinear mix of records
+/// tens of metres apart (in scene D, about three quarters of the model's variance against
+/// under half; in the middle of a 60 m cell the mix keeps a fifth of it).
+pub fn wind_field(spec: &SceneSpec, radius: f32) -> Result<SceneWind, ForestError> {
+    let field = coarse_wind_field(spec, radius)?;
+    let spacing = spec.spacing as f64;
+    let xs = &field.grid.xs;
+    let coarse = if xs.len() > 1 { xs[1] - xs[0] } else { f64::INFINITY };
+    let preset = matches!(spec.wind_source(), Ok(WindSource::Preset(_)));
+    if !preset || coarse <= 1.01 * spacing {
+        return Ok(SceneWind { field, near: None });
+    }
+    let points = ((2.0 * NEAR_REACH / spacing).ceil() as usize + 1).clamp(16, MAX_NEAR_POINTS);
+    let reach = NEAR_REACH.min(0.5 * spacing * (points - 1) as f64);
+    let synth = SynthParams { seed: mix64(spec.seed ^ NEAR_SEED), ..Default::default() };
+    let g = &field.grid;
+    let near = NearField::generate(
+        &field.params,
+        points,
+        spacing,
+        &g.zs,
+        g.frames,
+        g.dt,
+        synth,
+        reach,
+        NEAR_BAND * reach,
+    )
+    .map_err(|e| ForestError::Wind(format!("near field: {e}")))?;
+    Ok(SceneWind { field, near: Some(near) })
+}
+
+/// Salt of the near field's seed (ASCII "near").
+const NEAR_SEED: u64 = 0x6e65_6172;
+
+/// The field over the whole forest (see [`wind_field`]).
+fn coarse_wind_field(spec: &SceneSpec, radius: f32) -> Result<WindField, ForestError> {
     let source = spec.wind_source().map_err(|e| ForestError::Wind(e.to_string()))?;
     let preset = match source {
         WindSource::Preset(p) => p,

@@ -14,8 +14,9 @@ pub mod scene;
 
 pub use camera::{Camera, Mat4, ViewCone};
 pub use driver::{
-    Bucket, Forest, ForestError, FrameData, FrameStats, Instance, LodSettings, REGROUP_FADE,
-    REGROUP_TRAVEL, SpeciesRuntime, TreeInfo, blend_levels, hysteresis, lod_coordinate, wind_field,
+    Bucket, Forest, ForestError, FrameData, FrameStats, Instance, LodSettings, MAX_NEAR_POINTS,
+    NEAR_REACH, REGROUP_FADE, REGROUP_TRAVEL, SceneWind, SpeciesRuntime, TreeInfo, blend_levels,
+    hysteresis, lod_coordinate, wind_field,
 };
 pub use scene::{
     CameraKey, Lighting, LodSpec, Placement, SCENES, SceneError, SceneSpec, SpeciesShare,

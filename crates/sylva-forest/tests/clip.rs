@@ -175,8 +175,9 @@ fn played_back_joints_sit_where_the_palettes_put_them() {
             moved = moved.max((0..3).map(|i| (want[i] - rest[i]).abs()).fold(0.0, f64::max));
         }
     }
-    // The comparison is not of a tree at rest: strong wind moves joints by decimetres.
-    assert!(moved > 0.1, "largest displacement {moved} m");
+    // The comparison is not of a tree at rest: strong wind moves the heaviest joints by
+    // several centimetres within these two seconds (about 0.1 m).
+    assert!(moved > 0.05, "largest displacement {moved} m");
 }
 
 #[test]

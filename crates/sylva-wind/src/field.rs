@@ -178,7 +178,7 @@ pub struct FieldView<'a> {
 
 /// Position of `v` on a sorted axis: (lower index, fraction to the next), clamped.
 #[inline]
-fn locate(axis: &[f64], v: f64) -> (usize, f64) {
+pub(crate) fn locate(axis: &[f64], v: f64) -> (usize, f64) {
     let n = axis.len();
     if n == 1 || v <= axis[0] {
         return (0, 0.0);

@@ -23,6 +23,7 @@ pub mod error;
 pub mod field;
 pub mod grid;
 pub mod io;
+pub mod near;
 pub mod params;
 pub mod spectrum;
 pub mod stats;
@@ -31,6 +32,7 @@ pub mod synth;
 pub use error::{ParamError, WindError};
 pub use field::{Captured, FieldView, MipPyramid, OwnedPyramid, WindField, drag};
 pub use grid::Grid;
+pub use near::NearField;
 pub use params::{
     AIR_DENSITY, CoherenceSpeed, Component, KARMAN, Preset, Profile, SpectrumModel, WindParams,
 };

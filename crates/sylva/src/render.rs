@@ -287,12 +287,12 @@ pub fn render(a: &RenderArgs) -> anyhow::Result<RenderReport> {
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     let t0 = Instant::now();
     let mut forest = Forest::new(&spec)?;
-    let (wind_n, wind_dx) = forest.wind_grid();
     println!(
-        "scene {}: {} trees, {} species, wind grid {wind_n}×{wind_n} at {wind_dx:.1} m, built in {:.2} s",
+        "scene {}: {} trees, {} species, {}, built in {:.2} s",
         spec.name,
         forest.trees(),
         forest.species.len(),
+        forest.wind_summary(),
         t0.elapsed().as_secs_f64()
     );
     let mut gpu = Headless::new(&forest, w, h)?;

@@ -215,7 +215,7 @@ pub struct Figures {
 #[derive(Debug)]
 pub enum Job {
     /// A wind field for the current forest.
-    Wind(Receiver<Result<sylva_wind::WindField, String>>, Instant),
+    Wind(Receiver<Result<sylva_forest::SceneWind, String>>, Instant),
     /// A whole forest.
     Scene(Receiver<Result<Box<Forest>, String>>, Instant),
 }
@@ -507,8 +507,8 @@ impl Viewer {
             None => return Finished::Nothing,
             Some(Job::Wind(rx, _)) => {
                 match if wait { rx.recv().ok() } else { rx.try_recv().ok() } {
-                    Some(Ok(field)) => {
-                        self.forest.set_wind_field(field);
+                    Some(Ok(wind)) => {
+                        self.forest.set_wind_field(wind);
                         // The scene now carries this wind (for a later rebuild or export).
                         if let Ok(spec) = self.spec() {
                             self.forest.spec.wind = spec.wind;
