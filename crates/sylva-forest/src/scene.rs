@@ -122,6 +122,9 @@ pub struct SwayOverrides {
     /// Speed at which leaves have halved their drag, m/s.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub leaf_reconfiguration_speed: Option<f32>,
+    /// Whole-crown drag coefficient at 20 m/s on the silhouette (0: calibration off).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub crown_drag: Option<f32>,
     /// Air density, kg/m³.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub air_density: Option<f32>,
@@ -142,6 +145,7 @@ impl SwayOverrides {
             leaf_reconfiguration_speed: self
                 .leaf_reconfiguration_speed
                 .unwrap_or(base.leaf_reconfiguration_speed),
+            crown_drag: self.crown_drag.unwrap_or(base.crown_drag),
             air_density: self.air_density.unwrap_or(base.air_density),
             blend_time: self.blend_time.unwrap_or(base.blend_time),
         }

@@ -12,12 +12,14 @@
 #![warn(missing_docs)]
 
 pub mod batch;
+pub mod frontal;
 pub mod leaves;
 pub mod params;
 pub mod probe;
 pub mod species;
 
 pub use batch::{LANES, Lanes, Palette, PaletteSlot, SwayBatch, rotation_of, transform};
+pub use frontal::{Frontal, frontal_area};
 pub use leaves::{LeafParams, LeafSway};
-pub use params::{NEEDLE_LEAF_DRAG, SwayParamError, SwayParams};
+pub use params::{CROWN_DRAG_SPEED, NEEDLE_LEAF_DRAG, SwayParamError, SwayParams};
 pub use species::{JointSpring, SwaySpecies};

@@ -39,6 +39,16 @@ pub struct SwayParams {
     /// Default 8: crown drag areas falling by about half between 4 and 20 m/s (Rudnicki,
     /// Mitchell & Novak 2004, three conifers in a wind tunnel). Wood does not reconfigure.
     pub leaf_reconfiguration_speed: f32,
+    /// Whole-crown drag coefficient at [`CROWN_DRAG_SPEED`] on the tree's still-air
+    /// silhouette (≥ 0; 0 turns the calibration off). Summing every twig's and leaf's own drag
+    /// ignores that they shelter each other and bend into the flow: the shipped broadleaf
+    /// presets came out at 0.9–1.4 on their silhouettes, five times what wind tunnels
+    /// measure on whole crowns. A species whose summed drag at that speed exceeds this
+    /// coefficient times its silhouette has every element's drag scaled down to it (see
+    /// `SwaySpecies::drag_scale`). Default 0.2: crowns of black cottonwood, red alder and
+    /// paper birch measured 0.15–0.22 at 20 m/s (Vollsinger, Mitchell, Byrne, Novak &
+    /// Rudnicki 2005, Can. J. For. Res. 35, 1238–1249).
+    pub crown_drag: f32,
     /// Air density ρ, kg/m³ (eq. 8). Default 1.2.
     pub air_density: f32,
     /// Time over which a joint switched off by the animation LOD blends its rotation to the
@@ -55,11 +65,15 @@ impl Default for SwayParams {
             wood_drag: 1.0,
             leaf_drag: 0.2,
             leaf_reconfiguration_speed: 8.0,
+            crown_drag: 0.2,
             air_density: 1.2,
             blend_time: 0.5,
         }
     }
 }
+
+/// Wind speed of the whole-crown drag calibration ([`SwayParams::crown_drag`]), m/s.
+pub const CROWN_DRAG_SPEED: f32 = 20.0;
 
 /// Drag coefficient per one-sided needle area of a conifer: the leaf value 0.2 times the
 /// shoot silhouette-to-total-needle-area ratio, about 0.15 (needles on a shoot shade each
@@ -99,6 +113,7 @@ impl SwayParams {
             self.leaf_reconfiguration_speed,
             "> 0 m/s",
         )?;
+        check(self.crown_drag >= 0.0, "crown_drag", self.crown_drag, "≥ 0 (0: off)")?;
         check(self.air_density > 0.0, "air_density", self.air_density, "> 0 kg/m³")?;
         check(self.blend_time > 0.0, "blend_time", self.blend_time, "> 0 s")?;
         Ok(())

@@ -16,7 +16,9 @@
 //!   So a trunk sways at a fraction of a hertz and a twig at several hertz, as measured.
 //! * Damping c = 2ζ√(kI) with one damping ratio ζ (structural + aerodynamic).
 //! * Drag area: the segment's projected area d·L (C_d of a cylinder) plus its leaves
-//!   (C_d per one-sided leaf area), at the segment's mid point.
+//!   (C_d per one-sided leaf area), at the segment's mid point; all scaled by one factor
+//!   per species where their sum at 20 m/s exceeds the measured whole-crown drag on the
+//!   tree's silhouette (`SwayParams::crown_drag`: elements shelter each other).
 //!
 //! The model is quasi-physical, as in the paper: torques use rest-pose lever arms (small
 //! deflections), and each joint's spring is independent of its parent's motion except
@@ -26,7 +28,8 @@ use std::f32::consts::PI;
 
 use sylva_tree::Skeleton;
 
-use crate::params::{SwayParamError, SwayParams};
+use crate::frontal::frontal_area;
+use crate::params::{CROWN_DRAG_SPEED, SwayParamError, SwayParams};
 
 /// Effective mass fraction of a uniform cantilever at its tip (Rayleigh, 33/140).
 pub const CANTILEVER_TIP_MASS_FRACTION: f32 = 33.0 / 140.0;
@@ -62,6 +65,8 @@ pub struct SwaySpecies {
     /// relative-wind drag damps the joint at about this rate × |U|.
     pub(crate) aero: Vec<f32>,
     pub(crate) springs: Vec<JointSpring>,
+    /// Factor on every element's drag from the whole-crown calibration (≤ 1).
+    drag_scale: f32,
     /// Joints ordered by priority (carried mass, descending); a prefix of any length is
     /// closed under taking parents.
     pub(crate) priority: Vec<u32>,
@@ -100,7 +105,9 @@ impl SwaySpecies {
             springs: Vec::with_capacity(n),
             priority: Vec::new(),
             rank: vec![0; n],
+            drag_scale: crown_drag_scale(skeleton, &params),
         };
+        let scale = sp.drag_scale;
         let cbar = (params.youngs_modulus / params.wood_density).sqrt();
         // Rest of each joint's stem (tip inwards): length and wood mass along the longest
         // continuation.
@@ -135,8 +142,9 @@ impl SwaySpecies {
                 jk.origin[1] + 0.5 * jk.length * jk.axis[1],
                 jk.origin[2] + 0.5 * jk.length * jk.axis[2],
             ];
-            let area = params.wood_drag * 2.0 * jk.radius * jk.length
-                + params.leaf_drag * jk.leaf_area * reconfigured;
+            let area = scale
+                * (params.wood_drag * 2.0 * jk.radius * jk.length
+                    + params.leaf_drag * jk.leaf_area * reconfigured);
             let mut a = k as u32;
             while a != sylva_tree::NO_PARENT {
                 let ja = &joints[a as usize];
@@ -157,8 +165,8 @@ impl SwaySpecies {
             let h = 0.5 * j.length;
             sp.arm.push([j.axis[0] * h, j.axis[1] * h, j.axis[2] * h]);
             let d = 2.0 * j.radius;
-            sp.drag.push(0.5 * params.air_density * params.wood_drag * d * j.length);
-            sp.leaf_drag.push(0.5 * params.air_density * params.leaf_drag * j.leaf_area);
+            sp.drag.push(scale * 0.5 * params.air_density * params.wood_drag * d * j.length);
+            sp.leaf_drag.push(scale * 0.5 * params.air_density * params.leaf_drag * j.leaf_area);
             let l = rest_len[i];
             let m_stem = rest_mass[i].max(1e-6);
             let inertia = inertia[i].max(1e-9);
@@ -218,6 +226,41 @@ impl SwaySpecies {
     pub fn params(&self) -> &SwayParams {
         &self.params
     }
+
+    /// Factor on every segment's and leaf's drag from the whole-crown calibration
+    /// ([`SwayParams::crown_drag`]): 1 where the summed drag is within it.
+    pub fn drag_scale(&self) -> f32 {
+        self.drag_scale
+    }
+
+    /// The tree's drag area C_d·A at rest in a steady wind of `speed` m/s, m²: every
+    /// segment's and leaf's (leaves reconfigured), as the step sums them.
+    pub fn drag_area(&self, speed: f32) -> f32 {
+        let leaves = 1.0 / (1.0 + speed.max(0.0) / self.params.leaf_reconfiguration_speed);
+        let wood: f32 = self.drag.iter().sum();
+        let leaf: f32 = self.leaf_drag.iter().sum();
+        (wood + leaf * leaves) / (0.5 * self.params.air_density)
+    }
+}
+
+/// The whole-crown calibration's factor for `skeleton` ([`SwayParams::crown_drag`]):
+/// min(1, C_crown · silhouette / Σ element C_d A at [`CROWN_DRAG_SPEED`]).
+fn crown_drag_scale(skeleton: &Skeleton, params: &SwayParams) -> f32 {
+    if params.crown_drag <= 0.0 {
+        return 1.0;
+    }
+    let leaves = 1.0 / (1.0 + CROWN_DRAG_SPEED / params.leaf_reconfiguration_speed);
+    let elements: f32 = skeleton
+        .joints()
+        .iter()
+        .map(|j| {
+            params.wood_drag * 2.0 * j.radius * j.length + params.leaf_drag * j.leaf_area * leaves
+        })
+        .sum();
+    if elements <= 0.0 {
+        return 1.0;
+    }
+    (params.crown_drag * frontal_area(skeleton).union / elements).min(1.0)
 }
 
 /// Exact discretisation over a step `dt` of the linear oscillator θ'' + 2ζω θ' + ω² θ = τ/I
