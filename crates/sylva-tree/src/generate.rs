@@ -71,6 +71,18 @@ pub struct TreeStats {
     pub leaves: usize,
     /// One-sided leaf area, m².
     pub leaf_area: f32,
+    /// Crown width along x and y, m: the extent of the joint tips.
+    pub crown_width: [f32; 2],
+}
+
+impl TreeStats {
+    /// Leaf area index of the crown: one-sided leaf area over the ground the crown covers
+    /// (the ellipse of its widths), m²/m². Stands of temperate trees measure about 3–6 on
+    /// average (Asner, Scurlock & Hicke 2003, Global Ecology and Biogeography 12, 191–205).
+    pub fn leaf_area_index(&self) -> f32 {
+        let ground = std::f32::consts::FRAC_PI_4 * self.crown_width[0] * self.crown_width[1];
+        if ground > 0.0 { self.leaf_area / ground } else { 0.0 }
+    }
 }
 
 /// A generated tree: its skeleton and figures.
@@ -196,6 +208,13 @@ impl Species {
             });
         }
         let height = g.joints.iter().map(|j| j.tip()[2]).fold(0.0, f32::max);
+        let (mut lo, mut hi) = ([f32::MAX; 2], [f32::MIN; 2]);
+        for t in g.joints.iter().map(Joint::tip) {
+            for c in 0..2 {
+                lo[c] = lo[c].min(t[c]);
+                hi[c] = hi[c].max(t[c]);
+            }
+        }
         let stats = TreeStats {
             height,
             trunk_length,
@@ -203,6 +222,7 @@ impl Species {
             stems: g.stems,
             leaves: g.leaves,
             leaf_area: g.leaf_area,
+            crown_width: [hi[0] - lo[0], hi[1] - lo[1]],
         };
         Ok(Tree { skeleton: Skeleton::new(g.joints)?, stats })
     }

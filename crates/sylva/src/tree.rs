@@ -269,13 +269,6 @@ pub fn run_tree(cmd: TreeCommand) -> anyhow::Result<()> {
             let secs = t0.elapsed().as_secs_f64();
             let tree = &model.tree;
             let sk = &tree.skeleton;
-            let (mut lo, mut hi) = ([f32::MAX; 2], [f32::MIN; 2]);
-            for j in sk.joints() {
-                for c in 0..2 {
-                    lo[c] = lo[c].min(j.tip()[c]);
-                    hi[c] = hi[c].max(j.tip()[c]);
-                }
-            }
             let s = tree.stats;
             println!("species          {}", sp.name);
             println!("levels           {}", sp.levels);
@@ -289,7 +282,12 @@ pub fn run_tree(cmd: TreeCommand) -> anyhow::Result<()> {
                 200.0 * s.trunk_radius,
                 200.0 * sk.radius_at_height(1.3)
             );
-            println!("crown width      {:.2} m × {:.2} m", hi[0] - lo[0], hi[1] - lo[1]);
+            println!(
+                "crown width      {:.2} m × {:.2} m (leaf area index {:.1})",
+                s.crown_width[0],
+                s.crown_width[1],
+                s.leaf_area_index()
+            );
             println!("mass             {:.0} kg", sk.carried_mass(0));
             println!(
                 "generation       {:.2} ms (skeleton, meshes, LOD chain, textures)",
