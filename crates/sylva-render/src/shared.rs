@@ -293,6 +293,9 @@ pub struct PipelineSpec<'a> {
     /// A shadow-pass pipeline: `SHADOW` overridden to true, depth biased against acne, no
     /// colour targets (and no fragment stage when `fragment` is empty).
     pub shadow: bool,
+    /// One triangle strip per instance (a quad in four vertices rather than six) instead
+    /// of a triangle list.
+    pub strip: bool,
 }
 
 /// Build the render pipeline `spec` describes (entry points `vs_main` and `spec.fragment`).
@@ -322,7 +325,11 @@ pub fn pipeline(dev: &wgpu::Device, spec: &PipelineSpec<'_>) -> wgpu::RenderPipe
             buffers: spec.buffers,
         },
         primitive: wgpu::PrimitiveState {
-            topology: wgpu::PrimitiveTopology::TriangleList,
+            topology: if spec.strip {
+                wgpu::PrimitiveTopology::TriangleStrip
+            } else {
+                wgpu::PrimitiveTopology::TriangleList
+            },
             front_face: wgpu::FrontFace::Ccw,
             cull_mode: spec.cull,
             ..Default::default()

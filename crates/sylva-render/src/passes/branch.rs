@@ -38,6 +38,7 @@ impl BranchPass {
             samples,
             targets: &[format],
             shadow: false,
+            strip: false,
         };
         let (draw, bake) = draw_and_bake(dev, &spec, bake_targets);
         BranchPass { draw, bake }

@@ -112,6 +112,7 @@ impl FarPass {
             samples,
             targets: &[format],
             shadow: false,
+            strip: true,
         };
         let shadow =
             PipelineSpec { fragment: "fs_shadow", samples: 1, targets: &[], shadow: true, ..spec };
@@ -300,7 +301,7 @@ impl FarPass {
         instances: std::ops::Range<u32>,
     ) {
         pass.set_bind_group(1, &species.group, &[]);
-        pass.draw(0..6, instances);
+        pass.draw(0..4, instances);
     }
 }
 

@@ -25,24 +25,29 @@ struct FarSpecies {
 @group(1) @binding(1) var far_normal: texture_2d<f32>;
 @group(1) @binding(2) var<uniform> far: FarSpecies;
 
+// What varies smoothly over the quad is computed per vertex and interpolated, as for the
+// leaf cards: the aerial perspective (fog_at), the light shining through the leaves, and
+// the point's place in the two shadow cascades (affine in the world position). Only the
+// baked normal's lighting and the shadow lookups are per pixel.
 struct FarOut {
     @builtin(position) clip: vec4<f32>,
-    @location(0) world: vec3<f32>,
+    @location(0) fog: vec4<f32>,
     @location(1) uv: vec2<f32>,
     @location(2) @interpolate(flat) yaw: f32,
     @location(3) @interpolate(flat) fade: vec2<f32>,
     @location(4) @interpolate(flat) tint: vec3<f32>,
     @location(5) @interpolate(flat) tag: u32,
+    @location(6) glow: vec3<f32>,
+    @location(7) shadow_near: vec4<f32>,
+    @location(8) shadow_far: vec4<f32>,
 };
 
 const TAU: f32 = 6.28318530718;
 
 @vertex
 fn vs_main(@builtin(vertex_index) vi: u32, inst: InstanceIn) -> FarOut {
-    // Two triangles: corners (0,0) (1,0) (1,1), (0,0) (1,1) (0,1).
-    var corners = array<u32, 6>(0u, 1u, 2u, 0u, 2u, 3u);
-    let corner_index = corners[vi % 6u];
-    let corner = vec2<f32>(f32(corner_index == 1u || corner_index == 2u), f32(corner_index >= 2u));
+    // A quad as one triangle strip per instance: corners (0,0) (1,0) (0,1) (1,1).
+    let corner = vec2<f32>(f32(vi & 1u), f32(vi >> 1u));
     let base = inst.base.xyz;
     let yaw = inst.base.w;
     // Direction seen along (eye -> tree, or along the sun's rays), horizontal.
@@ -68,7 +73,13 @@ fn vs_main(@builtin(vertex_index) vi: u32, inst: InstanceIn) -> FarOut {
     let world = base + p;
     var out: FarOut;
     out.clip = project(world);
-    out.world = world;
+    if (!SHADOW) {
+        out.fog = fog_at(world);
+        out.glow = translucency(world);
+        // Offset towards the sun against self-shadowing (the baked normals vary per pixel).
+        out.shadow_near = shadow_near(world, globals.sun_dir);
+        out.shadow_far = shadow_far(world, globals.sun_dir);
+    }
     out.uv = vec2<f32>((f32(k) + corner.x) / n, 1.0 - corner.y);
     out.yaw = yaw;
     out.fade = inst.fade;
@@ -99,7 +110,7 @@ fn fs_main(in: FarOut) -> @location(0) vec4<f32> {
     n = rotate_z(normalize(n), in.yaw);
     // Leaf pixels (normal alpha 1) take the tree's colour variation, as near trees do.
     let tint = mix(vec3<f32>(1.0), in.tint, baked.a);
-    let sun = sun_visibility(in.world, n);
-    let lit = albedo.rgb * tint * (lighting(n, sun) + sun * baked.a * translucency(in.world));
-    return finish(apply_fog(overlay(lit, in.tag), in.world));
+    let sun = cascades_visibility(in.shadow_near, in.shadow_far, true);
+    let lit = albedo.rgb * tint * (lighting(n, sun) + sun * baked.a * in.glow);
+    return finish(mix_fog(overlay(lit, in.tag), in.fog));
 }

@@ -43,6 +43,7 @@ impl GroundPass {
             samples,
             targets: &[format],
             shadow: false,
+            strip: false,
         };
         GroundPass {
             pipeline: pipeline(&gpu.device, &spec),

@@ -40,6 +40,7 @@ impl LeafPass {
             samples,
             targets: &[format],
             shadow: false,
+            strip: false,
         };
         let (draw, bake) = draw_and_bake(dev, &spec, bake_targets);
         LeafPass { draw, bake }

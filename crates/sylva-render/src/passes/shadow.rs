@@ -50,6 +50,7 @@ impl ShadowPass {
             samples: 1,
             targets: &[],
             shadow: true,
+            strip: false,
         };
         let branch_buffers =
             [Some(vertex_layout::<BranchVertex>(&BRANCH_ATTRIBUTES)), Some(instance_layout())];

@@ -29,6 +29,7 @@ impl SkyPass {
             samples,
             targets: &[format],
             shadow: false,
+            strip: false,
         };
         SkyPass { pipeline: pipeline(dev, &spec) }
     }
