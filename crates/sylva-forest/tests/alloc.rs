@@ -3,7 +3,7 @@
 
 use sylva_forest::{Forest, FrameData, SceneSpec};
 
-use sylva_testkit::{CountingAllocator, exclusive, allocations};
+use sylva_testkit::{CountingAllocator, allocations, exclusive};
 
 #[global_allocator]
 static GLOBAL: CountingAllocator = CountingAllocator;

@@ -4,7 +4,7 @@
 use sylva_sway::{SwayBatch, SwayParams, SwaySpecies};
 use sylva_tree::{Joint, NO_PARENT, Skeleton};
 
-use sylva_testkit::{CountingAllocator, exclusive, allocations};
+use sylva_testkit::{CountingAllocator, allocations, exclusive};
 
 #[global_allocator]
 static GLOBAL: CountingAllocator = CountingAllocator;
