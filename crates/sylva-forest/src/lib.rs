@@ -19,7 +19,7 @@ pub use driver::{
     hysteresis, lod_coordinate, wind_field,
 };
 pub use scene::{
-    CameraKey, Lighting, LodSpec, Placement, SCENES, SceneError, SceneSpec, SpeciesShare,
+    CameraKey, Lighting, LodSpec, Placement, SCENES, SceneError, SceneSpec, SpeciesShare, Surround,
     SwayOverrides, Terrain, WindSource, camera_on_path, camera_path_from_toml, camera_path_to_toml,
     default_camera_path, layout,
 };

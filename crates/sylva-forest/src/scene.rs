@@ -211,6 +211,10 @@ pub struct SceneSpec {
     /// Terrain: wavelength of the hills, m (> 0). Default 150.
     #[serde(default = "wavelength")]
     pub terrain_wavelength: f32,
+    /// What lies around the forest (see [`Surround`]): `"open"` ground to the horizon
+    /// (default) or distant `"woodland"` beyond a meadow.
+    #[serde(default)]
+    pub surround: Surround,
     /// The wind (see [`WindSource`]): a preset (calm, breeze, strong, storm), a steady
     /// speed in m/s, or a wind file (.swf, .npy, .zarr; a relative path is taken from the
     /// scene file's folder). Default breeze.
@@ -263,6 +267,36 @@ pub struct SceneSpec {
     /// the viewpoint and the benchmark flies in from it ([`default_camera_path`]).
     #[serde(default)]
     pub camera_path: Vec<CameraKey>,
+}
+
+/// What lies around a forest, out to the horizon.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Surround {
+    /// Open ground (grass and soil) to the horizon: the forest stands alone on a plain.
+    #[default]
+    Open,
+    /// Woodland beyond a meadow around the forest: from [`Surround::woodland_start`] out to
+    /// the horizon the ground is shaded as a forest canopy seen from afar (crowns at the
+    /// scene's spacing, each lit as a dome by the sun, dark gaps between them, broken by
+    /// clearings a few hundred metres across). It is paint on the ground, not trees: no
+    /// height, no sway, no shadows, and it costs no triangles. It is meant for what lies
+    /// hundreds of metres beyond the camera, so the forest does not end as an island; a
+    /// camera low over it sees a flat canopy.
+    Woodland,
+}
+
+impl Surround {
+    /// Distance from the forest's centre where the woodland starts (it thickens over
+    /// [`Surround::woodland_ramp`]): past a meadow of three tree spacings.
+    pub fn woodland_start(radius: f32, spacing: f32) -> f32 {
+        radius + 3.0 * spacing
+    }
+
+    /// Width of the woodland's edge, m: six tree spacings.
+    pub fn woodland_ramp(spacing: f32) -> f32 {
+        6.0 * spacing
+    }
 }
 
 /// The LOD switches of a scene (paper §4.3; Table 3 switches each off in turn).

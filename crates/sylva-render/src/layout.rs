@@ -152,6 +152,12 @@ pub struct GroundVertex {
     pub normal: [f32; 3],
     /// Sky the ground sees past the crowns above it (1: open ground).
     pub open: f32,
+    /// Share of distant woodland painted here (0: grass and soil, 1: canopy).
+    pub woodland: f32,
+    /// Spacing of the painted woodland's crowns, m.
+    pub crown_spacing: f32,
+    /// Mean linear albedo of the painted woodland's crowns.
+    pub canopy: [f32; 3],
 }
 
 /// `FarSpecies` in far.wgsl: one species' impostor (uniform).
@@ -219,10 +225,13 @@ pub const LEAF_ATTRIBUTES: [wgpu::VertexAttribute; 10] = [
 ];
 
 /// `GroundIn`.
-pub const GROUND_ATTRIBUTES: [wgpu::VertexAttribute; 3] = [
+pub const GROUND_ATTRIBUTES: [wgpu::VertexAttribute; 6] = [
     attr!(GroundVertex, position, Float32x3, 0),
     attr!(GroundVertex, normal, Float32x3, 1),
     attr!(GroundVertex, open, Float32, 2),
+    attr!(GroundVertex, woodland, Float32, 3),
+    attr!(GroundVertex, crown_spacing, Float32, 4),
+    attr!(GroundVertex, canopy, Float32x3, 5),
 ];
 
 /// The per-instance buffer layout of every tree pipeline.

@@ -3,14 +3,14 @@
 //! spares hidden fragments their shading), per-species GPU resources, and the one-way
 //! upload of [`FrameData`].
 
-use sylva_forest::{Camera, Forest, FrameData, Instance, Lighting, Terrain};
+use sylva_forest::{Camera, Forest, FrameData, Instance, Lighting, Surround, Terrain};
 use sylva_tree::mesh::TreeModel;
 
 use crate::gpu::{Gpu, RenderError};
 use crate::layout::Globals;
 use crate::passes::branch::{self, BranchPass};
 use crate::passes::far::{BAKE_TARGETS, BakeContext, FarPass, FarSpeciesGpu, bake_level};
-use crate::passes::ground::GroundPass;
+use crate::passes::ground::{GroundPass, Woodland, mean_albedo};
 use crate::passes::leaf::{self, LeafPass};
 use crate::passes::shadow::{SHADOW_SIZE, ShadowPass};
 use crate::passes::sky::SkyPass;
@@ -22,7 +22,7 @@ use crate::shared::{
 /// What the renderer draws a scene with: tree models (in the scene's species order, as
 /// [`sylva_forest::Bucket::species`] indexes them), the terrain, how far the ground reaches
 /// and the lighting.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub struct SceneAssets<'a> {
     /// Tree models per species.
     pub models: &'a [&'a TreeModel],
@@ -32,6 +32,10 @@ pub struct SceneAssets<'a> {
     pub ground_extent: f32,
     /// Crowns the ground lies under: x, y and radius, m ([`Forest::crowns`]).
     pub crowns: &'a [[f32; 3]],
+    /// Woodland painted on the ground around the forest ([`sylva_forest::Surround`]): the
+    /// distance from the centre where it starts, the width of its edge and the crowns'
+    /// spacing, m; `None` for open ground.
+    pub woodland: Option<Woodland>,
     /// Sun, sky and fog.
     pub lighting: Lighting,
 }
@@ -131,6 +135,15 @@ impl Renderer {
             models: &models,
             terrain: &forest.terrain,
             ground_extent: 3.0 * forest.radius + GROUND_MARGIN,
+            woodland: (forest.spec.surround == Surround::Woodland).then(|| {
+                let spacing = forest.spec.spacing;
+                Woodland {
+                    start: Surround::woodland_start(forest.radius, spacing),
+                    ramp: Surround::woodland_ramp(spacing),
+                    spacing,
+                    shares: forest.spec.species.iter().map(|s| s.weight).collect(),
+                }
+            }),
             // The scene's fog, or the default scaled to the forest.
             lighting: Lighting {
                 fog_density: Some(forest.spec.lighting.fog(forest.radius)),
@@ -161,15 +174,6 @@ impl Renderer {
         let scene_layout = pipeline_layout(dev, "scene", &[&globals_layout]);
         let tree_layout = pipeline_layout(dev, "trees", &[&globals_layout, &species_layout]);
         let sky = SkyPass::new(dev, &scene_layout, format, samples);
-        let ground = GroundPass::new(
-            gpu,
-            &scene_layout,
-            format,
-            samples,
-            assets.terrain,
-            assets.ground_extent,
-            assets.crowns,
-        );
         let branch = BranchPass::new(dev, &tree_layout, format, samples, &BAKE_TARGETS);
         let leaf = LeafPass::new(dev, &tree_layout, format, samples, &BAKE_TARGETS);
         let far = FarPass::new(dev, &globals_layout, format, samples);
@@ -262,6 +266,28 @@ impl Renderer {
             joints_read.push(far.params.joint as usize + 1);
             species.push(SpeciesGpu { lods, joints_read, textures, far });
         }
+        // The woodland around the forest takes the colour of the forest's own impostors.
+        let woodland = assets.woodland.as_ref().map(|w| {
+            let total: f32 = w.shares.iter().sum::<f32>().max(1e-6);
+            let mut canopy = [0.0f32; 3];
+            for (sp, share) in species.iter().zip(&w.shares) {
+                let a = mean_albedo(&sp.far.albedo);
+                for k in 0..3 {
+                    canopy[k] += a[k] * share / total;
+                }
+            }
+            (w, canopy)
+        });
+        let ground = GroundPass::new(
+            gpu,
+            &scene_layout,
+            format,
+            samples,
+            assets.terrain,
+            assets.ground_extent,
+            assets.crowns,
+            woodland,
+        );
         let (msaa, depth) = targets(dev, format, samples, width, height);
         Ok(Renderer {
             format,

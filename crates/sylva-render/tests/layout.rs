@@ -7,8 +7,8 @@ use std::mem::{offset_of, size_of};
 use naga::{Module, ScalarKind, TypeInner, VectorSize};
 use sylva_forest::Instance;
 use sylva_render::layout::{
-    BRANCH_ATTRIBUTES, BranchVertex, FarSpecies, GROUND_ATTRIBUTES, Globals, INSTANCE_ATTRIBUTES,
-    LEAF_ATTRIBUTES, LeafVertex,
+    BRANCH_ATTRIBUTES, BranchVertex, FarSpecies, GROUND_ATTRIBUTES, Globals, GroundVertex,
+    INSTANCE_ATTRIBUTES, LEAF_ATTRIBUTES, LeafVertex,
 };
 use sylva_render::shader_source;
 use sylva_render::wgpu::{self, VertexFormat};
@@ -154,7 +154,7 @@ fn check_attributes(file: &str, input: &str, attrs: &[wgpu::VertexAttribute], st
 fn vertex_attributes_match_the_shader_inputs() {
     check_attributes("branch.wgsl", "BranchIn", &BRANCH_ATTRIBUTES, size_of::<BranchVertex>());
     check_attributes("leaf.wgsl", "LeafIn", &LEAF_ATTRIBUTES, size_of::<LeafVertex>());
-    check_attributes("ground.wgsl", "GroundIn", &GROUND_ATTRIBUTES, 28);
+    check_attributes("ground.wgsl", "GroundIn", &GROUND_ATTRIBUTES, size_of::<GroundVertex>());
     check_attributes("common.wgsl", "InstanceIn", &INSTANCE_ATTRIBUTES, size_of::<Instance>());
 }
 

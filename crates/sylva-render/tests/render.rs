@@ -368,3 +368,47 @@ fn the_level_overlay_tints_each_tree_by_the_level_it_is_drawn_at() {
     assert!(!impostors || cyan > 20, "impostors drawn: {impostors}, cyan pixels {cyan}");
     assert!(warm > warm_before + 200, "mesh levels tinted warm: {warm} vs {warm_before}");
 }
+
+#[test]
+fn woodland_around_the_forest_is_painted_past_its_meadow_and_nowhere_else() {
+    use sylva_forest::Surround;
+    use sylva_render::passes::ground::Woodland;
+    let open = SceneSpec::builtin("small").expect("small scene");
+    let wooded = SceneSpec { surround: Surround::Woodland, ..open.clone() };
+    let forest = Forest::new(&open).expect("forest");
+    let woodland = Woodland {
+        start: Surround::woodland_start(forest.radius, open.spacing),
+        ramp: Surround::woodland_ramp(open.spacing),
+        spacing: open.spacing,
+        shares: vec![1.0],
+    };
+    // A direction in which the ground 2.5 × the woodland's start out is all woodland.
+    let reach = 2.5 * woodland.start;
+    let a = (0..64)
+        .map(|k| k as f32 / 64.0 * std::f32::consts::TAU)
+        .find(|a| woodland.share(reach * a.cos(), reach * a.sin()) > 0.99)
+        .expect("woodland in some direction");
+    let (c, s) = (a.cos(), a.sin());
+    let ground = |r: f32| [r * c, r * s, forest.terrain.height(r * c, r * s)];
+    // From high above the forest (over its tallest crowns), looking out along that direction
+    // and down at the woodland, the meadow in the lower part of the view.
+    let camera = Camera {
+        eye: [0.0, 0.0, 45.0],
+        target: ground(reach),
+        fov_deg: 70.0,
+        near: 0.5,
+        far: 8000.0,
+    };
+    let (img_open, ..) = render_spec(&open, Some(camera));
+    let (img_wood, ..) = render_spec(&wooded, Some(camera));
+    let wood_px = pixel_of(&camera, ground(reach)).expect("woodland point in view");
+    let meadow_px =
+        pixel_of(&camera, ground(woodland.start - 0.5 * open.spacing)).expect("meadow in view");
+    // The canopy is darker than the grass it replaces.
+    let (grass, canopy) = (brightness(&img_open, wood_px), brightness(&img_wood, wood_px));
+    assert!(canopy < 0.85 * grass, "woodland {canopy:.1} against grass {grass:.1}");
+    // The meadow in front of it, and the sky above, are untouched.
+    let (m_open, m_wood) = (brightness(&img_open, meadow_px), brightness(&img_wood, meadow_px));
+    assert!((m_open - m_wood).abs() < 1.0, "meadow {m_wood:.1} against {m_open:.1}");
+    assert!((brightness(&img_open, (W / 2, 3)) - brightness(&img_wood, (W / 2, 3))).abs() < 1.0);
+}

@@ -2,7 +2,9 @@
 //! flat skirt around it out to the horizon;
 //! grass and soil mixed by value noise, lit and fogged (`ground.wgsl`). Each vertex carries
 //! how much sky it sees past the crowns above it ([`open_sky`]), so the forest floor is
-//! darker than the clearing.
+//! darker than the clearing, and how much distant woodland is painted on it ([`Woodland`]):
+//! crowns as sunlit domes at the scene's spacing with dark gaps, faded to their mean colour
+//! where a crown is smaller than a few pixels.
 
 use sylva_forest::Terrain;
 
@@ -32,6 +34,7 @@ impl GroundPass {
         terrain: &Terrain,
         extent: f32,
         crowns: &[[f32; 3]],
+        woodland: Option<(&Woodland, [f32; 3])>,
     ) -> GroundPass {
         let spec = PipelineSpec {
             shader: "ground.wgsl",
@@ -47,7 +50,7 @@ impl GroundPass {
         };
         GroundPass {
             pipeline: pipeline(&gpu.device, &spec),
-            mesh: ground_mesh(gpu, terrain, extent, crowns),
+            mesh: ground_mesh(gpu, terrain, extent, crowns, woodland),
         }
     }
 
@@ -56,6 +59,77 @@ impl GroundPass {
         pass.set_pipeline(&self.pipeline);
         self.mesh.draw(pass, 0..1);
     }
+}
+
+/// Woodland painted on the ground around a forest (`sylva_forest::Surround::Woodland`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Woodland {
+    /// Distance from the forest's centre where it starts, m.
+    pub start: f32,
+    /// Width over which it thickens from nothing to full, m.
+    pub ramp: f32,
+    /// Spacing of its crowns, m.
+    pub spacing: f32,
+    /// Share of each species of the scene (in its species order) in the woodland's colour:
+    /// the crowns take the mean albedo of the forest's own impostors, weighted by these.
+    pub shares: Vec<f32>,
+}
+
+/// Mean linear albedo of the opaque texels (alpha ≥ ½) of an sRGB RGBA8 image; grey where
+/// none is opaque.
+pub fn mean_albedo(rgba: &[u8]) -> [f32; 3] {
+    let lin = |v: u8| {
+        let c = v as f32 / 255.0;
+        if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
+    };
+    let (mut sum, mut n) = ([0.0f64; 3], 0usize);
+    for p in rgba.chunks_exact(4).filter(|p| p[3] >= 128) {
+        for k in 0..3 {
+            sum[k] += lin(p[k]) as f64;
+        }
+        n += 1;
+    }
+    if n == 0 {
+        return [0.1; 3];
+    }
+    sum.map(|v| (v / n as f64) as f32)
+}
+
+/// Side of the clearings that break the woodland up, m (the scale of its value noise).
+const CLEARING_SCALE: f32 = 900.0;
+
+impl Woodland {
+    /// Share of woodland at ground point (x, y): 0 out to [`Woodland::start`], rising
+    /// smoothly to 1 over [`Woodland::ramp`], unbroken for half a [`CLEARING_SCALE`] beyond,
+    /// and farther out lowered in clearings (low values of a seeded value noise on a
+    /// [`CLEARING_SCALE`] grid; about a fifth of the area is open).
+    pub fn share(&self, x: f32, y: f32) -> f32 {
+        let r = (x * x + y * y).sqrt();
+        let full = self.start + self.ramp.max(1e-3);
+        let edge = smoothstep(self.start, full, r);
+        let n = value_noise(x / CLEARING_SCALE, y / CLEARING_SCALE);
+        let clearings = smoothstep(full, full + 0.5 * CLEARING_SCALE, r);
+        edge * (1.0 - clearings * (1.0 - smoothstep(0.15, 0.3, n)))
+    }
+}
+
+fn smoothstep(a: f32, b: f32, x: f32) -> f32 {
+    let t = ((x - a) / (b - a)).clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
+
+/// Smooth value noise in [0, 1]: a seeded hash of the integer lattice, interpolated with
+/// smoothstep weights.
+fn value_noise(x: f32, y: f32) -> f32 {
+    let hash = |i: f32, j: f32| -> f32 {
+        let h = sylva_core::rng::mix64(((i as i64 as u64) << 32) ^ (j as i64 as u32 as u64));
+        (h >> 40) as f32 / (1u64 << 24) as f32
+    };
+    let (i, j) = (x.floor(), y.floor());
+    let (u, v) = (smoothstep(0.0, 1.0, x - i), smoothstep(0.0, 1.0, y - j));
+    let a = hash(i, j) + (hash(i + 1.0, j) - hash(i, j)) * u;
+    let b = hash(i, j + 1.0) + (hash(i + 1.0, j + 1.0) - hash(i, j + 1.0)) * u;
+    a + (b - a) * v
 }
 
 /// Share of the sky a crown of radius R hides from the ground below its centre; it falls
@@ -136,7 +210,16 @@ impl CrownGrid {
     }
 }
 
-fn ground_mesh(gpu: &Gpu, terrain: &Terrain, extent: f32, crowns: &[[f32; 3]]) -> Mesh {
+fn ground_mesh(
+    gpu: &Gpu,
+    terrain: &Terrain,
+    extent: f32,
+    crowns: &[[f32; 3]],
+    woodland: Option<(&Woodland, [f32; 3])>,
+) -> Mesh {
+    let paint = |x: f32, y: f32| woodland.map_or(0.0, |(w, _)| w.share(x, y));
+    let crown_spacing = woodland.map_or(1.0, |(w, _)| w.spacing);
+    let canopy = woodland.map_or([0.0; 3], |(_, c)| c);
     let n = CELLS;
     let grid = CrownGrid::new(crowns);
     let mut verts = Vec::with_capacity(((n + 1) * (n + 1)) as usize);
@@ -152,6 +235,9 @@ fn ground_mesh(gpu: &Gpu, terrain: &Terrain, extent: f32, crowns: &[[f32; 3]]) -
                 position: [x, y, terrain.height(x, y)],
                 normal: terrain.normal(x, y),
                 open: open_sky(x, y, crowns, &grid),
+                woodland: paint(x, y),
+                crown_spacing,
+                canopy,
             });
         }
     }
@@ -173,10 +259,14 @@ fn ground_mesh(gpu: &Gpu, terrain: &Terrain, extent: f32, crowns: &[[f32; 3]]) -
     let first_far = verts.len() as u32;
     for &e in &edge {
         let p = verts[e as usize].position;
+        let (x, y) = (p[0] * HORIZON, p[1] * HORIZON);
         verts.push(GroundVertex {
-            position: [p[0] * HORIZON, p[1] * HORIZON, p[2]],
+            position: [x, y, p[2]],
             normal: [0.0, 0.0, 1.0],
             open: 1.0,
+            woodland: paint(x, y),
+            crown_spacing,
+            canopy,
         });
     }
     let m = edge.len() as u32;
@@ -191,6 +281,44 @@ fn ground_mesh(gpu: &Gpu, terrain: &Terrain, extent: f32, crowns: &[[f32; 3]]) -
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn woodland_starts_past_its_meadow_and_leaves_clearings() {
+        let w = Woodland { start: 1000.0, ramp: 70.0, spacing: 7.0, shares: vec![1.0] };
+        // None on the meadow, whatever the direction.
+        for k in 0..64 {
+            let a = k as f32 / 64.0 * std::f32::consts::TAU;
+            assert_eq!(w.share(999.0 * a.cos(), 999.0 * a.sin()), 0.0);
+        }
+        // Beyond the edge: mostly woodland, with some clearings, over a ring 3–9 km out.
+        let (mut wood, mut open, mut n) = (0, 0, 0);
+        for i in 0..200 {
+            for j in 0..200 {
+                let (x, y) = (-9000.0 + 90.0 * i as f32, -9000.0 + 90.0 * j as f32);
+                let r = (x * x + y * y).sqrt();
+                if !(3000.0..9000.0).contains(&r) {
+                    continue;
+                }
+                let s = w.share(x, y);
+                assert!((0.0..=1.0).contains(&s));
+                n += 1;
+                wood += (s > 0.99) as usize;
+                open += (s < 0.01) as usize;
+            }
+        }
+        let (wood, open) = (wood as f32 / n as f32, open as f32 / n as f32);
+        assert!(wood > 0.5 && open > 0.03 && open < 0.35, "woodland {wood}, clearings {open}");
+        // It thickens over the ramp, monotonically along a ray that misses the clearings.
+        let ray = (0..64)
+            .map(|k| k as f32 / 64.0 * std::f32::consts::TAU)
+            .find(|a| w.share(2000.0 * a.cos(), 2000.0 * a.sin()) > 0.99)
+            .expect("a direction with woodland at 2 km");
+        let along: Vec<f32> = (0..=14)
+            .map(|k| 995.0 + 5.0 * k as f32)
+            .map(|r| w.share(r * ray.cos(), r * ray.sin()))
+            .collect();
+        assert!(along.windows(2).all(|p| p[1] >= p[0]), "{along:?}");
+    }
 
     #[test]
     fn the_floor_under_crowns_sees_less_sky_than_the_clearing() {
