@@ -101,16 +101,15 @@ impl Cell {
     }
 }
 
-fn run_config(
+/// `spec` with the three LOD switches `lods` (geometry, animation, wind field) and the
+/// command line's overrides.
+fn configure(
     spec: &SceneSpec,
-    gpu: &mut Option<Headless>,
     a: &Table3Bench,
-    (w, h): (u32, u32),
-    lods: (bool, bool, bool),
-    keep_previous: bool,
-) -> anyhow::Result<Cell> {
+    (geometry, animation, wind): (bool, bool, bool),
+) -> anyhow::Result<SceneSpec> {
     let mut spec = spec.clone();
-    (spec.lod.geometry, spec.lod.animation, spec.lod.wind) = lods;
+    (spec.lod.geometry, spec.lod.animation, spec.lod.wind) = (geometry, animation, wind);
     if let Some(f) = a.far_level {
         anyhow::ensure!((1..=6).contains(&f), "--far-level {f}: must be 1 … 6");
         spec.lod.far_level = f;
@@ -120,6 +119,27 @@ fn run_config(
         spec.lod.fraction = h0;
     }
     crate::render::apply_max_memory(&mut spec, a.max_memory)?;
+    Ok(spec)
+}
+
+/// Length of the camera path the benchmark follows, s (the default fly-in: 12 s).
+fn path_duration(spec: &SceneSpec, forest: &Forest) -> f32 {
+    if spec.camera_path.is_empty() {
+        sylva_forest::default_camera_path(spec, forest.radius).last().map_or(12.0, |k| k.t)
+    } else {
+        spec.camera_path.last().map_or(0.0, |k| k.t)
+    }
+}
+
+fn run_config(
+    spec: &SceneSpec,
+    gpu: &mut Option<Headless>,
+    a: &Table3Bench,
+    (w, h): (u32, u32),
+    lods: (bool, bool, bool),
+    keep_previous: bool,
+) -> anyhow::Result<Cell> {
+    let spec = configure(spec, a, lods)?;
     let mut forest = match Forest::new(&spec) {
         Ok(f) => f,
         Err(e) => return Ok(Cell { note: format!("not run: {e}"), ..Cell::default() }),
@@ -129,19 +149,23 @@ fn run_config(
     }
     let gpu = gpu.as_mut().context("renderer")?;
     let total = a.warmup + a.frames.max(1);
-    // The path's length: its last key (the default fly-in: 12 s).
-    let duration = if spec.camera_path.is_empty() {
-        sylva_forest::default_camera_path(&spec, forest.radius).last().map_or(12.0, |k| k.t)
-    } else {
-        spec.camera_path.last().map_or(0.0, |k| k.t)
-    };
+    let duration = path_duration(&spec, &forest);
     let dt = 0.1f32;
+    let cameras: Vec<_> = (0..total)
+        .map(|i| forest.camera_at(duration * i as f32 / (total - 1).max(1) as f32))
+        .collect();
+    // The frame's arrays grow to the path's largest before timing: built once for each of
+    // its cameras, last to first (so the level history ends where the path starts), no
+    // timed frame pays for growing them.
     let mut frame = FrameData::default();
+    for camera in cameras.iter().rev() {
+        forest.frame(camera, w as f32 / h as f32, &mut frame);
+    }
     let (mut sim, mut build, mut draw) = (Vec::new(), Vec::new(), Vec::new());
     let mut cell = Cell::default();
     let mut render_all = None;
     for i in 0..total {
-        let camera = forest.camera_at(duration * i as f32 / (total - 1).max(1) as f32);
+        let camera = cameras[i];
         let t = Instant::now();
         forest.step(dt);
         let t_sim = t.elapsed().as_secs_f64() * 1e3;
@@ -216,6 +240,35 @@ fn ssim(a: &[u8], b: &[u8], w: u32, h: u32) -> anyhow::Result<f64> {
     Ok(s.score)
 }
 
+/// The geometry LOD's own image error: the forest with all LODs and at full detail
+/// (geometry and animation LODs off, the same instance groups) before any step, so every
+/// tree stands in its rest pose and nothing but the drawn levels differs, seen from the
+/// path's last camera. Mean FLIP and SSIM of the first against the second; `None` where a
+/// configuration cannot be built or the full-detail frame is over `--max-image-triangles`.
+fn still_error(
+    spec: &SceneSpec,
+    gpu: &mut Headless,
+    a: &Table3Bench,
+    (w, h): (u32, u32),
+) -> anyhow::Result<Option<(f64, f64)>> {
+    let mut images = Vec::new();
+    for lods in [(true, true, true), (false, false, true)] {
+        let spec = configure(spec, a, lods)?;
+        let Ok(forest) = Forest::new(&spec) else { return Ok(None) };
+        let camera = forest.camera_at(path_duration(&spec, &forest));
+        let mut frame = FrameData::default();
+        forest.frame(&camera, w as f32 / h as f32, &mut frame);
+        if frame.stats.triangles as f64 > a.max_image_triangles {
+            return Ok(None);
+        }
+        images.push(gpu.render(&frame, &camera)?);
+    }
+    let [lod, full] = &images[..] else { return Ok(None) };
+    write_png(&a.out.join(format!("{}-still-all-LODs.png", spec.name)), w, h, lod)?;
+    write_png(&a.out.join(format!("{}-still-full-detail.png", spec.name)), w, h, full)?;
+    Ok(Some((flip(lod, full, w, h), ssim(lod, full, w, h)?)))
+}
+
 pub fn run(a: Table3Bench) -> anyhow::Result<()> {
     let (w, h) = parse_size(&a.size)?;
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
@@ -223,7 +276,7 @@ pub fn run(a: Table3Bench) -> anyhow::Result<()> {
     println!("machine: {machine}");
     let names: Vec<String> = a.scenes.split(',').map(|s| s.trim().to_string()).collect();
     let mut results: Vec<(String, usize, Vec<Cell>)> = Vec::new();
-    let mut floors: Vec<(String, Option<f64>)> = Vec::new();
+    let mut floors: Vec<Floor> = Vec::new();
     let mut adapter = String::new();
     for name in &names {
         let spec = SceneSpec::load(name)?;
@@ -264,7 +317,15 @@ pub fn run(a: Table3Bench) -> anyhow::Result<()> {
             0.1,
             floor.map_or("—".into(), |f| format!("{f:.3}"))
         );
-        floors.push((spec.name.clone(), floor));
+        let still = match gpu.as_mut() {
+            Some(g) => still_error(&spec, g, &a, (w, h))?,
+            None => None,
+        };
+        println!(
+            "  geometry LOD alone (rest pose, no motion), all LODs against full detail: {}",
+            still.map_or("—".into(), |(f, s)| format!("mean FLIP {f:.3}, SSIM {s:.3}"))
+        );
+        floors.push(Floor { scene: spec.name.clone(), motion: floor, still });
         for (cell, (label, ..)) in cells.iter_mut().zip(CONFIGS) {
             if let Some(img) = &cell.image {
                 cell.ssim = Some(ssim(img, ref_img, w, h)?);
@@ -289,6 +350,16 @@ pub fn run(a: Table3Bench) -> anyhow::Result<()> {
     }
     let popping = if a.popping_frames >= 3 { Some(popping(&a)?) } else { None };
     write_outputs(&a, &machine, &adapter, (w, h), &results, &floors, popping.as_deref())
+}
+
+/// What bounds the image error of a scene: one frame of motion at full detail, and the
+/// geometry LOD alone with nothing moving.
+struct Floor {
+    scene: String,
+    /// Mean FLIP between two consecutive full-detail frames.
+    motion: Option<f64>,
+    /// Mean FLIP and SSIM of all LODs against full detail, rest pose ([`still_error`]).
+    still: Option<(f64, f64)>,
 }
 
 /// Median and maximum of `v` (NaN when empty).
@@ -440,7 +511,7 @@ fn write_outputs(
     adapter: &str,
     (w, h): (u32, u32),
     results: &[(String, usize, Vec<Cell>)],
-    floors: &[(String, Option<f64>)],
+    floors: &[Floor],
     popping: Option<&str>,
 ) -> anyhow::Result<()> {
     let mut md = String::new();
@@ -521,7 +592,20 @@ fn write_outputs(
         "\nImage error floor — mean FLIP between two consecutive full-detail frames (0.1 s of wind): {}",
         floors
             .iter()
-            .map(|(n, f)| format!("{n} {}", f.map_or("—".into(), |f| format!("{f:.3}"))))
+            .map(|f| format!("{} {}", f.scene, f.motion.map_or("—".into(), |f| format!("{f:.3}"))))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    let _ = writeln!(
+        md,
+        "\nThe geometry LOD alone — all LODs against full detail before any step (every tree in its rest pose, nothing moving), the path's last camera: {}",
+        floors
+            .iter()
+            .map(|f| format!(
+                "{} {}",
+                f.scene,
+                f.still.map_or("—".into(), |(fl, ss)| format!("FLIP {fl:.3} / SSIM {ss:.3}"))
+            ))
             .collect::<Vec<_>>()
             .join(", ")
     );
