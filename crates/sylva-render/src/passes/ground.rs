@@ -96,7 +96,7 @@ pub fn mean_albedo(rgba: &[u8]) -> [f32; 3] {
 }
 
 /// Side of the clearings that break the woodland up, m (the scale of its value noise).
-const CLEARING_SCALE: f32 = 900.0;
+pub const CLEARING_SCALE: f32 = 900.0;
 
 impl Woodland {
     /// Share of woodland at ground point (x, y): 0 out to [`Woodland::start`], rising
