@@ -32,9 +32,9 @@ pub struct SceneAssets<'a> {
     pub ground_extent: f32,
     /// Crowns the ground lies under: x, y and radius, m ([`Forest::crowns`]).
     pub crowns: &'a [[f32; 3]],
-    /// Woodland painted on the ground around the forest ([`sylva_forest::Surround`]): the
-    /// distance from the centre where it starts, the width of its edge and the crowns'
-    /// spacing, m; `None` for open ground.
+    /// Woodland painted on the ground around the forest ([`sylva_forest::Surround`]): where
+    /// it starts, the width of its edge, the crowns' spacing and the species mix its colour
+    /// is taken from; `None` for open ground.
     pub woodland: Option<Woodland>,
     /// Sun, sky and fog.
     pub lighting: Lighting,
