@@ -224,8 +224,14 @@ fn tree_tint(base: vec4<f32>) -> vec3<f32> {
 // (interleaved gradient noise, Jimenez 2014); a draw keeps the pixels whose value lies in
 // its instance's fade range, so the two levels of a fading tree cover complementary pixels.
 fn dither_keeps(pixel: vec2<f32>, fade: vec2<f32>) -> bool {
-    let d = fract(52.9829189 * fract(dot(floor(pixel), vec2<f32>(0.06711056, 0.00583715))));
+    let d = dither_value(pixel);
     return d >= fade.x && d < fade.y;
+}
+
+// The dither value of a pixel (interleaved gradient noise). Another cross-fade in the same
+// draw reads it at transposed, shifted coordinates, which decorrelates the two.
+fn dither_value(pixel: vec2<f32>) -> f32 {
+    return fract(52.9829189 * fract(dot(floor(pixel), vec2<f32>(0.06711056, 0.00583715))));
 }
 
 // The tree pipelines' species textures.

@@ -412,3 +412,46 @@ fn woodland_around_the_forest_is_painted_past_its_meadow_and_nowhere_else() {
     assert!((m_open - m_wood).abs() < 1.0, "meadow {m_wood:.1} against {m_open:.1}");
     assert!((brightness(&img_open, (W / 2, 3)) - brightness(&img_wood, (W / 2, 3))).abs() < 1.0);
 }
+
+#[test]
+fn an_impostor_turns_from_one_baked_view_to_the_next_without_a_jump() {
+    // One tree, always an impostor (h₀ = 100), in calm air; the camera circles it in steps
+    // of 1° through 100°, so it passes at least two half-way directions between baked views
+    // (they are 45° apart). Without the cross-fade, the step across one swaps the whole
+    // crown's picture at once; with it, the swap is spread over the steps of the band.
+    let mut spec = SceneSpec::builtin("small").expect("small scene");
+    spec.trees = 1;
+    spec.wind = "calm".into();
+    spec.lod.fraction = 100.0;
+    spec.lighting.shadows = false;
+    let mut forest = Forest::new(&spec).expect("forest");
+    let mut gpu = Headless::new(&forest, W, H).unwrap_or_else(|e| panic!("{e}"));
+    let mut frame = FrameData::default();
+    forest.step(1.0 / 30.0);
+    forest.frame(&forest.default_camera(), W as f32 / H as f32, &mut frame);
+    let base = frame.instances[0].position;
+    let mut images = Vec::new();
+    for deg in 0..=100 {
+        let a = (deg as f32).to_radians();
+        let camera = Camera {
+            eye: [base[0] + 45.0 * a.cos(), base[1] + 45.0 * a.sin(), base[2] + 8.0],
+            target: [base[0], base[1], base[2] + 8.0],
+            fov_deg: 30.0,
+            near: 0.5,
+            far: 8000.0,
+        };
+        forest.frame(&camera, W as f32 / H as f32, &mut frame);
+        assert!(frame.instances.iter().all(|i| i.tag & 15 == 15), "an impostor");
+        images.push(gpu.render(&frame, &camera).expect("render"));
+    }
+    let mut steps: Vec<f64> = images.windows(2).map(|p| mean_abs_diff(&p[0], &p[1])).collect();
+    let max = steps.iter().copied().fold(0.0, f64::max);
+    steps.sort_by(f64::total_cmp);
+    let median = steps[steps.len() / 2];
+    eprintln!("view steps: median {median:.3}, max {max:.3}");
+    assert!(median > 0.0, "the impostor turns with the camera");
+    assert!(
+        max < 3.0 * median,
+        "a 1° step changes the image by {max:.3}, the median by {median:.3}"
+    );
+}

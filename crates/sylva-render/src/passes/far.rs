@@ -2,7 +2,10 @@
 //! [`VIEWS`] directions around it (its finest LOD level within [`BAKE_TRIANGLES`], rest pose,
 //! orthographic, horizontal) into an atlas of albedo and tree-space normals; a far tree is
 //! then one camera-facing quad (two triangles) showing the nearest view, lit per pixel like
-//! the near trees and swayed by its trunk-top joint.
+//! the near trees and swayed by its trunk-top joint. Seen from between two views, over the
+//! middle half of the angle between them, it shows both, cross-faded per pixel by a
+//! screen-space dither (`VIEW_BAND` in `far.wgsl`), so a tree does not jump from one view to
+//! the next as the camera goes round it.
 //!
 //! The atlas keeps the crown's look at every distance: its mip chain averages colour
 //! weighted by opacity (no dark fringes from the transparent background) and rescales each
@@ -89,7 +92,7 @@ impl FarPass {
                 texture_entry(1),
                 wgpu::BindGroupLayoutEntry {
                     binding: 2,
-                    visibility: wgpu::ShaderStages::VERTEX,
+                    visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
                     ty: wgpu::BindingType::Buffer {
                         ty: wgpu::BufferBindingType::Uniform,
                         has_dynamic_offset: false,

@@ -1,8 +1,11 @@
 // Impostors: a far tree as one quad (two triangles) turned about the vertical to face the
 // camera, showing the view of the tree (rendered once at start-up from `views` directions
-// around it, far.rs) nearest the direction it is seen from. Lit per pixel from the baked
-// tree-space normals like the near trees, swayed by its trunk-top joint: the quad shears with
-// the trunk top's displacement, in proportion to height. Into the sun's shadow map
+// around it, far.rs) nearest the direction it is seen from. Between two baked views, over
+// the middle half of the angle between them (VIEW_BAND), the two are cross-faded per pixel
+// by a screen-space dither, so a tree seen from a turning direction never jumps from one
+// view to the next. Lit per pixel from the baked tree-space normals like the near trees,
+// swayed by its trunk-top joint: the quad shears with the trunk top's displacement, in
+// proportion to height. Into the sun's shadow map
 // (SHADOW) the quad is turned to face the sun instead, so the tree casts the shadow of the
 // view nearest the sun's azimuth.
 
@@ -32,6 +35,7 @@ struct FarSpecies {
 struct FarOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) fog: vec4<f32>,
+    // Place on the quad: x across (0 … 1), y down (0 at the top).
     @location(1) uv: vec2<f32>,
     @location(2) @interpolate(flat) yaw: f32,
     @location(3) @interpolate(flat) fade: vec2<f32>,
@@ -40,9 +44,20 @@ struct FarOut {
     @location(6) glow: vec3<f32>,
     @location(7) shadow_near: vec4<f32>,
     @location(8) shadow_far: vec4<f32>,
+    // The two baked views nearest the direction seen along, and the second's share.
+    @location(9) @interpolate(flat) views: vec2<u32>,
+    @location(10) @interpolate(flat) blend: f32,
 };
 
 const TAU: f32 = 6.28318530718;
+// Share of the angle between two baked views over which they are cross-faded (centred on
+// the half-way direction); outside it one view is shown alone.
+const VIEW_BAND: f32 = 0.5;
+
+// Atlas coordinates of place `uv` on the quad in view `k`.
+fn view_uv(uv: vec2<f32>, k: u32) -> vec2<f32> {
+    return vec2<f32>((f32(k) + uv.x) / f32(far.views), uv.y);
+}
 
 @vertex
 fn vs_main(@builtin(vertex_index) vi: u32, inst: InstanceIn) -> FarOut {
@@ -60,10 +75,13 @@ fn vs_main(@builtin(vertex_index) vi: u32, inst: InstanceIn) -> FarOut {
     }
     d = normalize(d);
     let right = vec3<f32>(d.y, -d.x, 0.0);
-    // Nearest baked view: view k looked along azimuth k * TAU / views in tree space.
+    // Baked view k looked along azimuth k * TAU / views in tree space: the two either side
+    // of this direction, and how far it lies from the first towards the second.
     let n = f32(far.views);
     let azimuth = atan2(d.y, d.x) - yaw;
-    let k = u32(((round(azimuth / TAU * n) % n) + n) % n);
+    let s = ((azimuth / TAU * n) % n + n) % n;
+    let k0 = u32(floor(s)) % far.views;
+    let blend = clamp((fract(s) - 0.5) / VIEW_BAND + 0.5, 0.0, 1.0);
     let z = far.bottom + corner.y * far.extent;
     var p = right * ((corner.x - 0.5) * far.extent * inst.scale) + vec3<f32>(0.0, 0.0, z * inst.scale);
     // Sway: the trunk top's displacement, sheared in with height.
@@ -80,7 +98,9 @@ fn vs_main(@builtin(vertex_index) vi: u32, inst: InstanceIn) -> FarOut {
         out.shadow_near = shadow_near(world, globals.sun_dir);
         out.shadow_far = shadow_far(world, globals.sun_dir);
     }
-    out.uv = vec2<f32>((f32(k) + corner.x) / n, 1.0 - corner.y);
+    out.uv = vec2<f32>(corner.x, 1.0 - corner.y);
+    out.views = vec2<u32>(k0, (k0 + 1u) % far.views);
+    out.blend = blend;
     out.yaw = yaw;
     out.fade = inst.fade;
     out.tint = tree_tint(inst.base);
@@ -88,21 +108,30 @@ fn vs_main(@builtin(vertex_index) vi: u32, inst: InstanceIn) -> FarOut {
     return out;
 }
 
-// Into the shadow map: where the view shows the tree.
+// Into the shadow map: where the view nearest the sun's azimuth shows the tree.
 @fragment
 fn fs_shadow(in: FarOut) {
-    if (textureSample(far_albedo, linear_sampler, in.uv).a < 0.5) {
+    let k = select(in.views.x, in.views.y, in.blend >= 0.5);
+    if (textureSample(far_albedo, linear_sampler, view_uv(in.uv, k)).a < 0.5) {
         discard;
     }
 }
 
 @fragment
 fn fs_main(in: FarOut) -> @location(0) vec4<f32> {
-    let albedo = textureSample(far_albedo, linear_sampler, in.uv);
+    // The view is chosen per pixel, so the atlas is sampled with the place's own gradients
+    // (a view's cell is 1 / views of the atlas wide): neighbouring pixels showing different
+    // views must not read as a jump across the atlas.
+    let scale = vec2<f32>(1.0 / f32(far.views), 1.0);
+    let gx = dpdx(in.uv) * scale;
+    let gy = dpdy(in.uv) * scale;
+    let k = select(in.views.x, in.views.y, dither_value(in.clip.yx + vec2<f32>(7.0, 3.0)) < in.blend);
+    let uv = view_uv(in.uv, k);
+    let albedo = textureSampleGrad(far_albedo, linear_sampler, uv, gx, gy);
     if (albedo.a < 0.5 || !dither_keeps(in.clip.xy, in.fade)) {
         discard;
     }
-    let baked = textureSample(far_normal, linear_sampler, in.uv);
+    let baked = textureSampleGrad(far_normal, linear_sampler, uv, gx, gy);
     var n = baked.xyz * 2.0 - 1.0;
     if (dot(n, n) < 1e-6) {
         n = vec3<f32>(0.0, 0.0, 1.0);
