@@ -312,15 +312,23 @@ pub struct LodSpec {
     /// centre (instance groups, within `sim_joint_budget`). Off: every tree simulated on its
     /// own, each with its own wind sample and yaw. Default on.
     pub wind: bool,
-    /// Image-height fraction from which a tree is drawn at full detail. Default 1.
+    /// Image-height fraction from which a tree is drawn at full detail. Default 0.2
+    /// (`DEFAULT_LOD_FRACTION`).
     pub fraction: f32,
-    /// First level drawn as an impostor (1 … 6). Default 3.
+    /// First level drawn as an impostor (1 … 6). Default 1 (`DEFAULT_FAR_LEVEL`): full
+    /// detail, then the impostor.
     pub far_level: u32,
 }
 
 impl Default for LodSpec {
     fn default() -> LodSpec {
-        LodSpec { geometry: true, animation: true, wind: true, fraction: 1.0, far_level: 3 }
+        LodSpec {
+            geometry: true,
+            animation: true,
+            wind: true,
+            fraction: crate::driver::DEFAULT_LOD_FRACTION,
+            far_level: crate::driver::DEFAULT_FAR_LEVEL,
+        }
     }
 }
 

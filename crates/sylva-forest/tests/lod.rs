@@ -116,7 +116,10 @@ fn joints_not_drawn_are_neither_uploaded_nor_stepped() {
 
 #[test]
 fn moving_closer_switches_levels_through_a_cross_fade_and_the_crown_blends_in() {
-    let spec = SceneSpec::builtin("small").expect("small");
+    // The mesh levels in use (the default goes from the impostor straight to full detail).
+    let mut spec = SceneSpec::builtin("small").expect("small");
+    spec.lod.fraction = 1.0;
+    spec.lod.far_level = 3;
     let mut forest = Forest::new(&spec).expect("forest");
     let near = forest.default_camera();
     let far = far_camera(&forest);

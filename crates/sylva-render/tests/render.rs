@@ -253,7 +253,7 @@ fn the_far_cascade_shadows_ground_beyond_the_near_ones_reach() {
 
 #[test]
 fn impostors_cast_shadows_too() {
-    // Every tree an impostor (h₀ = 100: trees under 11 image heights): their quads, turned
+    // Every tree an impostor (h₀ = 100: trees under 100 image heights): their quads, turned
     // to the sun in the shadow map, shade the ground behind them.
     let mut spec = SceneSpec::builtin("small").expect("small scene");
     spec.lod.fraction = 100.0;
@@ -339,8 +339,8 @@ fn the_fir_crown_hides_most_of_the_sky_behind_it_at_twenty_metres() {
 fn the_level_overlay_tints_each_tree_by_the_level_it_is_drawn_at() {
     let spec = SceneSpec::builtin("small").expect("small scene");
     let mut forest = Forest::new(&spec).expect("forest");
-    // Coarse enough that the far trees are impostors and the near ones meshes.
-    forest.set_lod_fraction(3.0);
+    // Coarse enough that the far trees are impostors and the near ones meshes of the chain.
+    forest.set_lod(sylva_forest::LodSettings { fraction: 3.0, far_level: 3, ..forest.lod() });
     let camera = forest.default_camera();
     let mut gpu = Headless::new(&forest, W, H).unwrap_or_else(|e| panic!("{e}"));
     let mut frame = FrameData::default();

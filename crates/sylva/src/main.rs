@@ -91,8 +91,8 @@ fn demo(a: DemoArgs) -> anyhow::Result<()> {
             Err(e) => eprintln!("viewer unavailable ({e:#}); rendering headless instead"),
         }
     }
-    // Headless: scene A, 5 s at 10 frames per second, sized and detailed so that a software
-    // rasteriser finishes in about a minute.
+    // Headless: scene A, 5 s at 10 frames per second at its default level of detail, sized
+    // so that a software rasteriser finishes in about a minute.
     let args = render::RenderArgs {
         scene: "A".into(),
         seconds: 5.0,
@@ -100,7 +100,7 @@ fn demo(a: DemoArgs) -> anyhow::Result<()> {
         size: "800x600".into(),
         out: a.out,
         wind: None,
-        lod_fraction: Some(3.0),
+        lod_fraction: None,
         no_gif: false,
         camera_path: false,
         lod: render::LodArgs::default(),

@@ -32,7 +32,7 @@ pub struct RenderArgs {
     pub wind: Option<WindSource>,
     /// Geometry-LOD threshold h₀: full detail only for trees taller than this fraction of
     /// the image; one level coarser per factor 3 smaller. Larger is coarser and faster.
-    /// Default: the scene's (`[lod] fraction`, 1 unless set).
+    /// Default: the scene's (`[lod] fraction`, 0.2 unless set).
     #[arg(value_parser = crate::finite::<f32>, long)]
     pub lod_fraction: Option<f32>,
     /// Skip the animated GIF.
@@ -59,7 +59,8 @@ pub struct LodArgs {
     /// Wind-field LOD off: every tree simulated on its own (no instance groups).
     #[arg(long)]
     pub no_wind_lod: bool,
-    /// First LOD level drawn as an impostor (1 … 6; the scene's, default 3).
+    /// First LOD level drawn as an impostor (1 … 6; the scene's, default 1: full detail,
+    /// then the impostor).
     #[arg(long)]
     pub far_level: Option<u32>,
     /// Memory the forest's animation state may take, GB (replaces the scene's

@@ -37,7 +37,8 @@ pub struct ViewArgs {
     #[arg(long, default_value = "A")]
     pub scene: String,
     /// Geometry-LOD threshold h₀ (see `sylva render --help`). Default: the scene's on a
-    /// GPU, 3 on a software rasteriser such as lavapipe.
+    /// GPU, 1 on a software rasteriser such as lavapipe (only trees filling the image at
+    /// full detail, the rest impostors).
     #[arg(value_parser = crate::finite::<f32>, long)]
     pub lod_fraction: Option<f32>,
     /// Wind instead of the scene's: a preset (calm, breeze, strong, storm), a steady speed
@@ -127,7 +128,7 @@ impl App {
         surface.configure(&gpu.device, &config);
         let software = gpu.adapter.get_info().device_type == wgpu::DeviceType::Cpu;
         let forest = &mut self.viewer.forest;
-        let h0 = self.lod_fraction.unwrap_or(if software { 3.0 } else { forest.lod().fraction });
+        let h0 = self.lod_fraction.unwrap_or(if software { 1.0 } else { forest.lod().fraction });
         forest.set_lod_fraction(h0);
         let renderer =
             Renderer::for_forest(&gpu, forest, config.format, config.width, config.height)?;
