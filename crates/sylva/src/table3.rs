@@ -54,6 +54,11 @@ pub struct Table3Bench {
     /// quarters of the free memory): raise it to run the wind-field LOD off on C and D.
     #[arg(value_parser = crate::finite::<f64>, long)]
     max_memory: Option<f64>,
+    /// Run only the configuration with all LODs, and its image error against full detail
+    /// (without the motion floor's second full-detail frame): how a threshold or level
+    /// choice trades triangles for error, at a third of the full run's cost or less.
+    #[arg(long)]
+    all_lods_only: bool,
     /// Frames of the popping measurement (scene `small`, calm, along its fly-in; 0: skip).
     #[arg(long, default_value_t = 40)]
     popping_frames: usize,
@@ -286,7 +291,11 @@ pub fn run(a: Table3Bench) -> anyhow::Result<()> {
         println!("scene {} ({} trees):", spec.name, spec.trees);
         let mut gpu: Option<Headless> = None;
         let mut cells = Vec::new();
-        for (label, g, an, wi) in CONFIGS {
+        for (k, (label, g, an, wi)) in CONFIGS.into_iter().enumerate() {
+            if a.all_lods_only && k > 0 {
+                cells.push(Cell { note: "not run (--all-lods-only)".into(), ..Cell::default() });
+                continue;
+            }
             let cell = run_config(&spec, &mut gpu, &a, (w, h), (g, an, wi), false)?;
             println!(
                 "  {label:<24} {:>7} fps  sim {:>6.1} ms  frame {:>6.1} ms  render {:>8} ms  {:>7.2} M tris  {:>6.0} draws  {:>9.0} joints  {:>7.2} MB up  {}",
@@ -303,7 +312,8 @@ pub fn run(a: Table3Bench) -> anyhow::Result<()> {
             cells.push(cell);
         }
         // Reference: full detail (geometry and animation LODs off), same instance groups.
-        let reference = run_config(&spec, &mut gpu, &a, (w, h), (false, false, true), true)?;
+        let reference =
+            run_config(&spec, &mut gpu, &a, (w, h), (false, false, true), !a.all_lods_only)?;
         if let Some(g) = &gpu {
             adapter = g.gpu.describe();
         }

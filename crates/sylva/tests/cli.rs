@@ -406,3 +406,49 @@ fn resource_guards_refuse_before_work_with_what_to_change() {
         assert!(t0.elapsed().as_secs_f64() < 5.0, "refused up front, took {:?}", t0.elapsed());
     }
 }
+
+#[test]
+fn table3_with_all_lods_only_runs_that_configuration_and_its_image_error() {
+    let dir = temp("table3");
+    let d = dir.to_str().expect("utf-8 path");
+    let args = [
+        "bench",
+        "table3",
+        "--scenes",
+        "small",
+        "--size",
+        "128x96",
+        "--frames",
+        "1",
+        "--warmup",
+        "0",
+        "--popping-frames",
+        "0",
+        "--all-lods-only",
+        "--out",
+        d,
+    ];
+    let (ok, text) = sylva(&args);
+    assert!(ok, "{text}");
+    let csv = std::fs::read_to_string(dir.join("table3.csv")).expect("table3.csv");
+    let rows: Vec<Vec<&str>> =
+        csv.lines().filter(|l| l.starts_with("small,")).map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 4, "{csv}");
+    // Columns: scene, trees, configuration, fps, sim_ms, frame_ms, render_ms, triangles, …,
+    // flip, ssim. The first configuration ran and was compared with full detail.
+    assert_eq!(rows[0][2], "with all LODs");
+    let triangles: f64 = rows[0][7].parse().expect("triangles");
+    assert!(triangles > 0.0, "{csv}");
+    for col in [13, 14] {
+        let v: f64 = rows[0][col].parse().unwrap_or_else(|_| panic!("column {col}: {csv}"));
+        assert!((0.0..=1.0).contains(&v), "{csv}");
+    }
+    // The others did not run, and say so.
+    for r in &rows[1..] {
+        assert!(r[7] == "0" && r[13].is_empty(), "{csv}");
+    }
+    let md = std::fs::read_to_string(dir.join("table3.md")).expect("table3.md");
+    assert_eq!(md.matches("not run (--all-lods-only)").count(), 3, "{md}");
+    assert!(dir.join("small-with-all-LODs.png").exists());
+    assert!(dir.join("small-full-detail.png").exists());
+}
