@@ -18,7 +18,7 @@ use std::time::Instant;
 
 use anyhow::Context;
 use clap::Args;
-use sylva_forest::{Forest, FrameData, SceneSpec};
+use sylva_forest::{Camera, Forest, FrameData, SceneSpec};
 use sylva_render::Headless;
 use sylva_wind::io::atomic::write_atomic;
 
@@ -245,17 +245,40 @@ fn ssim(a: &[u8], b: &[u8], w: u32, h: u32) -> anyhow::Result<f64> {
     Ok(s.score)
 }
 
+/// What the geometry LOD's image error is measured against, rest pose ([`still_error`]).
+#[derive(Debug, Clone, Copy)]
+struct Still {
+    /// Mean FLIP and SSIM of all LODs against full detail.
+    lod: (f64, f64),
+    /// Mean FLIP and SSIM of full detail against itself seen a quarter pixel aside: how much
+    /// sampling alone moves per-pixel metrics where foliage is finer than a pixel.
+    sampling: (f64, f64),
+}
+
+/// `camera` turned about its eye by a quarter of a pixel's angle (image `h` pixels tall),
+/// to the right.
+fn quarter_pixel_aside(camera: &Camera, h: u32) -> Camera {
+    let f: [f32; 3] = std::array::from_fn(|i| camera.target[i] - camera.eye[i]);
+    let dist = f.iter().map(|v| v * v).sum::<f32>().sqrt().max(1e-3);
+    let right = [f[1], -f[0], 0.0];
+    let rn = (right[0] * right[0] + right[1] * right[1]).sqrt().max(1e-6);
+    let angle = 0.25 * camera.fov_deg.to_radians() / h.max(1) as f32;
+    let shift = dist * angle.tan() / rn;
+    Camera { target: std::array::from_fn(|i| camera.target[i] + right[i] * shift), ..*camera }
+}
+
 /// The geometry LOD's own image error: the forest with all LODs and at full detail
 /// (geometry and animation LODs off, the same instance groups) before any step, so every
 /// tree stands in its rest pose and nothing but the drawn levels differs, seen from the
-/// last timed frame's camera. Mean FLIP and SSIM of the first against the second; `None` where a
-/// configuration cannot be built or the full-detail frame is over `--max-image-triangles`.
+/// last timed frame's camera; and, for scale, full detail against itself turned a quarter
+/// pixel aside. `None` where a configuration cannot be built or the full-detail frame is
+/// over `--max-image-triangles`.
 fn still_error(
     spec: &SceneSpec,
     gpu: &mut Headless,
     a: &Table3Bench,
     (w, h): (u32, u32),
-) -> anyhow::Result<Option<(f64, f64)>> {
+) -> anyhow::Result<Option<Still>> {
     // Full detail first: where it is over the image limit, nothing is rendered.
     let mut images = Vec::new();
     for lods in [(false, false, true), (true, true, true)] {
@@ -270,11 +293,19 @@ fn still_error(
             return Ok(None);
         }
         images.push(gpu.render(&frame, &camera)?);
+        if !lods.0 {
+            let aside = quarter_pixel_aside(&camera, h);
+            forest.frame(&aside, w as f32 / h as f32, &mut frame);
+            images.push(gpu.render(&frame, &aside)?);
+        }
     }
-    let [full, lod] = &images[..] else { return Ok(None) };
+    let [full, aside, lod] = &images[..] else { return Ok(None) };
     write_png(&a.out.join(format!("{}-still-all-LODs.png", spec.name)), w, h, lod)?;
     write_png(&a.out.join(format!("{}-still-full-detail.png", spec.name)), w, h, full)?;
-    Ok(Some((flip(lod, full, w, h), ssim(lod, full, w, h)?)))
+    Ok(Some(Still {
+        lod: (flip(lod, full, w, h), ssim(lod, full, w, h)?),
+        sampling: (flip(aside, full, w, h), ssim(aside, full, w, h)?),
+    }))
 }
 
 pub fn run(a: Table3Bench) -> anyhow::Result<()> {
@@ -336,7 +367,15 @@ pub fn run(a: Table3Bench) -> anyhow::Result<()> {
         };
         println!(
             "  geometry LOD alone (rest pose, no motion), all LODs against full detail: {}",
-            still.map_or("—".into(), |(f, s)| format!("mean FLIP {f:.3}, SSIM {s:.3}"))
+            still
+                .map_or("—".into(), |s| format!("mean FLIP {:.3}, SSIM {:.3}", s.lod.0, s.lod.1))
+        );
+        println!(
+            "  sampling alone: full detail against itself a quarter pixel aside: {}",
+            still.map_or("—".into(), |s| format!(
+                "mean FLIP {:.3}, SSIM {:.3}",
+                s.sampling.0, s.sampling.1
+            ))
         );
         floors.push(Floor { scene: spec.name.clone(), motion: floor, still });
         for (cell, (label, ..)) in cells.iter_mut().zip(CONFIGS) {
@@ -371,8 +410,8 @@ struct Floor {
     scene: String,
     /// Mean FLIP between two consecutive full-detail frames.
     motion: Option<f64>,
-    /// Mean FLIP and SSIM of all LODs against full detail, rest pose ([`still_error`]).
-    still: Option<(f64, f64)>,
+    /// The geometry LOD's error and the sampling floor, rest pose ([`still_error`]).
+    still: Option<Still>,
 }
 
 /// Median and maximum of `v` (NaN when empty).
@@ -617,7 +656,24 @@ fn write_outputs(
             .map(|f| format!(
                 "{} {}",
                 f.scene,
-                f.still.map_or("—".into(), |(fl, ss)| format!("FLIP {fl:.3} / SSIM {ss:.3}"))
+                f.still
+                    .map_or("—".into(), |s| format!("FLIP {:.3} / SSIM {:.3}", s.lod.0, s.lod.1))
+            ))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    let _ = writeln!(
+        md,
+        "\nSampling alone — full detail in the rest pose against itself with the camera turned a quarter pixel aside (how much per-pixel metrics move where foliage is finer than a pixel): {}",
+        floors
+            .iter()
+            .map(|f| format!(
+                "{} {}",
+                f.scene,
+                f.still.map_or("—".into(), |s| format!(
+                    "FLIP {:.3} / SSIM {:.3}",
+                    s.sampling.0, s.sampling.1
+                ))
             ))
             .collect::<Vec<_>>()
             .join(", ")
