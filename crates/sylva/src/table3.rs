@@ -404,14 +404,28 @@ pub fn run(a: Table3Bench) -> anyhow::Result<()> {
     write_outputs(&a, &machine, &adapter, (w, h), &results, &floors, popping.as_deref())
 }
 
-/// What bounds the image error of a scene: one frame of motion at full detail, and the
-/// geometry LOD alone with nothing moving.
+/// What to read a scene's image error against: one frame of motion at full detail, the
+/// geometry LOD alone with nothing moving, and sampling alone.
 struct Floor {
     scene: String,
     /// Mean FLIP between two consecutive full-detail frames.
     motion: Option<f64>,
     /// The geometry LOD's error and the sampling floor, rest pose ([`still_error`]).
     still: Option<Still>,
+}
+
+/// "A 0.123, B —": one figure per scene, a dash where there is none.
+fn per_scene(floors: &[Floor], figure: impl Fn(&Floor) -> Option<String>) -> String {
+    floors
+        .iter()
+        .map(|f| format!("{} {}", f.scene, figure(f).unwrap_or_else(|| "—".into())))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// Mean FLIP and SSIM as the Markdown writes them.
+fn flip_ssim((flip, ssim): (f64, f64)) -> String {
+    format!("FLIP {flip:.3} / SSIM {ssim:.3}")
 }
 
 /// Median and maximum of `v` (NaN when empty).
@@ -642,41 +656,17 @@ fn write_outputs(
     let _ = writeln!(
         md,
         "\nImage error floor — mean FLIP between two consecutive full-detail frames (0.1 s of wind): {}",
-        floors
-            .iter()
-            .map(|f| format!("{} {}", f.scene, f.motion.map_or("—".into(), |f| format!("{f:.3}"))))
-            .collect::<Vec<_>>()
-            .join(", ")
+        per_scene(floors, |f| f.motion.map(|m| format!("{m:.3}")))
     );
     let _ = writeln!(
         md,
         "\nThe geometry LOD alone — all LODs against full detail before any step (every tree in its rest pose, nothing moving), the last timed frame's camera: {}",
-        floors
-            .iter()
-            .map(|f| format!(
-                "{} {}",
-                f.scene,
-                f.still
-                    .map_or("—".into(), |s| format!("FLIP {:.3} / SSIM {:.3}", s.lod.0, s.lod.1))
-            ))
-            .collect::<Vec<_>>()
-            .join(", ")
+        per_scene(floors, |f| f.still.map(|s| flip_ssim(s.lod)))
     );
     let _ = writeln!(
         md,
         "\nSampling alone — full detail in the rest pose against itself with the camera turned a quarter pixel aside (how much per-pixel metrics move where foliage is finer than a pixel): {}",
-        floors
-            .iter()
-            .map(|f| format!(
-                "{} {}",
-                f.scene,
-                f.still.map_or("—".into(), |s| format!(
-                    "FLIP {:.3} / SSIM {:.3}",
-                    s.sampling.0, s.sampling.1
-                ))
-            ))
-            .collect::<Vec<_>>()
-            .join(", ")
+        per_scene(floors, |f| f.still.map(|s| flip_ssim(s.sampling)))
     );
     // Speed-up of each LOD: with all LODs against that one off, in frames per second and in
     // CPU time (simulation + frame building), beside the paper's.
