@@ -40,9 +40,10 @@
 //! **Joint order, uploads and animation LOD.** Each species' skeleton is put in LOD order
 //! (`sylva_tree::lod_order`): the trunk first, then the joints of the coarsest level, and
 //! so on, so the joints a level draws are a prefix (an impostor needs only the trunk). Per
-//! lane group of 16 simulated instances, [`Forest::frame`] uploads the prefix its finest
-//! drawn level needs (nothing for a group with no tree in view), and records the prefix
-//! the next [`Forest::step`] simulates: that of the level half a level finer
+//! simulation, [`Forest::frame`] uploads the prefix the finest level its trees are drawn
+//! at needs (nothing for one with no tree in view; see [`FrameData::palettes`] for the
+//! layout), and records per lane group of 16 simulated instances the prefix the next
+//! [`Forest::step`] simulates: that of the level half a level finer
 //! ([`SIM_MARGIN`]), so a tree about to move closer is already simulated when drawn. The
 //! joints beyond are not stepped at all (their drag is felt as a lumped static load by the
 //! simulated ones, see `sylva_sway::batch`), and blend in from rest when switched back on.
@@ -113,9 +114,10 @@ pub struct Instance {
     pub yaw: f32,
     /// Uniform scale.
     pub scale: f32,
-    /// Where the instance's joint palettes lie in [`FrameData::palettes`] (the lane layout:
-    /// element e of joint j at `palette.base + (12 j + e) · palette.stride`, the stride
-    /// being the instances of its lane group).
+    /// Where the instance's joint palettes lie in [`FrameData::palettes`]: element e of
+    /// joint j at `palette.base + (12 j + e) · palette.stride`, the stride being the
+    /// instances of its lane group (the lane layout) or 1 (one simulation's palettes in a
+    /// row, see [`FrameData::palettes`]).
     pub palette: PaletteSlot,
     /// Leaf flutter phase, rad.
     pub leaf_phase: f32,
@@ -270,12 +272,15 @@ pub struct FrameData {
     /// the camera first: drawn in this order, near crowns fill the depth buffer before the
     /// ones they hide, whose fragments the depth test then rejects before shading.
     pub buckets: Vec<Bucket>,
-    /// Joint palettes the drawn trees use (3×4 row-major, rest → animated, tree space), as
-    /// the simulation computes them: per lane group of up to 16 simulated instances, per
-    /// joint, per matrix element, the group's values side by side (see
-    /// [`Instance::palette`]). A lane group with a tree drawn as a mesh has all its joints
-    /// here; one whose drawn trees are all impostors has only its trunk-top joint (the
-    /// impostor's joint 0). Groups with no drawn tree are left out. No padding.
+    /// Joint palettes the drawn trees use (3×4 row-major, rest → animated, tree space).
+    /// Each simulation's palettes are the prefix of joints the finest level any of its
+    /// trees is drawn at reads (an impostor: the trunk). A lane group (up to 16 simulated
+    /// instances) whose simulations all need the same prefix has it as the simulation
+    /// computes it: per joint, per matrix element, the group's values side by side. One
+    /// whose simulations need different prefixes (a near tree among far ones) has each
+    /// simulation's prefix in a row instead, so a fine level's joints are sent only for
+    /// the simulations drawn at it. [`Instance::palette`] says which. Simulations with no
+    /// drawn tree are left out. No padding.
     pub palettes: Vec<f32>,
     /// Mean wind at the scene centre, 20 m up, world m/s.
     pub wind: [f32; 3],
@@ -290,10 +295,12 @@ pub struct FrameData {
     lod_state: Vec<f32>,
     /// Per lane group (all species in a row): joints to upload (a prefix; 0: not drawn).
     upload: Vec<u32>,
+    /// Per simulation (lane group · 16 + lane): joints its drawn trees read (a prefix).
+    need: Vec<u32>,
+    /// Per simulation: where its palettes lie in `palettes`.
+    slots: Vec<PaletteSlot>,
     /// Per lane group: joints the next step is to simulate.
     simulate: Vec<u32>,
-    /// Per lane group: offset of its palettes in `palettes`.
-    offsets: Vec<u32>,
 }
 
 impl FrameData {
@@ -958,6 +965,8 @@ impl Forest {
             v.clear();
             v.resize(self.lane_groups, 0);
         }
+        out.need.clear();
+        out.need.resize(self.lane_groups * LANES, 0);
         let lod = self.lod;
         let mut stats = FrameStats { trees: self.trees.len(), ..FrameStats::default() };
         let cone = camera.cone(aspect);
@@ -1003,6 +1012,8 @@ impl Forest {
             for (group, old) in [(*g, false)].into_iter().chain(switch.map(|(_, f)| (f, true))) {
                 let lane = sp.lane_base + group as usize / LANES;
                 out.upload[lane] = out.upload[lane].max(joints(a) as u32);
+                let own = sp.lane_base * LANES + group as usize;
+                out.need[own] = out.need[own].max(joints(a) as u32);
                 out.simulate[lane] = out.simulate[lane].max(joints(sim) as u32);
                 for level in a..=b {
                     out.keys.push((level * n_species + p.species, i as u32 | (old as u32) << 31));
@@ -1059,11 +1070,11 @@ impl Forest {
             }
             run = end;
         }
-        // Palettes of the lane groups that are drawn: the prefix of joints their finest
+        // Palettes of the simulations that are drawn: the prefix of joints their finest
         // drawn level uses (a contiguous run: the batch lays palettes out joint-major).
         out.palettes.clear();
-        out.offsets.clear();
-        out.offsets.resize(self.lane_groups, u32::MAX);
+        out.slots.clear();
+        out.slots.resize(self.lane_groups * LANES, PaletteSlot::default());
         for s in &self.species {
             let n = s.batch.species().len();
             for (k, block) in s.batch.lane_palettes().chunks(n).enumerate() {
@@ -1072,9 +1083,37 @@ impl Forest {
                 if joints == 0 {
                     continue;
                 }
-                out.offsets[lane] = out.palettes.len() as u32;
                 // The batch pads its last lane group to 16; copy only the simulated lanes.
                 let used = (s.groups.len() - k * LANES).min(LANES);
+                let sims = lane * LANES..lane * LANES + used;
+                let need = &out.need[sims.clone()];
+                let slots = &mut out.slots[sims];
+                let own: usize = need.iter().map(|&m| (m as usize).min(n)).sum();
+                if own < joints * used {
+                    // Prefixes differ: each simulation's own, in a row. A gather, joint by
+                    // joint so each joint's block of 16 lanes is read once.
+                    let mut at = out.palettes.len();
+                    for (&m, slot) in need.iter().zip(slots.iter_mut()) {
+                        *slot = PaletteSlot { base: at as u32, stride: 1 };
+                        at += 12 * (m as usize).min(n);
+                    }
+                    out.palettes.resize(at, 0.0);
+                    for (j, pal) in block[..joints].iter().enumerate() {
+                        for (l, (&m, slot)) in need.iter().zip(slots.iter()).enumerate() {
+                            if j < m as usize {
+                                let run = slot.base as usize + 12 * j;
+                                for (v, lanes) in out.palettes[run..run + 12].iter_mut().zip(pal) {
+                                    *v = lanes[l];
+                                }
+                            }
+                        }
+                    }
+                    continue;
+                }
+                let base = out.palettes.len() as u32;
+                for (l, slot) in slots.iter_mut().enumerate() {
+                    *slot = PaletteSlot { base: base + l as u32, stride: used as u32 };
+                }
                 if used == LANES {
                     out.palettes.extend_from_slice(block[..joints].as_flattened().as_flattened());
                 } else {
@@ -1142,18 +1181,11 @@ impl Forest {
                 Some((false, w)) => (lo + (1.0 - w) * (hi - lo), hi),
             };
             let fade = [lo, if hi >= 1.0 { 2.0 } else { hi }];
-            // Lane group of this simulated instance: its palette block and its width.
-            let first_lane = g as usize / LANES * LANES;
-            let used = (sp.groups.len() - first_lane).min(LANES);
-            let block = out.offsets[sp.lane_base + g as usize / LANES];
             out.instances.push(Instance {
                 position: p.position,
                 yaw: group.yaw,
                 scale: p.scale,
-                palette: PaletteSlot {
-                    base: block + (g as usize % LANES) as u32,
-                    stride: used as u32,
-                },
+                palette: out.slots[sp.lane_base * LANES + g as usize],
                 leaf_phase: group.leaf.phase,
                 leaf_amplitude: group.leaf.amplitude,
                 fade,

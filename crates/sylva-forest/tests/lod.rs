@@ -403,3 +403,59 @@ fn draws_go_finest_level_first_and_nearest_tree_first_within_each() {
         assert!(meshes > 10, "meshes drawn: {meshes}");
     }
 }
+
+#[test]
+fn a_near_tree_among_far_ones_sends_its_fine_joints_alone() {
+    // Twelve aspens, each simulated on its own: one lane group of twelve lanes.
+    let text =
+        "name = \"mixed\"\ntrees = 12\nspacing = 25.0\nspecies = [{ name = \"quaking_aspen\" }]\n";
+    let mut spec = SceneSpec::from_toml("mixed.toml", text).expect("scene");
+    spec.lod.wind = false;
+    spec.lod.fraction = 0.6;
+    let mut forest = Forest::new(&spec).expect("forest");
+    let trees: Vec<_> = (0..).map_while(|t| forest.placement(t)).collect();
+    assert_eq!(trees.len(), 12);
+    // Seen from just outside tree 0, looking across the stand: tree 0 fills the image at
+    // full detail, the others stand 25 m and more behind it, impostors.
+    let n = trees.len() as f32;
+    let centre: Vec<f32> =
+        (0..2).map(|k| trees.iter().map(|p| p.position[k]).sum::<f32>() / n).collect();
+    let p0 = trees[0].position;
+    let (dx, dy) = (p0[0] - centre[0], p0[1] - centre[1]);
+    let len = dx.hypot(dy).max(1e-3);
+    let mut cam = forest.default_camera();
+    cam.eye = [p0[0] + 12.0 * dx / len, p0[1] + 12.0 * dy / len, p0[2] + 5.0];
+    cam.target = [centre[0], centre[1], p0[2] + 5.0];
+    let mut f = FrameData::default();
+    for _ in 0..3 {
+        forest.step(1.0 / 30.0);
+        forest.frame(&cam, 4.0 / 3.0, &mut f);
+    }
+    // Finest level each drawn tree reads, by its instance's trunk position.
+    let sp = &forest.species[0];
+    let chain = sp.model.lods.len() as u32;
+    let mut finest = vec![u32::MAX; trees.len()];
+    let mut draws = Vec::new();
+    for b in &f.buckets {
+        for inst in &f.instances[b.first as usize..(b.first + b.count) as usize] {
+            let t = trees.iter().position(|p| p.position == inst.position).expect("a scene tree");
+            finest[t] = finest[t].min(b.lod);
+            draws.push((t, b.lod, inst.palette));
+        }
+    }
+    assert_eq!(finest[0], 0, "tree 0 at full detail");
+    let far = finest.iter().filter(|&&l| l == chain).count();
+    assert!(far >= 5, "only {far} trees drawn as impostors: {finest:?}");
+    // Uploaded: full detail's joints for tree 0, the trunk for each impostor — not full
+    // detail's for all twelve lanes of the group.
+    let expected: usize =
+        finest.iter().filter(|&&l| l != u32::MAX).map(|&l| 12 * sp.joints_drawn(l)).sum();
+    assert_eq!(f.palettes.len(), expected);
+    // Every draw reads its own simulation's palettes, joint by joint.
+    for (t, lod, slot) in draws {
+        let joints: Vec<usize> = (0..sp.joints_drawn(lod)).collect();
+        for (j, want) in forest.tree_palettes(t, &joints).iter().enumerate() {
+            assert_eq!(slot.read(&f.palettes, j).as_ref(), Some(want), "tree {t} joint {j}");
+        }
+    }
+}

@@ -91,6 +91,8 @@ struct Cell {
     draws: f64,
     joints: f64,
     upload_mb: f64,
+    /// The most uploaded in one timed frame (the target is per frame).
+    upload_max_mb: f64,
     simulated: usize,
     impostors: f64,
     ssim: Option<f64>,
@@ -199,6 +201,7 @@ fn run_config(
             cell.draws += frame.stats.draw_calls as f64;
             cell.joints += frame.stats.joints as f64;
             cell.upload_mb += frame.stats.uploaded_bytes as f64 / 1e6;
+            cell.upload_max_mb = cell.upload_max_mb.max(frame.stats.uploaded_bytes as f64 / 1e6);
             cell.impostors += frame.stats.impostors as f64;
         }
         if last {
@@ -329,7 +332,7 @@ pub fn run(a: Table3Bench) -> anyhow::Result<()> {
             }
             let cell = run_config(&spec, &mut gpu, &a, (w, h), (g, an, wi), false)?;
             println!(
-                "  {label:<24} {:>7} fps  sim {:>6.1} ms  frame {:>6.1} ms  render {:>8} ms  {:>7.2} M tris  {:>6.0} draws  {:>9.0} joints  {:>7.2} MB up  {}",
+                "  {label:<24} {:>7} fps  sim {:>6.1} ms  frame {:>6.1} ms  render {:>8} ms  {:>7.2} M tris  {:>6.0} draws  {:>9.0} joints  {:>7.2} MB up (max {:.2})  {}",
                 cell.fps().map_or("—".into(), |f| format!("{f:.2}")),
                 cell.sim_ms,
                 cell.frame_ms,
@@ -338,6 +341,7 @@ pub fn run(a: Table3Bench) -> anyhow::Result<()> {
                 cell.draws,
                 cell.joints,
                 cell.upload_mb,
+                cell.upload_max_mb,
                 cell.note
             );
             cells.push(cell);
@@ -610,18 +614,18 @@ fn write_outputs(
         writeln!(md, "\nPer configuration (medians over the timed frames; means for counts):\n");
     let _ = writeln!(
         md,
-        "| scene | configuration | sim ms | frame ms | render ms | M triangles | draws | joint updates | MB uploaded | simulated trees | impostors | FLIP vs full detail | SSIM vs full detail | note |"
+        "| scene | configuration | sim ms | frame ms | render ms | M triangles | draws | joint updates | MB uploaded: mean / max | simulated trees | impostors | FLIP vs full detail | SSIM vs full detail | note |"
     );
     let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     let mut csv = String::from(
-        "scene,trees,configuration,fps,sim_ms,frame_ms,render_ms,triangles,draws,joint_updates,uploaded_mb,simulated,impostors,flip,ssim\n",
+        "scene,trees,configuration,fps,sim_ms,frame_ms,render_ms,triangles,draws,joint_updates,uploaded_mb,uploaded_max_mb,simulated,impostors,flip,ssim\n",
     );
     for (name, trees, cells) in results {
         for (c, (label, ..)) in cells.iter().zip(CONFIGS) {
             let opt = |v: Option<f64>, p: usize| v.map_or("—".into(), |v| format!("{v:.p$}"));
             let _ = writeln!(
                 md,
-                "| {name} | {label} | {:.1} | {:.1} | {} | {:.2} | {:.0} | {:.0} | {:.2} | {} | {:.0} | {} | {} | {} |",
+                "| {name} | {label} | {:.1} | {:.1} | {} | {:.2} | {:.0} | {:.0} | {:.2} / {:.2} | {} | {:.0} | {} | {} | {} |",
                 c.sim_ms,
                 c.frame_ms,
                 opt(c.render_ms, 0),
@@ -629,6 +633,7 @@ fn write_outputs(
                 c.draws,
                 c.joints,
                 c.upload_mb,
+                c.upload_max_mb,
                 c.simulated,
                 c.impostors,
                 opt(c.flip, 3),
@@ -637,7 +642,7 @@ fn write_outputs(
             );
             let _ = writeln!(
                 csv,
-                "{name},{trees},{label},{},{:.3},{:.3},{},{:.0},{:.0},{:.0},{:.3},{},{:.0},{},{}",
+                "{name},{trees},{label},{},{:.3},{:.3},{},{:.0},{:.0},{:.0},{:.3},{:.3},{},{:.0},{},{}",
                 c.fps().map_or(String::new(), |f| format!("{f:.3}")),
                 c.sim_ms,
                 c.frame_ms,
@@ -646,6 +651,7 @@ fn write_outputs(
                 c.draws,
                 c.joints,
                 c.upload_mb,
+                c.upload_max_mb,
                 c.simulated,
                 c.impostors,
                 c.flip.map_or(String::new(), |s| format!("{s:.4}")),

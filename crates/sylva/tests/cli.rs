@@ -434,18 +434,24 @@ fn table3_with_all_lods_only_runs_that_configuration_and_its_image_error() {
     let rows: Vec<Vec<&str>> =
         csv.lines().filter(|l| l.starts_with("small,")).map(|l| l.split(',').collect()).collect();
     assert_eq!(rows.len(), 4, "{csv}");
-    // Columns: scene, trees, configuration, fps, sim_ms, frame_ms, render_ms, triangles, …,
-    // flip, ssim. The first configuration ran and was compared with full detail.
-    assert_eq!(rows[0][2], "with all LODs");
-    let triangles: f64 = rows[0][7].parse().expect("triangles");
+    // Columns by their header. The first configuration ran and was compared with full
+    // detail.
+    let header: Vec<&str> = csv.lines().next().expect("header").split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).expect(name);
+    let (tris, flip, ssim) = (col("triangles"), col("flip"), col("ssim"));
+    assert_eq!(rows[0][col("configuration")], "with all LODs");
+    let triangles: f64 = rows[0][tris].parse().expect("triangles");
     assert!(triangles > 0.0, "{csv}");
-    for col in [13, 14] {
-        let v: f64 = rows[0][col].parse().unwrap_or_else(|_| panic!("column {col}: {csv}"));
+    for c in [flip, ssim] {
+        let v: f64 = rows[0][c].parse().unwrap_or_else(|_| panic!("column {c}: {csv}"));
         assert!((0.0..=1.0).contains(&v), "{csv}");
     }
+    // Uploads: the largest frame's at least the mean.
+    let up = |name| rows[0][col(name)].parse::<f64>().expect(name);
+    assert!(up("uploaded_max_mb") >= up("uploaded_mb") && up("uploaded_mb") > 0.0, "{csv}");
     // The others did not run, and say so.
     for r in &rows[1..] {
-        assert!(r[7] == "0" && r[13].is_empty(), "{csv}");
+        assert!(r[tris] == "0" && r[flip].is_empty(), "{csv}");
     }
     let md = std::fs::read_to_string(dir.join("table3.md")).expect("table3.md");
     assert_eq!(md.matches("not run (--all-lods-only)").count(), 3, "{md}");
