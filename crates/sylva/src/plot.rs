@@ -196,7 +196,10 @@ fn draw_panel(cv: &mut Canvas, ox: usize, p: &Panel) {
     if xa.partial_cmp(&xb) != Some(std::cmp::Ordering::Less) {
         (xa, xb) = (0.0, 1.0);
     }
-    if ya.partial_cmp(&yb) != Some(std::cmp::Ordering::Less) {
+    if !(ya.is_finite() && yb.is_finite()) {
+        // Nothing to show (every figure missing): an empty axis, not one from −∞ to ∞.
+        (ya, yb) = (0.0, 1.0);
+    } else if ya.partial_cmp(&yb) != Some(std::cmp::Ordering::Less) {
         (ya, yb) = (ya.min(0.0) - 1.0, ya.max(0.0) + 1.0);
     }
     let map = |x: f64, y: f64| {
@@ -388,5 +391,31 @@ mod tests {
         r.next_frame(&mut buf).expect("frame");
         let reds = buf.chunks(3).filter(|c| c == &red).count();
         assert!(reds > 200, "only {reds} red pixels");
+    }
+
+    #[test]
+    fn a_plot_with_no_finite_point_is_an_empty_frame() {
+        // Table 3 with every configuration timed on the CPU only has no FPS to plot.
+        let dir = std::env::temp_dir().join(format!("sylva-plot-empty-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        let p = dir.join("p.png");
+        for log in [false, true] {
+            let panel = Panel {
+                title: "EMPTY".into(),
+                x_label: "X".into(),
+                y_label: "Y".into(),
+                log_x: log,
+                log_y: log,
+                y_range: None,
+                series: vec![Series {
+                    label: "NONE".into(),
+                    color: [220, 0, 0],
+                    points: vec![(1.0, f64::NAN), (f64::INFINITY, 2.0), (3.0, f64::NAN)],
+                    markers: false,
+                }],
+            };
+            write_png(&p, &[panel]).expect("write");
+            assert!(std::fs::metadata(&p).expect("png").len() > 0);
+        }
     }
 }
