@@ -49,6 +49,23 @@ struct Globals {
 // turn cards towards the sun.
 override SHADOW: bool = false;
 
+// True where the pipeline turns the fragment's alpha into MSAA sample coverage (alpha to
+// coverage): the leaf cards and impostors of a multisampled frame.
+override COVERAGE: bool = false;
+
+// Coverage of an alpha-tested texel whose alpha is `alpha`, changing by `width` (fwidth)
+// to the next pixel. With alpha to coverage the edge at alpha 0.5 is spread over one
+// pixel, so a leaf's outline stays as sharp as the alpha test's close up, and a leaf
+// smaller than a pixel (its alpha averaged by the mips) covers that share of the pixel's
+// samples instead of all or none of them, which made distant foliage a shimmering
+// speckle. Without it, the alpha test: 1 from alpha 0.5 up, else 0.
+fn coverage(alpha: f32, width: f32) -> f32 {
+    if (COVERAGE) {
+        return clamp((alpha - 0.5) / max(width, 1e-3) + 0.5, 0.0, 1.0);
+    }
+    return select(0.0, 1.0, alpha >= 0.5);
+}
+
 // Clip position of `world` for the pass being drawn (the camera's, or the sun's).
 fn project(world: vec3<f32>) -> vec4<f32> {
     if (SHADOW) {

@@ -296,20 +296,29 @@ pub struct PipelineSpec<'a> {
     /// One triangle strip per instance (a quad in four vertices rather than six) instead
     /// of a triangle list.
     pub strip: bool,
+    /// Alpha to coverage (`COVERAGE` overridden to true) where there are several samples
+    /// and colour targets; the colour's alpha then only chooses samples and is not written.
+    pub coverage: bool,
 }
 
 /// Build the render pipeline `spec` describes (entry points `vs_main` and `spec.fragment`).
 pub fn pipeline(dev: &wgpu::Device, spec: &PipelineSpec<'_>) -> wgpu::RenderPipeline {
     let module = shader_module(dev, spec.shader);
+    let coverage = spec.coverage && spec.samples > 1 && !spec.shadow && !spec.targets.is_empty();
+    let write_mask = if coverage { wgpu::ColorWrites::COLOR } else { wgpu::ColorWrites::ALL };
     let targets: Vec<Option<wgpu::ColorTargetState>> = spec
         .targets
         .iter()
-        .map(|&format| {
-            Some(wgpu::ColorTargetState { format, blend: None, write_mask: wgpu::ColorWrites::ALL })
-        })
+        .map(|&format| Some(wgpu::ColorTargetState { format, blend: None, write_mask }))
         .collect();
-    let constants: &[(&str, f64)] = if spec.shadow { &[("SHADOW", 1.0)] } else { &[] };
-    let options = wgpu::PipelineCompilationOptions { constants, ..Default::default() };
+    let mut constants: Vec<(&str, f64)> = Vec::new();
+    if spec.shadow {
+        constants.push(("SHADOW", 1.0));
+    }
+    if coverage {
+        constants.push(("COVERAGE", 1.0));
+    }
+    let options = wgpu::PipelineCompilationOptions { constants: &constants, ..Default::default() };
     let bias = if spec.shadow {
         wgpu::DepthBiasState { constant: 2, slope_scale: 2.0, clamp: 0.0 }
     } else {
@@ -348,7 +357,7 @@ pub fn pipeline(dev: &wgpu::Device, spec: &PipelineSpec<'_>) -> wgpu::RenderPipe
         multisample: wgpu::MultisampleState {
             count: spec.samples,
             mask: !0,
-            alpha_to_coverage_enabled: false,
+            alpha_to_coverage_enabled: coverage,
         },
         fragment: (!spec.fragment.is_empty()).then(|| wgpu::FragmentState {
             module: &module,

@@ -39,6 +39,7 @@ impl BranchPass {
             targets: &[format],
             shadow: false,
             strip: false,
+            coverage: false,
         };
         let (draw, bake) = draw_and_bake(dev, &spec, bake_targets);
         BranchPass { draw, bake }

@@ -116,6 +116,7 @@ impl FarPass {
             targets: &[format],
             shadow: false,
             strip: true,
+            coverage: true,
         };
         let shadow =
             PipelineSpec { fragment: "fs_shadow", samples: 1, targets: &[], shadow: true, ..spec };

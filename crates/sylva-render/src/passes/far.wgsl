@@ -128,7 +128,8 @@ fn fs_main(in: FarOut) -> @location(0) vec4<f32> {
     let k = select(in.views.x, in.views.y, dither_value(in.clip.yx + vec2<f32>(7.0, 3.0)) < in.blend);
     let uv = view_uv(in.uv, k);
     let albedo = textureSampleGrad(far_albedo, linear_sampler, uv, gx, gy);
-    if (albedo.a < 0.5 || !dither_keeps(in.clip.xy, in.fade)) {
+    let a = coverage(albedo.a, fwidth(albedo.a));
+    if (a <= 0.0 || !dither_keeps(in.clip.xy, in.fade)) {
         discard;
     }
     let baked = textureSampleGrad(far_normal, linear_sampler, uv, gx, gy);
@@ -141,5 +142,5 @@ fn fs_main(in: FarOut) -> @location(0) vec4<f32> {
     let tint = mix(vec3<f32>(1.0), in.tint, baked.a);
     let sun = cascades_visibility(in.shadow_near, in.shadow_far, true);
     let lit = albedo.rgb * tint * (lighting(n, sun) + sun * baked.a * in.glow);
-    return finish(mix_fog(overlay(lit, in.tag), in.fog));
+    return vec4<f32>(finish(mix_fog(overlay(lit, in.tag), in.fog)).rgb, a);
 }

@@ -47,6 +47,7 @@ impl GroundPass {
             targets: &[format],
             shadow: false,
             strip: false,
+            coverage: false,
         };
         GroundPass {
             pipeline: pipeline(&gpu.device, &spec),

@@ -41,6 +41,7 @@ impl LeafPass {
             targets: &[format],
             shadow: false,
             strip: false,
+            coverage: true,
         };
         let (draw, bake) = draw_and_bake(dev, &spec, bake_targets);
         LeafPass { draw, bake }

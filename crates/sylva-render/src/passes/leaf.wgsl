@@ -112,14 +112,15 @@ fn unit_or_up(n: vec3<f32>) -> vec3<f32> {
 @fragment
 fn fs_main(in: LeafOut) -> @location(0) vec4<f32> {
     let t = textureSample(leaf_texture, linear_sampler, in.uv);
-    if (t.a < 0.5 || !dither_keeps(in.clip.xy, in.fade)) {
+    let a = coverage(t.a, fwidth(t.a));
+    if (a <= 0.0 || !dither_keeps(in.clip.xy, in.fade)) {
         discard;
     }
     // One bilinear comparison per cascade: a leaf is small and the crown busy enough that
     // the wider filter of bark and ground shows no difference, at a quarter of the reads.
     let sun = cascades_visibility(in.shadow_near, in.shadow_far, true);
     let lit = t.rgb * (in.ambient + sun * in.sun);
-    return finish(mix_fog(overlay(lit, in.tag), in.fog));
+    return vec4<f32>(finish(mix_fog(overlay(lit, in.tag), in.fog)).rgb, a);
 }
 
 // The shadow pass: only the alpha test, so light passes between the leaves.

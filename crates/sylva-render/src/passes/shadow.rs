@@ -51,6 +51,7 @@ impl ShadowPass {
             targets: &[],
             shadow: true,
             strip: false,
+            coverage: false,
         };
         let branch_buffers =
             [Some(vertex_layout::<BranchVertex>(&BRANCH_ATTRIBUTES)), Some(instance_layout())];

@@ -30,6 +30,7 @@ impl SkyPass {
             targets: &[format],
             shadow: false,
             strip: false,
+            coverage: false,
         };
         SkyPass { pipeline: pipeline(dev, &spec) }
     }
