@@ -293,9 +293,8 @@ pub struct FrameData {
     sorted: Vec<(u32, u32)>,
     /// Per tree: continuous level after hysteresis (NaN: not seen yet).
     lod_state: Vec<f32>,
-    /// Per lane group (all species in a row): joints to upload (a prefix; 0: not drawn).
-    upload: Vec<u32>,
-    /// Per simulation (lane group · 16 + lane): joints its drawn trees read (a prefix).
+    /// Per simulation (lane group · 16 + lane, all species in a row): joints its drawn
+    /// trees read (a prefix; 0: not drawn).
     need: Vec<u32>,
     /// Per simulation: where its palettes lie in `palettes`.
     slots: Vec<PaletteSlot>,
@@ -961,10 +960,8 @@ impl Forest {
             out.lod_state.clear();
             out.lod_state.resize(self.trees.len(), f32::NAN);
         }
-        for v in [&mut out.upload, &mut out.simulate] {
-            v.clear();
-            v.resize(self.lane_groups, 0);
-        }
+        out.simulate.clear();
+        out.simulate.resize(self.lane_groups, 0);
         out.need.clear();
         out.need.resize(self.lane_groups * LANES, 0);
         let lod = self.lod;
@@ -1011,7 +1008,6 @@ impl Forest {
                 (sw.from != u32::MAX && sw.at > previous && sw.at <= self.time) as usize;
             for (group, old) in [(*g, false)].into_iter().chain(switch.map(|(_, f)| (f, true))) {
                 let lane = sp.lane_base + group as usize / LANES;
-                out.upload[lane] = out.upload[lane].max(joints(a) as u32);
                 let own = sp.lane_base * LANES + group as usize;
                 out.need[own] = out.need[own].max(joints(a) as u32);
                 out.simulate[lane] = out.simulate[lane].max(joints(sim) as u32);
@@ -1079,14 +1075,15 @@ impl Forest {
             let n = s.batch.species().len();
             for (k, block) in s.batch.lane_palettes().chunks(n).enumerate() {
                 let lane = s.lane_base + k;
-                let joints = (out.upload[lane] as usize).min(n);
-                if joints == 0 {
-                    continue;
-                }
                 // The batch pads its last lane group to 16; copy only the simulated lanes.
                 let used = (s.groups.len() - k * LANES).min(LANES);
                 let sims = lane * LANES..lane * LANES + used;
                 let need = &out.need[sims.clone()];
+                // The group's finest prefix: what the lane layout would send for each lane.
+                let joints = (need.iter().copied().max().unwrap_or(0) as usize).min(n);
+                if joints == 0 {
+                    continue;
+                }
                 let slots = &mut out.slots[sims];
                 let own: usize = need.iter().map(|&m| (m as usize).min(n)).sum();
                 if own < joints * used {
