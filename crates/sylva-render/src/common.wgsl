@@ -55,10 +55,10 @@ override COVERAGE: bool = false;
 
 // Coverage of an alpha-tested texel whose alpha is `alpha`, changing by `width` (fwidth)
 // to the next pixel. With alpha to coverage the edge at alpha 0.5 is spread over one
-// pixel, so a leaf's outline stays as sharp as the alpha test's close up, and a leaf
-// smaller than a pixel (its alpha averaged by the mips) covers that share of the pixel's
-// samples instead of all or none of them, which made distant foliage a shimmering
-// speckle. Without it, the alpha test: 1 from alpha 0.5 up, else 0.
+// pixel, so a leaf's outline stays as sharp as the alpha test's close up while getting
+// the coverage steps MSAA gives the card's own edges, instead of all samples or none
+// (closer to a 64-sample reference: see render.rs's `leaf_edges_come_closer_…`).
+// Without it, the alpha test: 1 from alpha 0.5 up, else 0.
 fn coverage(alpha: f32, width: f32) -> f32 {
     if (COVERAGE) {
         return clamp((alpha - 0.5) / max(width, 1e-3) + 0.5, 0.0, 1.0);
