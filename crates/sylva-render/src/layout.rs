@@ -168,14 +168,14 @@ pub struct FarSpecies {
     pub tip: [f32; 3],
     /// Side of the square each view covers, m.
     pub extent: f32,
-    /// Height of the views' bottom edge, tree space, m.
-    pub bottom: f32,
+    /// Height of the point every view is centred on, tree space, m.
+    pub center: f32,
     /// Views around the tree.
     pub views: u32,
     /// The trunk-top joint, whose palette sways the quad.
     pub joint: u32,
-    /// Padding.
-    pub pad0: u32,
+    /// Elevations baked (rows of the atlas), [`crate::passes::far::ROW_STEP_DEG`] apart.
+    pub rows: u32,
 }
 
 macro_rules! attr {

@@ -81,7 +81,7 @@ fn impostor_parameters_match_their_wgsl_twin() {
     macro_rules! f {
         ($($n:ident),*) => { [$((stringify!($n), offset_of!(FarSpecies, $n))),*] };
     }
-    let fields = f!(tip, extent, bottom, views, joint, pad0);
+    let fields = f!(tip, extent, center, views, joint, rows);
     check_struct("far.wgsl", "FarSpecies", size_of::<FarSpecies>(), &fields);
 }
 

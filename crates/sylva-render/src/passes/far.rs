@@ -1,11 +1,14 @@
 //! Far trees as impostors (`far.wgsl`): each species is rendered once, at start-up, from
-//! [`VIEWS`] directions around it (its finest LOD level within [`BAKE_TRIANGLES`], rest pose,
-//! orthographic, horizontal) into an atlas of albedo and tree-space normals; a far tree is
-//! then one camera-facing quad (two triangles) showing the nearest view, lit per pixel like
-//! the near trees and swayed by its trunk-top joint. Seen from between two views, over the
-//! middle half of the angle between them, it shows both, cross-faded per pixel by a
-//! screen-space dither (`VIEW_BAND` in `far.wgsl`), so a tree does not jump from one view to
-//! the next as the camera goes round it.
+//! [`VIEWS`] directions around it at each of [`ROWS`] elevations (its finest LOD level within
+//! [`BAKE_TRIANGLES`], rest pose, orthographic, centred on the middle of its bounds) into an
+//! atlas of albedo and tree-space normals; a far tree is then one camera-facing quad (two
+//! triangles) showing the nearest view, lit per pixel like the near trees and swayed by its
+//! trunk-top joint. Seen from between two views, over the middle half of the step between
+//! them, it shows both, cross-faded per pixel by a screen-space dither (`VIEW_BAND` in
+//! `far.wgsl`), so a tree does not jump from one view to the next as the camera goes round
+//! it or rises over it. The elevations matter to a camera over a forest: a tree 40° below
+//! the horizon seen in a level view shows its side and its trunk below the crown, where
+//! full detail shows the crown from above.
 //!
 //! The atlas keeps the crown's look at every distance: its mip chain averages colour
 //! weighted by opacity (no dark fringes from the transparent background) and rescales each
@@ -22,8 +25,13 @@ use crate::shared::{
     texture_entry, upload_mips,
 };
 
-/// Views baked around each tree.
+/// Views baked around each tree, at each elevation.
 pub const VIEWS: u32 = 8;
+/// Elevations the views are baked at: 0, [`ROW_STEP_DEG`], 2·[`ROW_STEP_DEG`] … (rows of the
+/// atlas).
+pub const ROWS: u32 = 3;
+/// Step between the baked elevations, degrees.
+pub const ROW_STEP_DEG: f32 = 30.0;
 /// Side of one view in the atlas, texels.
 pub const VIEW_SIZE: u32 = 256;
 /// Impostors are rendered from the finest LOD level with at most this many triangles
@@ -38,6 +46,9 @@ pub fn bake_level(model: &TreeModel) -> usize {
         .position(|l| l.triangles() <= BAKE_TRIANGLES)
         .unwrap_or(model.lods.len().saturating_sub(1))
 }
+/// Distance of the bake's eye point from the tree, m: the views are orthographic, and what
+/// turns towards the eye (leaf cards) must turn as for a viewer far away.
+const FAR_EYE: f32 = 1.0e4;
 /// Formats of the bake targets: albedo (sRGB) and normals (linear).
 pub const BAKE_TARGETS: [wgpu::TextureFormat; 2] =
     [wgpu::TextureFormat::Rgba8UnormSrgb, wgpu::TextureFormat::Rgba8Unorm];
@@ -58,7 +69,7 @@ pub struct FarSpeciesGpu {
     group: wgpu::BindGroup,
     /// What the shader places the quad with.
     pub params: FarSpecies,
-    /// The baked views, level 0: albedo RGBA8 (sRGB), `VIEWS·VIEW_SIZE × VIEW_SIZE`.
+    /// The horizontal views, level 0: albedo RGBA8 (sRGB), `VIEWS·VIEW_SIZE × VIEW_SIZE`.
     pub albedo: Vec<u8>,
 }
 
@@ -153,9 +164,12 @@ impl FarPass {
         if !z0.is_finite() {
             (z0, z1) = (0.0, 1.0);
         }
-        let extent = (2.0 * radius).max(z1 - z0) * 1.04;
-        let bottom = z0 - 0.02 * extent;
-        let depth_range = radius + 1.0;
+        // Every view is centred on the middle of the tree's bounds and covers them from any
+        // elevation: the bounding cylinder seen from elevation e is 2·radius wide and
+        // height·cos e + 2·radius·sin e tall, at most the hypotenuse below.
+        let extent = (2.0 * radius).max((z1 - z0).hypot(2.0 * radius)) * 1.04;
+        let center = 0.5 * (z0 + z1);
+        let depth_range = radius.hypot(0.5 * (z1 - z0)) + 1.0;
         // Rest pose: identity palettes, one instance at the origin.
         let joints = model.tree.skeleton.len().max(1);
         let identity: Vec<f32> = (0..joints)
@@ -172,22 +186,31 @@ impl FarPass {
         let instances =
             buffer(gpu, "bake instance", bytemuck::bytes_of(&instance), wgpu::BufferUsages::VERTEX);
         let light = Lighting::default();
-        let groups: Vec<wgpu::BindGroup> = (0..VIEWS)
-            .map(|k| {
+        let groups: Vec<wgpu::BindGroup> = (0..ROWS * VIEWS)
+            .map(|cell| {
+                let (k, row) = (cell % VIEWS, cell / VIEWS);
                 let a = std::f32::consts::TAU * k as f32 / VIEWS as f32;
                 let (s, c) = a.sin_cos();
-                let (d, right) = ([c, s], [s, -c]);
+                let (se, ce) = (row as f32 * ROW_STEP_DEG).to_radians().sin_cos();
+                // Looking along f (down by the elevation), right r, up u = r × f.
+                let f = [c * ce, s * ce, -se];
+                let r = [s, -c, 0.0];
+                let u = [c * se, s * se, ce];
                 let h = 0.5 * extent;
-                let mid = bottom + h;
                 let zs = 1.0 / (2.0 * depth_range);
-                // Column-major: m[column][row].
+                // Orthographic about (0, 0, center). Column-major: m[column][row].
                 let view_proj = [
-                    [right[0] / h, 0.0, d[0] * zs, 0.0],
-                    [right[1] / h, 0.0, d[1] * zs, 0.0],
-                    [0.0, 1.0 / h, 0.0, 0.0],
-                    [0.0, -mid / h, 0.5, 1.0],
+                    [r[0] / h, u[0] / h, f[0] * zs, 0.0],
+                    [r[1] / h, u[1] / h, f[1] * zs, 0.0],
+                    [r[2] / h, u[2] / h, f[2] * zs, 0.0],
+                    [0.0, -center * u[2] / h, 0.5 - center * f[2] * zs, 1.0],
                 ];
-                let eye = [-d[0] * depth_range, -d[1] * depth_range, mid];
+                // The projection is orthographic, but leaf cards turn towards the eye
+                // point: placed far along the view, they turn as they do for a far viewer.
+                // At the near plane's distance the cards off the axis turned sideways and
+                // were seen foreshortened, and the baked crowns showed their bark between
+                // thinned-out leaves.
+                let eye = [-f[0] * FAR_EYE, -f[1] * FAR_EYE, center - f[2] * FAR_EYE];
                 let g = Globals::new(view_proj, eye, 0.0, &light);
                 let buf = buffer(
                     gpu,
@@ -199,7 +222,7 @@ impl FarPass {
                 globals_group(dev, ctx.globals_layout, &with, &palettes)
             })
             .collect();
-        let (w, h) = (VIEWS * VIEW_SIZE, VIEW_SIZE);
+        let (w, h) = (VIEWS * VIEW_SIZE, ROWS * VIEW_SIZE);
         let target = |format, label| {
             dev.create_texture(&wgpu::TextureDescriptor {
                 label: Some(label),
@@ -241,9 +264,9 @@ impl FarPass {
             });
             pass.set_bind_group(1, textures, &[]);
             pass.set_vertex_buffer(1, instances.slice(..));
-            for (k, group) in groups.iter().enumerate() {
-                let x = (k as u32 * VIEW_SIZE) as f32;
-                pass.set_viewport(x, 0.0, VIEW_SIZE as f32, VIEW_SIZE as f32, 0.0, 1.0);
+            for (cell, group) in groups.iter().enumerate() {
+                let (x, y) = ((cell as u32 % VIEWS) * VIEW_SIZE, (cell as u32 / VIEWS) * VIEW_SIZE);
+                pass.set_viewport(x as f32, y as f32, VIEW_SIZE as f32, VIEW_SIZE as f32, 0.0, 1.0);
                 pass.set_bind_group(0, group, &[]);
                 for (pipeline, mesh) in [(ctx.branch, meshes.0), (ctx.leaf, meshes.1)] {
                     if let Some(mesh) = mesh {
@@ -255,13 +278,14 @@ impl FarPass {
         }
         let albedo = read_back(gpu, enc, &[&albedo_tex, &normal_tex], w, h)?;
         let (albedo, normal) = (&albedo[0], &albedo[1]);
-        let (albedo_mips, normal_mips) = impostor_mips(albedo, normal, w, h, (VIEWS, 1));
+        let (albedo_mips, normal_mips) = impostor_mips(albedo, normal, w, h, (VIEWS, ROWS));
         let av = upload_mips(gpu, &albedo_mips, w, h, BAKE_TARGETS[0], "impostor albedo");
         let nv = upload_mips(gpu, &normal_mips, w, h, BAKE_TARGETS[1], "impostor normals");
         let sk = &model.tree.skeleton;
         let top = sk.trunk_top();
         let tip = sk.joints().get(top).map(|j| j.tip()).unwrap_or([0.0, 0.0, 1.0]);
-        let params = FarSpecies { tip, extent, bottom, views: VIEWS, joint: top as u32, pad0: 0 };
+        let params =
+            FarSpecies { tip, extent, center, views: VIEWS, joint: top as u32, rows: ROWS };
         let uniform =
             buffer(gpu, "impostor", bytemuck::bytes_of(&params), wgpu::BufferUsages::UNIFORM);
         let group = dev.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -282,7 +306,15 @@ impl FarPass {
         Ok(FarSpeciesGpu {
             group,
             params,
-            albedo: albedo_mips.into_iter().next().unwrap_or_default(),
+            // The horizontal row: the atlas's first VIEW_SIZE rows of texels.
+            albedo: albedo_mips
+                .into_iter()
+                .next()
+                .map(|mut a| {
+                    a.truncate((w * VIEW_SIZE * 4) as usize);
+                    a
+                })
+                .unwrap_or_default(),
         })
     }
 
@@ -490,6 +522,15 @@ pub fn impostor_mips(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_shader_steps_between_the_elevations_the_atlas_is_baked_at() {
+        let src = include_str!("far.wgsl");
+        let line = src.lines().find(|l| l.starts_with("const ROW_STEP: f32 = ")).expect("ROW_STEP");
+        let value: f32 =
+            line["const ROW_STEP: f32 = ".len()..].trim_end_matches(';').parse().expect("a number");
+        assert!((value - ROW_STEP_DEG.to_radians()).abs() < 1e-6, "{value} rad");
+    }
 
     #[test]
     fn alpha_mips_keep_the_crown_from_thinning_out_and_within_its_silhouette() {

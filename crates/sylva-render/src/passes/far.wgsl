@@ -1,13 +1,16 @@
-// Impostors: a far tree as one quad (two triangles) turned about the vertical to face the
-// camera, showing the view of the tree (rendered once at start-up from `views` directions
-// around it, far.rs) nearest the direction it is seen from. Between two baked views, over
-// the middle half of the angle between them (VIEW_BAND), the two are cross-faded per pixel
-// by a screen-space dither, so a tree seen from a turning direction never jumps from one
-// view to the next. Lit per pixel from the baked tree-space normals like the near trees,
-// swayed by its trunk-top joint: the quad shears with the trunk top's displacement, in
-// proportion to height. Into the sun's shadow map
-// (SHADOW) the quad is turned to face the sun instead, so the tree casts the shadow of the
-// view nearest the sun's azimuth.
+// Impostors: a far tree as one quad (two triangles) facing the camera, showing the view of
+// the tree nearest the direction it is seen from. The views are rendered once at start-up
+// (far.rs) from `views` directions around the tree at each of `rows` elevations (0, 30°,
+// 60°): a tree below a camera looking down shows its crown from above, as full detail
+// does, not its side. The quad is centred on the tree's middle and perpendicular to the
+// line of sight, as each view's orthographic image plane was. Between two baked directions
+// or two elevations, over the middle half of the step between them (VIEW_BAND), the two
+// are cross-faded per pixel by a screen-space dither, so a tree seen from a turning
+// direction never jumps from one view to the next. Lit per pixel from the baked tree-space
+// normals like the near trees, swayed by its trunk-top joint: the quad shears with the
+// trunk top's displacement, in proportion to height. Into the sun's shadow map (SHADOW) the
+// quad stands upright and faces the sun's azimuth, casting the shadow of the horizontal
+// view nearest it.
 
 // One species' impostor: where its views lie in the atlas and how to place the quad.
 struct FarSpecies {
@@ -15,13 +18,14 @@ struct FarSpecies {
     tip: vec3<f32>,
     // Side of the square each view covers, m.
     extent: f32,
-    // Height of the views' bottom edge (tree space), m.
-    bottom: f32,
+    // Height of the point each view is centred on (tree space), m.
+    center: f32,
     // Views around the tree (atlas cells in one row).
     views: u32,
     // The trunk-top joint, whose palette sways the quad.
     joint: u32,
-    pad0: u32,
+    // Elevations baked (rows of cells), ROW_STEP apart from the horizontal up.
+    rows: u32,
 };
 
 @group(1) @binding(0) var far_albedo: texture_2d<f32>;
@@ -44,19 +48,30 @@ struct FarOut {
     @location(6) glow: vec3<f32>,
     @location(7) shadow_near: vec4<f32>,
     @location(8) shadow_far: vec4<f32>,
-    // The two baked views nearest the direction seen along, and the second's share.
+    // The two baked views nearest the direction seen along and the second's share; the two
+    // elevations and the second's share.
     @location(9) @interpolate(flat) views: vec2<u32>,
     @location(10) @interpolate(flat) blend: f32,
+    @location(11) @interpolate(flat) rows: vec2<u32>,
+    @location(12) @interpolate(flat) row_blend: f32,
 };
 
 const TAU: f32 = 6.28318530718;
 // Share of the angle between two baked views over which they are cross-faded (centred on
 // the half-way direction); outside it one view is shown alone.
 const VIEW_BAND: f32 = 0.5;
+// Step between the baked elevations, radians (ROW_STEP_DEG in far.rs).
+const ROW_STEP: f32 = 0.52359878;
 
-// Atlas coordinates of place `uv` on the quad in view `k`.
-fn view_uv(uv: vec2<f32>, k: u32) -> vec2<f32> {
-    return vec2<f32>((f32(k) + uv.x) / f32(far.views), uv.y);
+// Atlas coordinates of place `uv` on the quad in view `k` of row `r`.
+fn view_uv(uv: vec2<f32>, k: u32, r: u32) -> vec2<f32> {
+    return vec2<f32>((f32(k) + uv.x) / f32(far.views), (f32(r) + uv.y) / f32(far.rows));
+}
+
+// Where `s` (in steps between baked views) lies: the view below, and the next one's share
+// of the cross-fade (0 outside the middle VIEW_BAND of the step).
+fn band(s: f32) -> f32 {
+    return clamp((fract(s) - 0.5) / VIEW_BAND + 0.5, 0.0, 1.0);
 }
 
 @vertex
@@ -81,13 +96,24 @@ fn vs_main(@builtin(vertex_index) vi: u32, inst: InstanceIn) -> FarOut {
     let azimuth = atan2(d.y, d.x) - yaw;
     let s = ((azimuth / TAU * n) % n + n) % n;
     let k0 = u32(floor(s)) % far.views;
-    let blend = clamp((fract(s) - 0.5) / VIEW_BAND + 0.5, 0.0, 1.0);
-    let z = far.bottom + corner.y * far.extent;
-    var p = right * ((corner.x - 0.5) * far.extent * inst.scale) + vec3<f32>(0.0, 0.0, z * inst.scale);
-    // Sway: the trunk top's displacement, sheared in with height.
+    // Elevation of the line of sight to the tree's middle (0 into the shadow map).
+    let mid = base + vec3<f32>(0.0, 0.0, far.center * inst.scale);
+    var elevation = 0.0;
+    if (!SHADOW) {
+        let to = globals.eye - mid;
+        elevation = atan2(max(to.z, 0.0), max(length(to.xy), 1e-3));
+    }
+    let e = min(elevation / ROW_STEP, f32(far.rows - 1u));
+    let r0 = min(u32(floor(e)), far.rows - 1u);
+    // The quad's up edge: perpendicular to the line of sight and to `right`.
+    let up = vec3<f32>(d * sin(elevation), cos(elevation));
+    let h = 0.5 * far.extent * inst.scale;
+    let offset = right * ((corner.x - 0.5) * 2.0 * h) + up * ((corner.y - 0.5) * 2.0 * h);
+    // Sway: the trunk top's displacement, sheared in with height above the ground.
+    let z = far.center + offset.z / inst.scale;
     let m = palette(inst.palette, far.joint);
     let shift = rotate_z(palette_apply(m, far.tip) - far.tip, yaw) * inst.scale;
-    p = p + shift * clamp(z / max(far.tip.z, 0.1), 0.0, 1.5);
+    let p = mid - base + offset + shift * clamp(z / max(far.tip.z, 0.1), 0.0, 1.5);
     let world = base + p;
     var out: FarOut;
     out.clip = project(world);
@@ -100,7 +126,9 @@ fn vs_main(@builtin(vertex_index) vi: u32, inst: InstanceIn) -> FarOut {
     }
     out.uv = vec2<f32>(corner.x, 1.0 - corner.y);
     out.views = vec2<u32>(k0, (k0 + 1u) % far.views);
-    out.blend = blend;
+    out.blend = band(s);
+    out.rows = vec2<u32>(r0, min(r0 + 1u, far.rows - 1u));
+    out.row_blend = band(e);
     out.yaw = yaw;
     out.fade = inst.fade;
     out.tint = tree_tint(inst.base);
@@ -112,7 +140,7 @@ fn vs_main(@builtin(vertex_index) vi: u32, inst: InstanceIn) -> FarOut {
 @fragment
 fn fs_shadow(in: FarOut) {
     let k = select(in.views.x, in.views.y, in.blend >= 0.5);
-    if (textureSample(far_albedo, linear_sampler, view_uv(in.uv, k)).a < 0.5) {
+    if (textureSample(far_albedo, linear_sampler, view_uv(in.uv, k, 0u)).a < 0.5) {
         discard;
     }
 }
@@ -122,11 +150,17 @@ fn fs_main(in: FarOut) -> @location(0) vec4<f32> {
     // The view is chosen per pixel, so the atlas is sampled with the place's own gradients
     // (a view's cell is 1 / views of the atlas wide): neighbouring pixels showing different
     // views must not read as a jump across the atlas.
-    let scale = vec2<f32>(1.0 / f32(far.views), 1.0);
+    let scale = vec2<f32>(1.0 / f32(far.views), 1.0 / f32(far.rows));
     let gx = dpdx(in.uv) * scale;
     let gy = dpdy(in.uv) * scale;
-    let k = select(in.views.x, in.views.y, dither_value(in.clip.yx + vec2<f32>(7.0, 3.0)) < in.blend);
-    let uv = view_uv(in.uv, k);
+    // One dither value picks the row (below the row blend: the upper one), then, rescaled
+    // to the part it fell in, the view: both cross-fades from one uniform value.
+    let u = dither_value(in.clip.yx + vec2<f32>(7.0, 3.0));
+    let upper = u < in.row_blend;
+    let v = select((u - in.row_blend) / max(1.0 - in.row_blend, 1e-6), u / max(in.row_blend, 1e-6), upper);
+    let r = select(in.rows.x, in.rows.y, upper);
+    let k = select(in.views.x, in.views.y, v < in.blend);
+    let uv = view_uv(in.uv, k, r);
     let albedo = textureSampleGrad(far_albedo, linear_sampler, uv, gx, gy);
     let a = coverage(albedo.a, fwidth(albedo.a));
     if (a <= 0.0 || !dither_keeps(in.clip.xy, in.fade)) {
