@@ -120,9 +120,15 @@ fn vs_main(@builtin(vertex_index) vi: u32, inst: InstanceIn) -> FarOut {
     if (!SHADOW) {
         out.fog = fog_at(world);
         out.glow = translucency(world);
-        // Offset towards the sun against self-shadowing (the baked normals vary per pixel).
-        out.shadow_near = shadow_near(world, globals.sun_dir);
-        out.shadow_far = shadow_far(world, globals.sun_dir);
+        // Shadows are looked up on the upright plane through the trunk facing the camera,
+        // the point moved back to it horizontally: the quad leans back as the camera rises,
+        // and the leaning part would lie behind the upright quad the tree casts its shadow
+        // from, in its own shadow. Offset towards the sun against self-shadowing (the baked
+        // normals vary per pixel).
+        let across = vec3<f32>(d, 0.0);
+        let upright = world - across * dot(world - mid, across);
+        out.shadow_near = shadow_near(upright, globals.sun_dir);
+        out.shadow_far = shadow_far(upright, globals.sun_dir);
     }
     out.uv = vec2<f32>(corner.x, 1.0 - corner.y);
     out.views = vec2<u32>(k0, (k0 + 1u) % far.views);
