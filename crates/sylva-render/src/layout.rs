@@ -176,6 +176,14 @@ pub struct FarSpecies {
     pub joint: u32,
     /// Elevations baked (rows of the atlas), [`crate::passes::far::ROW_STEP_DEG`] apart.
     pub rows: u32,
+    /// Radius of the tree's bounds about the trunk axis, m.
+    pub radius: f32,
+    /// Height of the tree's bounds, m.
+    pub height: f32,
+    /// Padding.
+    pub pad0: u32,
+    /// Padding.
+    pub pad1: u32,
 }
 
 macro_rules! attr {

@@ -413,12 +413,10 @@ fn woodland_around_the_forest_is_painted_past_its_meadow_and_nowhere_else() {
     assert!((brightness(&img_open, (W / 2, 3)) - brightness(&img_wood, (W / 2, 3))).abs() < 1.0);
 }
 
-#[test]
-fn an_impostor_turns_from_one_baked_view_to_the_next_without_a_jump() {
-    // One tree, always an impostor (h₀ = 100), in calm air; the camera circles it in steps
-    // of 1° through 100°, so it passes at least two half-way directions between baked views
-    // (they are 45° apart). Without the cross-fade, the step across one swaps the whole
-    // crown's picture at once; with it, the swap is spread over the steps of the band.
+/// One tree, always an impostor (h₀ = 100), in calm air without shadows, seen by each of
+/// the cameras of `path` (given the tree's base) in turn: the mean |Δ| between consecutive
+/// images.
+fn impostor_steps(path: impl Fn([f32; 3]) -> Vec<Camera>) -> Vec<f64> {
     let mut spec = SceneSpec::builtin("small").expect("small scene");
     spec.trees = 1;
     spec.wind = "calm".into();
@@ -431,29 +429,68 @@ fn an_impostor_turns_from_one_baked_view_to_the_next_without_a_jump() {
     forest.frame(&forest.default_camera(), W as f32 / H as f32, &mut frame);
     let base = frame.instances[0].position;
     let mut images = Vec::new();
-    for deg in 0..=100 {
-        let a = (deg as f32).to_radians();
-        let camera = Camera {
-            eye: [base[0] + 45.0 * a.cos(), base[1] + 45.0 * a.sin(), base[2] + 8.0],
-            target: [base[0], base[1], base[2] + 8.0],
-            fov_deg: 30.0,
-            near: 0.5,
-            far: 8000.0,
-        };
+    for camera in path(base) {
         forest.frame(&camera, W as f32 / H as f32, &mut frame);
         assert!(frame.instances.iter().all(|i| i.tag & 15 == 15), "an impostor");
         images.push(gpu.render(&frame, &camera).expect("render"));
     }
-    let mut steps: Vec<f64> = images.windows(2).map(|p| mean_abs_diff(&p[0], &p[1])).collect();
+    images.windows(2).map(|p| mean_abs_diff(&p[0], &p[1])).collect()
+}
+
+/// No step of `steps` more than three times their median (and the median not nothing).
+fn assert_no_jump(mut steps: Vec<f64>, what: &str) {
     let max = steps.iter().copied().fold(0.0, f64::max);
     steps.sort_by(f64::total_cmp);
     let median = steps[steps.len() / 2];
-    eprintln!("view steps: median {median:.3}, max {max:.3}");
-    assert!(median > 0.0, "the impostor turns with the camera");
+    eprintln!("{what}: median {median:.3}, max {max:.3}");
+    assert!(median > 0.0, "{what}: the impostor changes with the camera");
     assert!(
         max < 3.0 * median,
-        "a 1° step changes the image by {max:.3}, the median by {median:.3}"
+        "{what}: one step changes the image by {max:.3}, the median by {median:.3}"
     );
+}
+
+fn looking_at(base: [f32; 3], eye: [f32; 3]) -> Camera {
+    Camera {
+        eye: [base[0] + eye[0], base[1] + eye[1], base[2] + eye[2]],
+        target: [base[0], base[1], base[2] + 8.0],
+        fov_deg: 30.0,
+        near: 0.5,
+        far: 8000.0,
+    }
+}
+
+#[test]
+fn an_impostor_turns_from_one_baked_view_to_the_next_without_a_jump() {
+    // The camera circles the tree in steps of 1° through 100°, so it passes at least two
+    // half-way directions between baked views (they are 45° apart). Without the
+    // cross-fade, the step across one swaps the whole crown's picture at once; with it,
+    // the swap is spread over the steps of the band.
+    let path = |base: [f32; 3]| -> Vec<Camera> {
+        (0..=100)
+            .map(|deg| {
+                let a = (deg as f32).to_radians();
+                looking_at(base, [45.0 * a.cos(), 45.0 * a.sin(), 8.0])
+            })
+            .collect()
+    };
+    assert_no_jump(impostor_steps(path), "view steps");
+}
+
+#[test]
+fn an_impostor_rises_from_one_baked_elevation_to_the_next_without_a_jump() {
+    // The camera rises over the tree in steps of 0.5° from 10° to 50° above the horizon, so
+    // it passes the half-way elevations between the baked ones (0, 30 and 60°), at 15 and
+    // 45°.
+    let path = |base: [f32; 3]| -> Vec<Camera> {
+        (20..=100)
+            .map(|half_deg| {
+                let (s, c) = (0.5 * half_deg as f32).to_radians().sin_cos();
+                looking_at(base, [45.0 * c, 10.0 * c, 8.0 + 46.1 * s])
+            })
+            .collect()
+    };
+    assert_no_jump(impostor_steps(path), "elevation steps");
 }
 
 #[test]

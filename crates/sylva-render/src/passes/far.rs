@@ -284,8 +284,18 @@ impl FarPass {
         let sk = &model.tree.skeleton;
         let top = sk.trunk_top();
         let tip = sk.joints().get(top).map(|j| j.tip()).unwrap_or([0.0, 0.0, 1.0]);
-        let params =
-            FarSpecies { tip, extent, center, views: VIEWS, joint: top as u32, rows: ROWS };
+        let params = FarSpecies {
+            tip,
+            extent,
+            center,
+            views: VIEWS,
+            joint: top as u32,
+            rows: ROWS,
+            radius,
+            height: z1 - z0,
+            pad0: 0,
+            pad1: 0,
+        };
         let uniform =
             buffer(gpu, "impostor", bytemuck::bytes_of(&params), wgpu::BufferUsages::UNIFORM);
         let group = dev.create_bind_group(&wgpu::BindGroupDescriptor {

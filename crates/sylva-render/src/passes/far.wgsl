@@ -26,6 +26,12 @@ struct FarSpecies {
     joint: u32,
     // Elevations baked (rows of cells), ROW_STEP apart from the horizontal up.
     rows: u32,
+    // The tree's bounds (tree space, m): radius about the trunk axis and height, which
+    // size the quad to what a view at a given elevation covers of its cell.
+    radius: f32,
+    height: f32,
+    pad0: u32,
+    pad1: u32,
 };
 
 @group(1) @binding(0) var far_albedo: texture_2d<f32>;
@@ -68,6 +74,12 @@ fn view_uv(uv: vec2<f32>, k: u32, r: u32) -> vec2<f32> {
     return vec2<f32>((f32(k) + uv.x) / f32(far.views), (f32(r) + uv.y) / f32(far.rows));
 }
 
+// Height of the tree's bounds seen in the views of row `r`, m.
+fn row_span(r: u32) -> f32 {
+    let e = f32(r) * ROW_STEP;
+    return far.height * cos(e) + 2.0 * far.radius * sin(e);
+}
+
 // Where `s` (in steps between baked views) lies: the view below, and the next one's share
 // of the cross-fade (0 outside the middle VIEW_BAND of the step).
 fn band(s: f32) -> f32 {
@@ -107,8 +119,14 @@ fn vs_main(@builtin(vertex_index) vi: u32, inst: InstanceIn) -> FarOut {
     let r0 = min(u32(floor(e)), far.rows - 1u);
     // The quad's up edge: perpendicular to the line of sight and to `right`.
     let up = vec3<f32>(d * sin(elevation), cos(elevation));
-    let h = 0.5 * far.extent * inst.scale;
-    let offset = right * ((corner.x - 0.5) * 2.0 * h) + up * ((corner.y - 0.5) * 2.0 * h);
+    // The quad covers of the views' cells (far.extent a side, centred on the tree's
+    // middle) what the tree's bounds cover in the two elevations shown: its radius across,
+    // and height · cos e + 2 · radius · sin e up (4 % margin), so the empty parts of the
+    // cells cost no fragments.
+    let span = max(row_span(r0), row_span(min(r0 + 1u, far.rows - 1u)));
+    let half = 0.52 * min(vec2<f32>(2.0 * far.radius, span), vec2<f32>(far.extent));
+    let q = (corner - 0.5) * 2.0 * half;
+    let offset = (right * q.x + up * q.y) * inst.scale;
     // Sway: the trunk top's displacement, sheared in with height above the ground.
     let z = far.center + offset.z / inst.scale;
     let m = palette(inst.palette, far.joint);
@@ -130,7 +148,7 @@ fn vs_main(@builtin(vertex_index) vi: u32, inst: InstanceIn) -> FarOut {
         out.shadow_near = shadow_near(upright, globals.sun_dir);
         out.shadow_far = shadow_far(upright, globals.sun_dir);
     }
-    out.uv = vec2<f32>(corner.x, 1.0 - corner.y);
+    out.uv = vec2<f32>(0.5 + q.x / far.extent, 0.5 - q.y / far.extent);
     out.views = vec2<u32>(k0, (k0 + 1u) % far.views);
     out.blend = band(s);
     out.rows = vec2<u32>(r0, min(r0 + 1u, far.rows - 1u));
