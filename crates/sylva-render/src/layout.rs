@@ -180,10 +180,10 @@ pub struct FarSpecies {
     pub radius: f32,
     /// Height of the tree's bounds, m.
     pub height: f32,
+    /// Step between the baked elevations, rad.
+    pub row_step: f32,
     /// Padding.
     pub pad0: u32,
-    /// Padding.
-    pub pad1: u32,
 }
 
 macro_rules! attr {

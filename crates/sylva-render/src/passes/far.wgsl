@@ -24,14 +24,15 @@ struct FarSpecies {
     views: u32,
     // The trunk-top joint, whose palette sways the quad.
     joint: u32,
-    // Elevations baked (rows of cells), ROW_STEP apart from the horizontal up.
+    // Elevations baked (rows of cells), row_step apart from the horizontal up.
     rows: u32,
     // The tree's bounds (tree space, m): radius about the trunk axis and height, which
     // size the quad to what a view at a given elevation covers of its cell.
     radius: f32,
     height: f32,
+    // Step between the baked elevations, rad.
+    row_step: f32,
     pad0: u32,
-    pad1: u32,
 };
 
 @group(1) @binding(0) var far_albedo: texture_2d<f32>;
@@ -66,8 +67,6 @@ const TAU: f32 = 6.28318530718;
 // Share of the angle between two baked views over which they are cross-faded (centred on
 // the half-way direction); outside it one view is shown alone.
 const VIEW_BAND: f32 = 0.5;
-// Step between the baked elevations, radians (ROW_STEP_DEG in far.rs).
-const ROW_STEP: f32 = 0.52359878;
 
 // Atlas coordinates of place `uv` on the quad in view `k` of row `r`.
 fn view_uv(uv: vec2<f32>, k: u32, r: u32) -> vec2<f32> {
@@ -76,12 +75,12 @@ fn view_uv(uv: vec2<f32>, k: u32, r: u32) -> vec2<f32> {
 
 // Height of the tree's bounds seen in the views of row `r`, m.
 fn row_span(r: u32) -> f32 {
-    let e = f32(r) * ROW_STEP;
+    let e = f32(r) * far.row_step;
     return far.height * cos(e) + 2.0 * far.radius * sin(e);
 }
 
-// Where `s` (in steps between baked views) lies: the view below, and the next one's share
-// of the cross-fade (0 outside the middle VIEW_BAND of the step).
+// The next baked view's share of the cross-fade at `s` (in steps between baked views,
+// from the view below): 0 or 1 outside the middle VIEW_BAND of the step.
 fn band(s: f32) -> f32 {
     return clamp((fract(s) - 0.5) / VIEW_BAND + 0.5, 0.0, 1.0);
 }
@@ -115,7 +114,7 @@ fn vs_main(@builtin(vertex_index) vi: u32, inst: InstanceIn) -> FarOut {
         let to = globals.eye - mid;
         elevation = atan2(max(to.z, 0.0), max(length(to.xy), 1e-3));
     }
-    let e = min(elevation / ROW_STEP, f32(far.rows - 1u));
+    let e = min(elevation / far.row_step, f32(far.rows - 1u));
     let r0 = min(u32(floor(e)), far.rows - 1u);
     // The quad's up edge: perpendicular to the line of sight and to `right`.
     let up = vec3<f32>(d * sin(elevation), cos(elevation));
