@@ -116,13 +116,14 @@ fn vs_main(@builtin(vertex_index) vi: u32, inst: InstanceIn) -> FarOut {
     }
     let e = min(elevation / far.row_step, f32(far.rows - 1u));
     let r0 = min(u32(floor(e)), far.rows - 1u);
+    let r1 = min(r0 + 1u, far.rows - 1u);
     // The quad's up edge: perpendicular to the line of sight and to `right`.
     let up = vec3<f32>(d * sin(elevation), cos(elevation));
     // The quad covers of the views' cells (far.extent a side, centred on the tree's
     // middle) what the tree's bounds cover in the two elevations shown: its radius across,
     // and height · cos e + 2 · radius · sin e up (4 % margin), so the empty parts of the
     // cells cost no fragments.
-    let span = max(row_span(r0), row_span(min(r0 + 1u, far.rows - 1u)));
+    let span = max(row_span(r0), row_span(r1));
     let half = 0.52 * min(vec2<f32>(2.0 * far.radius, span), vec2<f32>(far.extent));
     let q = (corner - 0.5) * 2.0 * half;
     let offset = (right * q.x + up * q.y) * inst.scale;
@@ -150,7 +151,7 @@ fn vs_main(@builtin(vertex_index) vi: u32, inst: InstanceIn) -> FarOut {
     out.uv = vec2<f32>(0.5 + q.x / far.extent, 0.5 - q.y / far.extent);
     out.views = vec2<u32>(k0, (k0 + 1u) % far.views);
     out.blend = band(s);
-    out.rows = vec2<u32>(r0, min(r0 + 1u, far.rows - 1u));
+    out.rows = vec2<u32>(r0, r1);
     out.row_blend = band(e);
     out.yaw = yaw;
     out.fade = inst.fade;
