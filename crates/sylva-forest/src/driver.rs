@@ -42,11 +42,16 @@
 //! so on, so the joints a level draws are a prefix (an impostor needs only the trunk). Per
 //! simulation, [`Forest::frame`] uploads the prefix the finest level its trees are drawn
 //! at needs (nothing for one with no tree in view; see [`FrameData::palettes`] for the
-//! layout), and records per lane group of 16 simulated instances the prefix the next
-//! [`Forest::step`] simulates: that of the level half a level finer
-//! ([`SIM_MARGIN`]), so a tree about to move closer is already simulated when drawn. The
-//! joints beyond are not stepped at all (their drag is felt as a lumped static load by the
-//! simulated ones, see `sylva_sway::batch`), and blend in from rest when switched back on.
+//! layout), and records per simulation the prefix the next [`Forest::step`] simulates:
+//! that of the level half a level finer ([`SIM_MARGIN`]), so a tree about to move closer is
+//! already simulated when drawn. The joints beyond are not stepped at all (their drag is
+//! felt as a lumped static load by the simulated ones, see `sylva_sway::batch`), and blend
+//! in from rest when switched back on. The batch steps 16 simulations (lanes) at a time, and
+//! a lane group steps the longest prefix any of its lanes needs, so before each step the
+//! simulations are packed (`lanes.rs`): those that need the same prefix are gathered into
+//! the same lane groups, moving as few as possible. A simulation changes lane with its whole
+//! state ([`SwayBatch::swap_instances`]) and carries on exactly as it would have; an
+//! instance group keeps its number.
 
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicU32, Ordering};
@@ -64,6 +69,7 @@ use thiserror::Error;
 
 use crate::camera::Camera;
 use crate::groups::{assign_slots, morton, partition};
+use crate::lanes;
 use crate::scene::{
     Placement, SceneSpec, Terrain, WindSource, camera_on_path, default_camera, default_camera_path,
     layout,
@@ -298,8 +304,8 @@ pub struct FrameData {
     need: Vec<u32>,
     /// Per simulation: where its palettes lie in `palettes`.
     slots: Vec<PaletteSlot>,
-    /// Per lane group: joints the next step is to simulate.
-    simulate: Vec<u32>,
+    /// Per simulation (as `need`): joints the next step is to simulate for it.
+    want: Vec<u32>,
 }
 
 impl FrameData {
@@ -345,6 +351,16 @@ pub struct SpeciesRuntime {
     codes: Vec<u64>,
     /// Index of this species' first lane group in the forest's list of lane groups.
     lane_base: usize,
+    /// Per group: the batch instance (lane) that simulates it. The animation LOD moves
+    /// simulations between lanes (see `lanes.rs`); a group keeps its number.
+    lane_of: Vec<u32>,
+    /// Per lane: the group it simulates.
+    group_of: Vec<u32>,
+    /// Scratch: per lane the joints its simulation is to step, per lane group the longest,
+    /// and the packing's.
+    want: Vec<u32>,
+    longest: Vec<u32>,
+    packer: lanes::Packer,
     /// The skeleton's LOD order: joints each level uses, joints of the trunk.
     pub order: LodOrder,
     /// Simulated instances that read the coarse wind in the last step.
@@ -400,8 +416,9 @@ pub struct Forest {
     last_sim_ms: f64,
     lod: LodSettings,
     lane_groups: usize,
-    /// Per lane group: joints to simulate, as the last frame asked (animation LOD).
-    simulate: Vec<AtomicU32>,
+    /// Per lane (lane group · 16 + lane, all species in a row): joints to simulate for its
+    /// simulation, as the last frame asked (animation LOD).
+    want: Vec<AtomicU32>,
     /// Per tree: the instance group it is fading out of, if it changed group lately.
     switches: Vec<Switch>,
     /// Where the last frame's camera was.
@@ -572,6 +589,11 @@ impl Forest {
                 members,
                 codes,
                 lane_base,
+                lane_of: (0..n_groups as u32).collect(),
+                group_of: (0..n_groups as u32).collect(),
+                want: Vec::with_capacity(n_groups),
+                longest: Vec::with_capacity(n_groups.div_ceil(LANES)),
+                packer: lanes::Packer::default(),
                 order,
                 coarse_wind: 0,
                 near_wind: 0,
@@ -602,7 +624,7 @@ impl Forest {
                 ..LodSettings::default()
             },
             lane_groups: lane_base,
-            simulate: (0..lane_base).map(|_| AtomicU32::new(u32::MAX)).collect(),
+            want: (0..lane_base * LANES).map(|_| AtomicU32::new(u32::MAX)).collect(),
             switches: vec![Switch::NONE; n_trees],
             eye: Mutex::new(None),
             grouped: (eye, 0.0),
@@ -787,7 +809,7 @@ impl Forest {
             .iter()
             .map(|&j| {
                 if j < n {
-                    s.batch.palette(g as usize, j)
+                    s.batch.palette(s.lane_of[g as usize] as usize, j)
                 } else {
                     [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0]
                 }
@@ -912,7 +934,7 @@ impl Forest {
         let leaf = self.leaf_params;
         let (pyramid, gain, turn) = (&self.wind, self.gain, self.turn);
         let (near, centre) = (self.near.as_ref(), self.near_centre());
-        let (simulate, animation) = (&self.simulate, self.lod.animation);
+        let (wanted, animation) = (&self.want, self.lod.animation);
         let coarse_levels = self.spec.lod.wind;
         // Species in parallel; each samples the shared, read-only field for its groups.
         self.species.par_iter_mut().for_each(|s| {
@@ -920,15 +942,34 @@ impl Forest {
             let trunk = s.order.trunk;
             s.coarse_wind = 0;
             s.near_wind = 0;
-            for k in 0..s.groups.len().div_ceil(LANES) {
-                let want = simulate[s.lane_base + k].load(Ordering::Relaxed) as usize;
-                s.batch.set_active(k, if animation { want } else { all });
+            let base = s.lane_base * LANES;
+            let want = &mut s.want;
+            want.clear();
+            want.extend((0..s.groups.len()).map(|l| wanted[base + l].load(Ordering::Relaxed)));
+            if animation {
+                // Gather the simulations that need the same joints into the same lane groups.
+                let dest = s.packer.pack(want);
+                let (batch, lane_of, group_of) = (&mut s.batch, &mut s.lane_of, &mut s.group_of);
+                lanes::apply(dest, |a, b| {
+                    batch.swap_instances(a, b);
+                    want.swap(a, b);
+                    group_of.swap(a, b);
+                    lane_of[group_of[a] as usize] = a as u32;
+                    lane_of[group_of[b] as usize] = b as u32;
+                });
             }
-            for (i, (g, out)) in s.groups.iter_mut().zip(&mut s.winds).enumerate() {
+            // Per lane group: the longest prefix any of its lanes wants.
+            let longest = &mut s.longest;
+            longest.clear();
+            longest.extend(want.chunks(LANES).map(|c| c.iter().copied().max().unwrap_or(0)));
+            for (k, &w) in longest.iter().enumerate() {
+                s.batch.set_active(k, if animation { w as usize } else { all });
+            }
+            for (i, g) in s.groups.iter_mut().enumerate() {
+                let lane = s.lane_of[i] as usize;
                 // Wind-field LOD: groups whose trees are all impostors (or out of view) read
                 // the pyramid's coarse level.
-                let want = simulate[s.lane_base + i / LANES].load(Ordering::Relaxed) as usize;
-                let far = coarse_levels && want <= trunk;
+                let far = coarse_levels && longest[lane / LANES] as usize <= trunk;
                 s.coarse_wind += far as usize;
                 let w = if far {
                     pyramid.level(FAR_WIND_LEVEL).sample(g.sample, t)
@@ -939,7 +980,7 @@ impl Forest {
                 };
                 let w = steer(w, gain, turn);
                 let (sn, cs) = g.yaw.sin_cos();
-                *out = [cs * w[0] + sn * w[1], -sn * w[0] + cs * w[1], w[2]];
+                s.winds[lane] = [cs * w[0] + sn * w[1], -sn * w[0] + cs * w[1], w[2]];
                 let speed = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
                 leaf.step(&mut g.leaf, speed, dt);
             }
@@ -960,8 +1001,8 @@ impl Forest {
             out.lod_state.clear();
             out.lod_state.resize(self.trees.len(), f32::NAN);
         }
-        out.simulate.clear();
-        out.simulate.resize(self.lane_groups, 0);
+        out.want.clear();
+        out.want.resize(self.lane_groups * LANES, 0);
         out.need.clear();
         out.need.resize(self.lane_groups * LANES, 0);
         let lod = self.lod;
@@ -1007,10 +1048,9 @@ impl Forest {
             stats.group_changes +=
                 (sw.from != u32::MAX && sw.at > previous && sw.at <= self.time) as usize;
             for (group, old) in [(*g, false)].into_iter().chain(switch.map(|(_, f)| (f, true))) {
-                let lane = sp.lane_base + group as usize / LANES;
-                let own = sp.lane_base * LANES + group as usize;
+                let own = sp.lane_base * LANES + sp.lane_of[group as usize] as usize;
                 out.need[own] = out.need[own].max(joints(a) as u32);
-                out.simulate[lane] = out.simulate[lane].max(joints(sim) as u32);
+                out.want[own] = out.want[own].max(joints(sim) as u32);
                 for level in a..=b {
                     out.keys.push((level * n_species + p.species, i as u32 | (old as u32) << 31));
                 }
@@ -1124,7 +1164,7 @@ impl Forest {
             stats.near_wind += s.near_wind;
             stats.joints += s.batch.joint_updates();
         }
-        for (a, &v) in self.simulate.iter().zip(&out.simulate) {
+        for (a, &v) in self.want.iter().zip(&out.want) {
             a.store(v, Ordering::Relaxed);
         }
         out.instances.clear();
@@ -1182,7 +1222,7 @@ impl Forest {
                 position: p.position,
                 yaw: group.yaw,
                 scale: p.scale,
-                palette: out.slots[sp.lane_base * LANES + g as usize],
+                palette: out.slots[sp.lane_base * LANES + sp.lane_of[g as usize] as usize],
                 leaf_phase: group.leaf.phase,
                 leaf_amplitude: group.leaf.amplitude,
                 fade,
@@ -1365,4 +1405,52 @@ fn coarse_wind_field(spec: &SceneSpec, radius: f32) -> Result<WindField, ForestE
         &|_| {},
     )
     .map_err(|e| ForestError::Wind(e.to_string()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Joint updates of lanes wanting `want` (each at least the trunk: a lane group steps
+    /// no less), 16 to a lane group, each group stepping its longest.
+    fn cost(want: impl Iterator<Item = u32>, trunk: usize) -> usize {
+        let w: Vec<usize> = want.map(|w| (w as usize).max(trunk)).collect();
+        w.chunks(LANES).map(|c| c.iter().max().unwrap_or(&0) * c.len()).sum()
+    }
+
+    #[test]
+    fn simulations_that_need_the_same_joints_are_stepped_together() {
+        // Scene A from its default viewpoint: a few trees at full detail, most impostors.
+        let spec = SceneSpec::builtin("A").expect("A");
+        let mut forest = Forest::new(&spec).expect("forest");
+        let cam = forest.default_camera();
+        let mut f = FrameData::default();
+        let dt = 1.0 / 30.0;
+        for _ in 0..3 {
+            forest.step(dt);
+            forest.frame(&cam, 4.0 / 3.0, &mut f);
+        }
+        forest.step(dt);
+        let (mut packed, mut scattered, mut sorted, mut stepped) = (0, 0, 0, 0);
+        for s in &forest.species {
+            let trunk = s.order.trunk;
+            // The step just packed the lanes; `want` is what each lane's simulation asked for.
+            packed += cost(s.want.iter().copied(), trunk);
+            // Each simulation in the lane of its own number, as if nothing had been moved.
+            scattered += cost(s.lane_of.iter().map(|&l| s.want[l as usize]), trunk);
+            let mut w = s.want.clone();
+            w.sort_unstable_by(|a, b| b.cmp(a));
+            sorted += cost(w.into_iter(), trunk);
+            stepped += s.batch.joint_updates();
+            for (g, &l) in s.lane_of.iter().enumerate() {
+                assert_eq!(s.group_of[l as usize] as usize, g, "lanes and groups agree");
+            }
+        }
+        eprintln!(
+            "joint updates: packed {packed}, scattered {scattered}, sorted longest first {sorted}"
+        );
+        assert_eq!(stepped, packed, "the batch steps what the packed lanes want");
+        assert!(packed <= sorted, "packed {packed}, sorted {sorted}");
+        assert!(packed * 10 < scattered * 9, "packed {packed}, scattered {scattered}");
+    }
 }

@@ -10,6 +10,7 @@ pub mod camera;
 pub mod clip;
 pub mod driver;
 mod groups;
+mod lanes;
 pub mod scene;
 
 pub use camera::{Camera, Mat4, ViewCone};

@@ -113,6 +113,9 @@ pub struct SwayBatch {
     budget: Vec<u32>,
     /// Per group: joints simulated (a prefix).
     active: Vec<u32>,
+    /// Per instance: joints whose state is current (the prefix its group simulated when
+    /// last set; an instance moved by [`SwayBatch::swap_instances`] takes its own along).
+    fresh: Vec<u32>,
     /// Registered prefixes and, per joint of each, the lumped static drag [D, c] with
     /// `c = P − D o` (see the module documentation), of the wood and of the leaves.
     lumped: Vec<(usize, Vec<Lump>)>,
@@ -217,6 +220,7 @@ impl SwayBatch {
             pal_lanes: vec![std::array::from_fn(|e| [IDENTITY[e]; LANES]); groups * n],
             budget: vec![n as u32; instances],
             active: vec![n as u32; groups],
+            fresh: vec![n as u32; instances],
             lumped: Vec::new(),
             updates: 0,
             transitions: Vec::with_capacity(n),
@@ -287,19 +291,66 @@ impl SwayBatch {
     /// 16 group + 15`): rounded up to the joint count or the nearest prefix registered with
     /// [`SwayBatch::set_prefixes`]. Joints switched back on restart at equilibrium and blend
     /// in; joints beyond are left untouched (their palettes keep old values: do not draw
-    /// them).
+    /// them). What is switched on is decided per instance: a joint an instance was already
+    /// simulating (in this group or, moved by [`SwayBatch::swap_instances`], in another)
+    /// carries on as it was.
     pub fn set_active(&mut self, group: usize, joints: usize) {
         let n = self.species.len();
-        let Some(cur) = self.active.get(group).copied() else { return };
+        if group >= self.active.len() {
+            return;
+        }
         let p =
             self.lumped.iter().map(|(q, _)| *q).filter(|&q| q >= joints).min().unwrap_or(n).min(n)
                 as u32;
-        if p > cur {
-            for w in &mut self.weight[group * n + cur as usize..group * n + p as usize] {
-                *w = ZERO;
+        self.active[group] = p;
+        for i in group * LANES..self.instances.min(group * LANES + LANES) {
+            self.refresh(i);
+        }
+    }
+
+    /// Bring instance `i`'s record of its current joints in line with its group's prefix:
+    /// joints newly simulated for it restart at equilibrium (blend weight 0).
+    fn refresh(&mut self, i: usize) {
+        let n = self.species.len();
+        let (g, l) = (i / LANES, i % LANES);
+        let (f, p) = (self.fresh[i] as usize, self.active[g] as usize);
+        if f < p {
+            for w in &mut self.weight[g * n + f..g * n + p] {
+                w[l] = 0.0;
             }
         }
-        self.active[group] = p;
+        self.fresh[i] = p as u32;
+    }
+
+    /// Exchange the whole animation state of instances `a` and `b` (angles, rates, blend
+    /// weights, budgets): each carries on in the other's lane exactly as it would have in
+    /// its own, so a caller can gather instances that need the same joints into one group
+    /// (a group steps the longest prefix any of its lanes needs). Joints beyond what either
+    /// was simulating are stale and not moved; palettes are recomputed by the next step.
+    /// Out-of-range indices are ignored.
+    pub fn swap_instances(&mut self, a: usize, b: usize) {
+        if a == b || a >= self.instances || b >= self.instances {
+            return;
+        }
+        let n = self.species.len();
+        let (ga, la, gb, lb) = (a / LANES * n, a % LANES, b / LANES * n, b % LANES);
+        let m = self.fresh[a].max(self.fresh[b]) as usize;
+        for j in 0..m {
+            let (x, y) = (ga + j, gb + j);
+            for k in 0..2 {
+                let t = self.theta[x][k][la];
+                self.theta[x][k][la] = self.theta[y][k][lb];
+                self.theta[y][k][lb] = t;
+                let r = self.rate[x][k][la];
+                self.rate[x][k][la] = self.rate[y][k][lb];
+                self.rate[y][k][lb] = r;
+            }
+            let w = self.weight[x][la];
+            self.weight[x][la] = self.weight[y][lb];
+            self.weight[y][lb] = w;
+        }
+        self.fresh.swap(a, b);
+        self.budget.swap(a, b);
     }
 
     /// Joints simulated in group `group`.
@@ -370,6 +421,9 @@ impl SwayBatch {
     pub fn step(&mut self, dt: f32, wind: &[[f32; 3]]) {
         if !(dt > 0.0 && dt.is_finite()) {
             return;
+        }
+        for i in 0..self.instances {
+            self.refresh(i);
         }
         let sp = &self.species;
         if dt != self.dt {

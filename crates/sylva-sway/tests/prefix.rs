@@ -80,3 +80,70 @@ fn a_trunk_only_tree_bends_like_the_full_tree_in_steady_wind() {
         assert!(trunk.weight(0, j) <= (1.0 / 30.0) / blend + 1e-6, "joint {j} jumped in");
     }
 }
+
+/// Tip of every joint of instance `i`, animated (tree space).
+fn tips(b: &SwayBatch, sk: &sylva_tree::Skeleton, i: usize) -> Vec<[f32; 3]> {
+    (0..sk.len()).map(|j| transform(&b.palette(i, j), sk.joints()[j].tip())).collect()
+}
+
+fn farthest(a: &[[f32; 3]], b: &[[f32; 3]]) -> f32 {
+    a.iter()
+        .zip(b)
+        .map(|(p, q)| (0..3).map(|k| (p[k] - q[k]).powi(2)).sum::<f32>().sqrt())
+        .fold(0.0, f32::max)
+}
+
+#[test]
+fn an_instance_moved_to_another_lane_carries_on_as_it_was() {
+    // Two groups: instances 0–15 simulate every joint, 16–31 the trunk only. Each instance
+    // has its own wind. After 2 s, instance 0 (full) and 16 (trunk) trade lanes and the two
+    // groups trade prefixes with them, as the forest does to gather trees drawn at full
+    // detail into one group. Instance 0 must carry on in lane 16 exactly as it would have in
+    // lane 0; instance 17, whose group now simulates the crown it had not been simulating,
+    // must have the crown blend in from rest.
+    let (model, order) = aspen();
+    let sk = &model.tree.skeleton;
+    let n = sk.len();
+    let make = || {
+        let mut b =
+            SwayBatch::new(SwaySpecies::new(sk, SwayParams::default()).expect("s"), 2 * LANES);
+        b.set_prefixes(&[order.trunk]);
+        b.set_active(1, order.trunk);
+        b
+    };
+    let wind: Vec<[f32; 3]> = (0..2 * LANES).map(|i| [3.0 + 0.2 * i as f32, 1.0, 0.0]).collect();
+    let dt = 1.0 / 30.0;
+    let (mut kept, mut moved) = (make(), make());
+    for _ in 0..60 {
+        kept.step(dt, &wind);
+        moved.step(dt, &wind);
+    }
+    moved.swap_instances(0, LANES);
+    moved.set_active(0, order.trunk);
+    moved.set_active(1, n);
+    let mut swapped = wind.clone();
+    swapped.swap(0, LANES);
+    let blend = SwayParams::default().blend_time;
+    for s in 0..30 {
+        kept.step(dt, &wind);
+        moved.step(dt, &swapped);
+        let gap = farthest(&tips(&kept, sk, 0), &tips(&moved, sk, LANES));
+        assert!(gap < 1e-5, "step {s}: instance 0 moved to lane 16 is {gap} m off its own path");
+        // Its crown did not restart: every joint is fully displayed.
+        assert!((order.trunk..n).all(|j| moved.weight(LANES, j) == 1.0), "step {s}: it blended");
+        if s == 0 {
+            // Lane 17 had its crown held; it comes in from rest, one blend step at a time.
+            for j in order.trunk..n {
+                assert!(moved.weight(LANES + 1, j) <= dt / blend + 1e-6, "joint {j} jumped in");
+            }
+        }
+        // Instance 16, now in lane 0 of a trunk-only group, keeps its trunk's path.
+        let (a, b) = (tips(&kept, sk, LANES), tips(&moved, sk, 0));
+        let gap = farthest(&a[..order.trunk], &b[..order.trunk]);
+        assert!(
+            gap < 1e-5,
+            "step {s}: instance 16 moved to lane 0 is {gap} m off its trunk's path"
+        );
+    }
+    assert_eq!(moved.joint_updates(), LANES * n + LANES * order.trunk);
+}
