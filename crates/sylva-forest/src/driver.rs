@@ -945,7 +945,12 @@ impl Forest {
             let base = s.lane_base * LANES;
             let want = &mut s.want;
             want.clear();
-            want.extend((0..s.groups.len()).map(|l| wanted[base + l].load(Ordering::Relaxed)));
+            // A lane group steps the trunk at least: a want below it (nothing drawn) is the
+            // trunk's, so out-of-view and impostor simulations are not told apart.
+            want.extend(
+                (0..s.groups.len())
+                    .map(|l| wanted[base + l].load(Ordering::Relaxed).max(trunk as u32)),
+            );
             if animation {
                 // Gather the simulations that need the same joints into the same lane groups.
                 let dest = s.packer.pack(want);

@@ -22,6 +22,7 @@ pub(crate) struct Packer {
     open: Vec<(u32, u32)>,
     here: Vec<(u32, u32)>,
     wanted: Vec<u32>,
+    after: Vec<u32>,
 }
 
 impl Packer {
@@ -32,7 +33,7 @@ impl Packer {
     /// (a partial group's run where it costs least), so the sum over groups of the longest
     /// want in each, times the group's lanes, is as small as any arrangement makes it.
     pub(crate) fn pack(&mut self, want: &[u32]) -> &mut [u32] {
-        let Packer { dest, sorted, keys, order, leaving, open, here, wanted } = self;
+        let Packer { dest, sorted, keys, order, leaving, open, here, wanted, after } = self;
         let lanes = want.len();
         let groups = lanes.div_ceil(LANES);
         dest.clear();
@@ -126,8 +127,23 @@ impl Packer {
             debug_assert_eq!(w, v);
             dest[from as usize] = to;
         }
+        // Moving costs a copy of each moved simulation's state: only for a saving.
+        after.clear();
+        after.resize(lanes, 0);
+        for (l, &d) in dest.iter().enumerate() {
+            after[d as usize] = want[l];
+        }
+        if stepped(after) >= stepped(want) {
+            dest.clear();
+            dest.extend(0..lanes as u32);
+        }
         dest
     }
+}
+
+/// Joint updates of lanes wanting `want`, 16 to a lane group, each group stepping its longest.
+pub(crate) fn stepped(want: &[u32]) -> u64 {
+    want.chunks(LANES).map(|c| c.iter().copied().max().unwrap_or(0) as u64 * c.len() as u64).sum()
 }
 
 /// Carry out the permutation `dest` (lane `l`'s simulation to lane `dest[l]`) as a sequence
@@ -148,9 +164,8 @@ mod tests {
     use super::*;
     use sylva_core::rng::SplitMix64;
 
-    /// Joints stepped: per lane group, the longest want times its lanes.
     fn cost(want: &[u32]) -> u64 {
-        want.chunks(LANES).map(|c| *c.iter().max().unwrap_or(&0) as u64 * c.len() as u64).sum()
+        stepped(want)
     }
 
     fn pack(want: &[u32]) -> Vec<u32> {
@@ -207,6 +222,19 @@ mod tests {
         assert_eq!(dest[50] / LANES as u32, 1, "the near tree joins the group of near trees");
         let after = moved(&want);
         assert_eq!(cost(&after), 16 * 500 + 16 * 500 + 16 * 10 + 16 * 10);
+    }
+
+    #[test]
+    fn nothing_moves_for_no_saving() {
+        // Seventeen near trees in two lane groups: both groups step the whole crown however
+        // they are spread, so gathering sixteen of them in one saves nothing; nothing moves.
+        let want: Vec<u32> = (0..32).map(|i| if i % 2 == 0 || i == 1 { 500 } else { 10 }).collect();
+        assert_eq!(want.iter().filter(|&&w| w == 500).count(), 17);
+        assert!(pack(&want).iter().enumerate().all(|(l, &d)| d as usize == l));
+        // With one near tree fewer, sixteen fit one lane group: they are gathered.
+        let mut fewer = want.clone();
+        fewer[0] = 10;
+        assert_eq!(cost(&moved(&fewer)), 16 * 500 + 16 * 10);
     }
 
     #[test]
