@@ -176,6 +176,15 @@ pub const FAR_WIND_LEVEL: usize = 2;
 /// leads the camera by a frame.
 pub const SIM_MARGIN: f32 = 0.5;
 
+/// Animation LOD by projected size: a tree whose height covers more than a third of this
+/// fraction of the image height simulates every joint; below, one level's prefix of the
+/// LOD chain per factor of 3 (level `⌊log₃(ANIMATION_FRACTION / h)⌋`, never finer than the
+/// geometry LOD would simulate it), the joints beyond held at rest on their parents. 1.5:
+/// every joint from half the image height up; level 1's (about a third to a half of the
+/// joints) down to a sixth, where the finest twigs, a few cm long on a 15–25 m tree, move
+/// by about a pixel or less.
+pub const ANIMATION_FRACTION: f32 = 1.5;
+
 impl Default for LodSettings {
     fn default() -> LodSettings {
         LodSettings {
@@ -360,6 +369,7 @@ pub struct SpeciesRuntime {
     /// and the packing's.
     want: Vec<u32>,
     longest: Vec<u32>,
+    shown: Vec<u32>,
     packer: lanes::Packer,
     /// The skeleton's LOD order: joints each level uses, joints of the trunk.
     pub order: LodOrder,
@@ -419,6 +429,8 @@ pub struct Forest {
     /// Per lane (lane group · 16 + lane, all species in a row): joints to simulate for its
     /// simulation, as the last frame asked (animation LOD).
     want: Vec<AtomicU32>,
+    /// Per lane (as `want`): joints the last frame drew of its simulation.
+    shown: Vec<AtomicU32>,
     /// Per tree: the instance group it is fading out of, if it changed group lately.
     switches: Vec<Switch>,
     /// Where the last frame's camera was.
@@ -593,6 +605,7 @@ impl Forest {
                 group_of: (0..n_groups as u32).collect(),
                 want: Vec::with_capacity(n_groups),
                 longest: Vec::with_capacity(n_groups.div_ceil(LANES)),
+                shown: Vec::with_capacity(n_groups),
                 packer: lanes::Packer::default(),
                 order,
                 coarse_wind: 0,
@@ -625,6 +638,7 @@ impl Forest {
             },
             lane_groups: lane_base,
             want: (0..lane_base * LANES).map(|_| AtomicU32::new(u32::MAX)).collect(),
+            shown: (0..lane_base * LANES).map(|_| AtomicU32::new(u32::MAX)).collect(),
             switches: vec![Switch::NONE; n_trees],
             eye: Mutex::new(None),
             grouped: (eye, 0.0),
@@ -809,7 +823,13 @@ impl Forest {
             .iter()
             .map(|&j| {
                 if j < n {
-                    s.batch.palette(s.lane_of[g as usize] as usize, j)
+                    let lane = s.lane_of[g as usize] as usize;
+                    let simulated = s.batch.active(lane / LANES);
+                    let shown = match s.batch.anchors(simulated) {
+                        Some(a) if j >= simulated => a[j] as usize,
+                        _ => j,
+                    };
+                    s.batch.palette(lane, shown)
                 } else {
                     [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0]
                 }
@@ -934,7 +954,7 @@ impl Forest {
         let leaf = self.leaf_params;
         let (pyramid, gain, turn) = (&self.wind, self.gain, self.turn);
         let (near, centre) = (self.near.as_ref(), self.near_centre());
-        let (wanted, animation) = (&self.want, self.lod.animation);
+        let (wanted, drawn, animation) = (&self.want, &self.shown, self.lod.animation);
         let coarse_levels = self.spec.lod.wind;
         // Species in parallel; each samples the shared, read-only field for its groups.
         self.species.par_iter_mut().for_each(|s| {
@@ -951,6 +971,9 @@ impl Forest {
                 (0..s.groups.len())
                     .map(|l| wanted[base + l].load(Ordering::Relaxed).max(trunk as u32)),
             );
+            let shown = &mut s.shown;
+            shown.clear();
+            shown.extend((0..s.groups.len()).map(|l| drawn[base + l].load(Ordering::Relaxed)));
             if animation {
                 // Gather the simulations that need the same joints into the same lane groups.
                 let dest = s.packer.pack(want);
@@ -958,6 +981,7 @@ impl Forest {
                 lanes::apply(dest, |a, b| {
                     batch.swap_instances(a, b);
                     want.swap(a, b);
+                    shown.swap(a, b);
                     group_of.swap(a, b);
                     lane_of[group_of[a] as usize] = a as u32;
                     lane_of[group_of[b] as usize] = b as u32;
@@ -969,6 +993,12 @@ impl Forest {
             longest.extend(want.chunks(LANES).map(|c| c.iter().copied().max().unwrap_or(0)));
             for (k, &w) in longest.iter().enumerate() {
                 s.batch.set_active(k, if animation { w as usize } else { all });
+                // Joints switched off fade out where a tree shows them; where none does, they
+                // go at once.
+                let end = shown.len().min(k * LANES + LANES);
+                if shown[k * LANES..end].iter().all(|&d| d <= w) {
+                    s.batch.settle(k);
+                }
             }
             for (i, g) in s.groups.iter_mut().enumerate() {
                 let lane = s.lane_of[i] as usize;
@@ -1034,8 +1064,9 @@ impl Forest {
             let joints = |l: u32| {
                 if lod.geometry && l >= far { sp.order.trunk } else { sp.order.prefix[l as usize] }
             };
+            let frac = cone.screen_fraction(c, h);
             let (a, b, sim) = if lod.geometry {
-                let x = lod_coordinate(cone.screen_fraction(c, h), lod.fraction);
+                let x = lod_coordinate(frac, lod.fraction);
                 let x = hysteresis(out.lod_state[i], x, lod.hysteresis);
                 let before = out.lod_state[i];
                 if !before.is_nan() && before.floor() != x.floor() {
@@ -1047,6 +1078,16 @@ impl Forest {
             } else {
                 (0, 0, 0)
             };
+            // Joints to simulate: the geometry's choice half a level ahead, or coarser by
+            // projected size (the joints it draws beyond are held, shown at rest on their
+            // parents).
+            let moving = if lod.geometry && sim >= far {
+                sp.order.trunk
+            } else {
+                let by_size = ((ANIMATION_FRACTION / frac.max(1e-9)).ln() / 3f32.ln()).max(0.0);
+                let level = sim.max(by_size as u32) as usize;
+                sp.order.prefix[level.min(sp.order.prefix.len() - 1)]
+            };
             // The tree's group, and the one it is fading out of after a regroup.
             let switch = self.switches[i].fading(self.time, self.regroup_fade);
             let sw = self.switches[i];
@@ -1055,7 +1096,7 @@ impl Forest {
             for (group, old) in [(*g, false)].into_iter().chain(switch.map(|(_, f)| (f, true))) {
                 let own = sp.lane_base * LANES + sp.lane_of[group as usize] as usize;
                 out.need[own] = out.need[own].max(joints(a) as u32);
-                out.want[own] = out.want[own].max(joints(sim) as u32);
+                out.want[own] = out.want[own].max(moving as u32);
                 for level in a..=b {
                     out.keys.push((level * n_species + p.species, i as u32 | (old as u32) << 31));
                 }
@@ -1130,6 +1171,11 @@ impl Forest {
                     continue;
                 }
                 let slots = &mut out.slots[sims];
+                // Joints drawn beyond what the group simulates (the animation LOD by size)
+                // rest on their parents: each shows its nearest simulated ancestor's palette.
+                let simulated = s.batch.active(k);
+                let anchors = if joints > simulated { s.batch.anchors(simulated) } else { None };
+                let src = |j: usize| anchors.map_or(j, |a| a[j] as usize);
                 let own: usize = need.iter().map(|&m| (m as usize).min(n)).sum();
                 if own < joints * used {
                     // Prefixes differ: each simulation's own, in a row. A gather, joint by
@@ -1140,7 +1186,8 @@ impl Forest {
                         at += 12 * (m as usize).min(n);
                     }
                     out.palettes.resize(at, 0.0);
-                    for (j, pal) in block[..joints].iter().enumerate() {
+                    for j in 0..joints {
+                        let pal = &block[src(j)];
                         for (l, (&m, slot)) in need.iter().zip(slots.iter()).enumerate() {
                             if j < m as usize {
                                 let run = slot.base as usize + 12 * j;
@@ -1156,10 +1203,16 @@ impl Forest {
                 for (l, slot) in slots.iter_mut().enumerate() {
                     *slot = PaletteSlot { base: base + l as u32, stride: used as u32 };
                 }
+                let copied = joints.min(simulated);
                 if used == LANES {
-                    out.palettes.extend_from_slice(block[..joints].as_flattened().as_flattened());
+                    out.palettes.extend_from_slice(block[..copied].as_flattened().as_flattened());
                 } else {
-                    for lanes in block[..joints].iter().flatten() {
+                    for lanes in block[..copied].iter().flatten() {
+                        out.palettes.extend_from_slice(&lanes[..used]);
+                    }
+                }
+                for j in copied..joints {
+                    for lanes in &block[src(j)] {
                         out.palettes.extend_from_slice(&lanes[..used]);
                     }
                 }
@@ -1170,6 +1223,9 @@ impl Forest {
             stats.joints += s.batch.joint_updates();
         }
         for (a, &v) in self.want.iter().zip(&out.want) {
+            a.store(v, Ordering::Relaxed);
+        }
+        for (a, &v) in self.shown.iter().zip(&out.need) {
             a.store(v, Ordering::Relaxed);
         }
         out.instances.clear();
@@ -1431,7 +1487,8 @@ mod tests {
         let cam = forest.default_camera();
         let mut f = FrameData::default();
         let dt = 1.0 / 30.0;
-        for _ in 0..3 {
+        // Long enough for the joints switched off to fade out (blend_time, 0.5 s).
+        for _ in 0..30 {
             forest.step(dt);
             forest.frame(&cam, 4.0 / 3.0, &mut f);
         }

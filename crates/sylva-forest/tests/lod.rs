@@ -459,3 +459,105 @@ fn a_near_tree_among_far_ones_sends_its_fine_joints_alone() {
         }
     }
 }
+
+#[test]
+fn a_small_tree_at_full_detail_simulates_a_coarser_prefix_and_holds_its_twigs_without_a_jump() {
+    // One tree, seen first at 80 % of the image height (every joint simulated), then at 30 %
+    // (drawn at full detail still, level 1's prefix simulated, the rest held on their
+    // parents after fading out).
+    let mut spec = SceneSpec::builtin("small").expect("small");
+    spec.trees = 1;
+    let mut forest = Forest::new(&spec).expect("forest");
+    let (p, si) = {
+        let pl = forest.placement(0).expect("tree");
+        (pl.position, pl.species as usize)
+    };
+    let tall = forest.tree_info(0).expect("tree").height;
+    let cam = |h: f32| {
+        let d = tall / (2.0 * 30f32.to_radians().tan() * h);
+        let mid = [p[0], p[1], p[2] + 0.5 * tall];
+        Camera {
+            eye: [mid[0] - d, mid[1], mid[2]],
+            target: mid,
+            fov_deg: 60.0,
+            near: 0.5,
+            far: 1e4,
+        }
+    };
+    let sp = &forest.species[si];
+    let (n, level1) = (sp.model.tree.skeleton.len(), sp.order.prefix[1]);
+    // The other species (no tree here) step their trunks.
+    let others: usize = (forest.species.iter().enumerate())
+        .filter(|&(k, _)| k != si)
+        .map(|(_, s)| s.order.trunk * s.simulated())
+        .sum();
+    let joints: Vec<usize> = (0..n).collect();
+    let sk = forest.species[si].model.tree.skeleton.clone();
+    let parent_of = |j: usize| sk.joints()[j].parent as usize;
+    // Where each twig beyond level 1's prefix has its tip, relative to where its parent's
+    // motion alone would carry it (its own bend).
+    let bends = |forest: &Forest| -> Vec<[f32; 3]> {
+        let all = forest.tree_palettes(0, &joints);
+        (level1..n)
+            .map(|j| {
+                let tip = sk.joints()[j].tip();
+                let (a, b) = (
+                    sylva_sway::transform(&all[j], tip),
+                    sylva_sway::transform(&all[parent_of(j)], tip),
+                );
+                [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+            })
+            .collect()
+    };
+    let farthest = |a: &[[f32; 3]], b: &[[f32; 3]]| {
+        a.iter()
+            .zip(b)
+            .map(|(x, y)| (0..3).map(|k| (x[k] - y[k]).powi(2)).sum::<f32>().sqrt())
+            .fold(0.0f32, f32::max)
+    };
+    let dt = 1.0 / 30.0;
+    let mut f = FrameData::default();
+    let mut last = bends(&forest);
+    let mut ordinary = 0.0f32;
+    for k in 0..60 {
+        forest.step(dt);
+        forest.frame(&cam(0.8), 4.0 / 3.0, &mut f);
+        let now = bends(&forest);
+        if k >= 30 {
+            ordinary = ordinary.max(farthest(&last, &now));
+        }
+        last = now;
+    }
+    assert_eq!(
+        f.stats.joints - others,
+        n,
+        "a tree at 80 % of the image height simulates every joint"
+    );
+    // How far the held twigs would jump if they went to rest at once: their bend now.
+    let snap = farthest(&bends(&forest), &vec![[0.0; 3]; n - level1]);
+    let mut switch = 0.0f32;
+    for _ in 0..30 {
+        forest.step(dt);
+        forest.frame(&cam(0.3), 4.0 / 3.0, &mut f);
+        assert!(f.buckets.iter().all(|b| b.lod == 0), "still drawn at full detail");
+        let now = bends(&forest);
+        switch = switch.max(farthest(&last, &now));
+        last = now;
+    }
+    eprintln!(
+        "largest change of a twig's bend in a frame: {ordinary:.4} m in ordinary frames, \
+         {switch:.4} m across the switch; the held twigs were bent up to {snap:.4} m"
+    );
+    assert_eq!(f.stats.joints - others, level1, "at 30 % only level 1's prefix is simulated");
+    assert!(switch < 0.5 * snap, "held twigs jumped: {switch} m in a frame, bent {snap} m");
+    assert!(switch < 2.0 * ordinary, "{switch} m in a frame against {ordinary} m");
+    // Uploaded as shown: every drawn joint's palette, the held ones their ancestors'.
+    let inst = f.instances[0];
+    let pal = forest.tree_palettes(0, &joints);
+    for j in 0..n {
+        assert_eq!(inst.palette.read(&f.palettes, j), Some(pal[j]), "joint {j}");
+        if j >= level1 {
+            assert_eq!(pal[j], pal[parent_of(j)], "held joint {j} rests on its parent");
+        }
+    }
+}

@@ -116,9 +116,16 @@ pub struct SwayBatch {
     /// Per instance: joints whose state is current (the prefix its group simulated when
     /// last set; an instance moved by [`SwayBatch::swap_instances`] takes its own along).
     fresh: Vec<u32>,
+    /// Per group: the prefix it is fading down to (= `active` when not fading). Joints from
+    /// `keep` to `active` are still computed, frozen, their displayed rotation blending to
+    /// rest; once every one is at rest the group drops them.
+    keep: Vec<u32>,
     /// Registered prefixes and, per joint of each, the lumped static drag [D, c] with
     /// `c = P − D o` (see the module documentation), of the wood and of the leaves.
     lumped: Vec<(usize, Vec<Lump>)>,
+    /// Per registered prefix, per joint: the joint whose palette it shows when the prefix is
+    /// simulated (itself within the prefix, else its nearest simulated ancestor).
+    anchors: Vec<(usize, Vec<u32>)>,
     /// Joint updates (joints × instances) of the last step.
     updates: usize,
     transitions: Vec<Transition>,
@@ -221,7 +228,9 @@ impl SwayBatch {
             budget: vec![n as u32; instances],
             active: vec![n as u32; groups],
             fresh: vec![n as u32; instances],
+            keep: vec![n as u32; groups],
             lumped: Vec::new(),
+            anchors: Vec::new(),
             updates: 0,
             transitions: Vec::with_capacity(n),
             aero_dt: Vec::with_capacity(n),
@@ -252,6 +261,7 @@ impl SwayBatch {
         let sp = &self.species;
         let n = sp.len();
         self.lumped.clear();
+        self.anchors.clear();
         for &p in prefixes {
             let p = p.clamp(1, n);
             if p == n || self.lumped.iter().any(|(q, _)| *q == p) {
@@ -284,16 +294,28 @@ impl SwayBatch {
                 }
             }
             self.lumped.push((p, sums));
+            self.anchors.push((p, anchor));
         }
+    }
+
+    /// For a registered prefix `prefix` (or the whole skeleton), per joint: the joint whose
+    /// palette it shows while a group simulates only `prefix` joints — itself within the
+    /// prefix, else its nearest simulated ancestor. A held joint rests on its parent, so
+    /// its palette (rest → animated) is its anchor's: a renderer drawing joints beyond the
+    /// prefix reads them there. `None` for a prefix not registered.
+    pub fn anchors(&self, prefix: usize) -> Option<&[u32]> {
+        self.anchors.iter().find(|(q, _)| *q == prefix).map(|(_, a)| a.as_slice())
     }
 
     /// Simulate only the first `joints` joints of group `group` (instances `16 group …
     /// 16 group + 15`): rounded up to the joint count or the nearest prefix registered with
     /// [`SwayBatch::set_prefixes`]. Joints switched back on restart at equilibrium and blend
-    /// in; joints beyond are left untouched (their palettes keep old values: do not draw
-    /// them). What is switched on is decided per instance: a joint an instance was already
-    /// simulating (in this group or, moved by [`SwayBatch::swap_instances`], in another)
-    /// carries on as it was.
+    /// in; joints switched off fade out first — still computed, frozen, their displayed
+    /// rotation blending to rest over `blend_time` — and are dropped once at rest, so
+    /// neither way does a displayed joint jump. Joints dropped are left untouched (their
+    /// palettes keep old values: draw them with [`SwayBatch::anchors`]). What is switched
+    /// on is decided per instance: a joint an instance was already simulating (in this
+    /// group or, moved by [`SwayBatch::swap_instances`], in another) carries on as it was.
     pub fn set_active(&mut self, group: usize, joints: usize) {
         let n = self.species.len();
         if group >= self.active.len() {
@@ -302,9 +324,21 @@ impl SwayBatch {
         let p =
             self.lumped.iter().map(|(q, _)| *q).filter(|&q| q >= joints).min().unwrap_or(n).min(n)
                 as u32;
-        self.active[group] = p;
-        for i in group * LANES..self.instances.min(group * LANES + LANES) {
-            self.refresh(i);
+        self.keep[group] = p;
+        // Before the first step every joint is at rest: nothing to fade.
+        if p >= self.active[group] || self.dt.is_nan() {
+            self.active[group] = p;
+            for i in group * LANES..self.instances.min(group * LANES + LANES) {
+                self.refresh(i);
+            }
+        }
+    }
+
+    /// Drop at once the joints group `group` is fading out (see
+    /// [`SwayBatch::set_active`]), as a group switched off before any step would.
+    pub fn settle(&mut self, group: usize) {
+        if let Some(&k) = self.keep.get(group) {
+            self.active[group] = self.active[group].min(k);
         }
     }
 
@@ -438,9 +472,9 @@ impl SwayBatch {
         let blend = dt / sp.params.blend_time;
         let (tr, aero, budget, ni) =
             (&self.transitions, &self.aero_dt, &self.budget, self.instances);
-        let (active, lumped) = (&self.active, &self.lumped);
+        let (keep, lumped) = (&self.keep, &self.lumped);
         self.updates = (0..self.instances.div_ceil(LANES))
-            .map(|g| active[g] as usize * LANES.min(ni - g * LANES))
+            .map(|g| self.active[g] as usize * LANES.min(ni - g * LANES))
             .sum();
         self.theta
             .par_chunks_mut(n)
@@ -448,8 +482,9 @@ impl SwayBatch {
             .zip(self.weight.par_chunks_mut(n))
             .zip(self.loads.par_chunks_mut(n))
             .zip(self.pal_lanes.par_chunks_mut(n))
+            .zip(self.active.par_iter_mut())
             .enumerate()
-            .for_each(|(g, ((((theta, rate), weight), loads), lanes))| {
+            .for_each(|(g, (((((theta, rate), weight), loads), lanes), active))| {
                 let mut u = [ZERO; 3];
                 let mut bud = [0u32; LANES];
                 for l in 0..LANES.min(ni - g * LANES) {
@@ -459,10 +494,16 @@ impl SwayBatch {
                     }
                     bud[l] = budget[g * LANES + l];
                 }
-                let p = active[g] as usize;
+                let p = *active as usize;
+                let k = (keep[g] as usize).min(p);
                 let held = lumped.iter().find(|(q, _)| *q == p).map(|(_, v)| v.as_slice());
-                let mut st = Group { theta, rate, weight, loads, lanes, active: p, held };
+                let mut st = Group { theta, rate, weight, loads, lanes, active: p, keep: k, held };
                 step_group(sp, tr, aero, blend, &bud, &u, &mut st);
+                // Joints fading out are dropped once every lane shows them at rest.
+                let used = LANES.min(ni - g * LANES);
+                if k < p && st.weight[k..p].iter().all(|w| w[..used].iter().all(|&x| x == 0.0)) {
+                    *active = k as u32;
+                }
             });
     }
 }
@@ -476,6 +517,8 @@ struct Group<'a> {
     lanes: &'a mut [[Lanes; 12]],
     /// Joints simulated (a prefix).
     active: usize,
+    /// Joints switched on (a prefix of the simulated ones; those beyond are fading out).
+    keep: usize,
     /// Lumped static drag of the held joints, per simulated joint (none: all simulated).
     held: Option<&'a [Lump]>,
 }
@@ -583,6 +626,7 @@ simd_kernel! {
         for i in 0..n {
             let t = &tr[i];
             let rank = sp.rank[i];
+            let on = i < st.keep;
             let [ax, ay] = sp.axes[i];
             let li = &st.loads[i];
             let (th, ra, w) = (&mut st.theta[i], &mut st.rate[i], &mut st.weight[i]);
@@ -616,7 +660,7 @@ simd_kernel! {
                 eqs[1][l] *= f[l];
             }
             for l in 0..LANES {
-                let active = rank < bud[l];
+                let active = on && rank < bud[l];
                 let restart = active && w[l] == 0.0;
                 for a in 0..2 {
                     let eq = eqs[a][l];

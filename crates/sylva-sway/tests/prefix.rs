@@ -37,7 +37,31 @@ fn held_joints_cost_nothing_and_are_left_untouched() {
     b.step(0.05, &[[6.0, 0.0, 0.0]; 2 * LANES]);
     assert_eq!(b.joint_updates(), 2 * LANES * n);
     b.set_active(1, order.trunk);
-    assert_eq!(b.active(1), order.trunk);
+    // The crown fades out first: still computed, its displayed rotation going to rest over
+    // blend_time, then dropped.
+    let blend = SwayParams::default().blend_time;
+    let fade = (blend / 0.05).ceil() as usize;
+    let mut last = vec![1.0f32; n];
+    for k in 0..fade {
+        assert_eq!(b.active(1), n, "step {k}: still fading");
+        b.step(0.05, &[[6.0, 0.0, 0.0]; 2 * LANES]);
+        assert_eq!(b.joint_updates(), 2 * LANES * n, "a fading joint is still computed");
+        for (j, w) in last.iter_mut().enumerate().skip(order.trunk) {
+            let now = b.weight(LANES, j);
+            assert!(now <= *w && *w - now <= 0.05 / blend + 1e-6, "joint {j}: {w} → {now}");
+            *w = now;
+        }
+    }
+    assert_eq!(b.active(1), order.trunk, "dropped once at rest");
+    // At rest on its parent, a held joint's palette (computed in the last fading step) is
+    // its nearest simulated ancestor's: what a renderer shows for it from now on.
+    let anchors = b.anchors(order.trunk).expect("registered prefix");
+    for j in order.trunk..n {
+        let (own, shown) = (b.palette(LANES, j), b.palette(LANES, anchors[j] as usize));
+        assert!((anchors[j] as usize) < order.trunk);
+        let gap = own.iter().zip(&shown).map(|(a, c)| (a - c).abs()).fold(0.0, f32::max);
+        assert!(gap < 1e-5, "joint {j}: palette {gap} off its anchor's");
+    }
     let before: Vec<_> = (order.trunk..n).map(|j| b.palette(LANES, j)).collect();
     b.step(0.05, &[[6.0, 0.0, 0.0]; 2 * LANES]);
     // One full group and one trunk-only group: the count of joint updates says so.
