@@ -176,14 +176,17 @@ pub const FAR_WIND_LEVEL: usize = 2;
 /// leads the camera by a frame.
 pub const SIM_MARGIN: f32 = 0.5;
 
-/// Animation LOD by projected size: a tree whose height covers more than a third of this
-/// fraction of the image height simulates every joint; below, one level's prefix of the
-/// LOD chain per factor of 3 (level `⌊log₃(ANIMATION_FRACTION / h)⌋`, never finer than the
-/// geometry LOD would simulate it), the joints beyond held at rest on their parents. 1.5:
-/// every joint from half the image height up; level 1's (about a third to a half of the
-/// joints) down to a sixth, where the finest twigs, a few cm long on a 15–25 m tree, move
-/// by about a pixel or less.
-pub const ANIMATION_FRACTION: f32 = 1.5;
+/// Animation LOD by projected size: a tree simulates the joints of the mesh level its size
+/// calls for by the default geometry rule — [`lod_coordinate`] with this h₀, half a level
+/// ahead ([`SIM_MARGIN`]), every level a mesh — and never finer than the geometry LOD
+/// would simulate it; the joints it draws beyond are held at rest on their parents. With
+/// the geometry LOD at its defaults this is what it draws (every joint for a tree at full
+/// detail); it saves work where trees are drawn finer than their size calls for (the
+/// geometry LOD off, or a smaller h₀). A larger value was measured and not kept: at 1.5
+/// (every joint only above half the image height) scene A's simulation took 13 ms instead
+/// of 27, but its image error rose from FLIP 0.037 to 0.098 — twigs held at rest lack the
+/// bend the wind gives them (docs/benchmarks.md).
+pub const ANIMATION_FRACTION: f32 = 0.2;
 
 impl Default for LodSettings {
     fn default() -> LodSettings {
@@ -1065,7 +1068,7 @@ impl Forest {
                 if lod.geometry && l >= far { sp.order.trunk } else { sp.order.prefix[l as usize] }
             };
             let frac = cone.screen_fraction(c, h);
-            let (a, b, sim) = if lod.geometry {
+            let (a, b, sim, x) = if lod.geometry {
                 let x = lod_coordinate(frac, lod.fraction);
                 let x = hysteresis(out.lod_state[i], x, lod.hysteresis);
                 let before = out.lod_state[i];
@@ -1074,9 +1077,9 @@ impl Forest {
                 }
                 out.lod_state[i] = x;
                 let (a, b, _) = blend_levels(x, far, lod.band);
-                (a, b, blend_levels((x - SIM_MARGIN).max(0.0), far, 0.0).0)
+                (a, b, blend_levels((x - SIM_MARGIN).max(0.0), far, 0.0).0, x)
             } else {
-                (0, 0, 0)
+                (0, 0, 0, f32::NAN)
             };
             // Joints to simulate: the geometry's choice half a level ahead, or coarser by
             // projected size (the joints it draws beyond are held, shown at rest on their
@@ -1084,8 +1087,14 @@ impl Forest {
             let moving = if lod.geometry && sim >= far {
                 sp.order.trunk
             } else {
-                let by_size = ((ANIMATION_FRACTION / frac.max(1e-9)).ln() / 3f32.ln()).max(0.0);
-                let level = sim.max(by_size as u32) as usize;
+                // With the geometry LOD on, from its coordinate (and so its hysteresis), so
+                // the two agree wherever their thresholds do.
+                let by_size = if x.is_nan() {
+                    lod_coordinate(frac, ANIMATION_FRACTION)
+                } else {
+                    x + (ANIMATION_FRACTION / lod.fraction).ln() / 3f32.ln()
+                } - SIM_MARGIN;
+                let level = sim.max(by_size.max(0.0) as u32) as usize;
                 sp.order.prefix[level.min(sp.order.prefix.len() - 1)]
             };
             // The tree's group, and the one it is fading out of after a regroup.

@@ -462,11 +462,12 @@ fn a_near_tree_among_far_ones_sends_its_fine_joints_alone() {
 
 #[test]
 fn a_small_tree_at_full_detail_simulates_a_coarser_prefix_and_holds_its_twigs_without_a_jump() {
-    // One tree, seen first at 80 % of the image height (every joint simulated), then at 30 %
-    // (drawn at full detail still, level 1's prefix simulated, the rest held on their
-    // parents after fading out).
+    // One tree drawn at full detail (the geometry LOD off), seen first at 80 % of the image
+    // height (every joint simulated), then at 8 %, where its size calls for level 1: level
+    // 1's prefix simulated, the rest held on their parents after fading out.
     let mut spec = SceneSpec::builtin("small").expect("small");
     spec.trees = 1;
+    spec.lod.geometry = false;
     let mut forest = Forest::new(&spec).expect("forest");
     let (p, si) = {
         let pl = forest.placement(0).expect("tree");
@@ -538,7 +539,7 @@ fn a_small_tree_at_full_detail_simulates_a_coarser_prefix_and_holds_its_twigs_wi
     let mut switch = 0.0f32;
     for _ in 0..30 {
         forest.step(dt);
-        forest.frame(&cam(0.3), 4.0 / 3.0, &mut f);
+        forest.frame(&cam(0.08), 4.0 / 3.0, &mut f);
         assert!(f.buckets.iter().all(|b| b.lod == 0), "still drawn at full detail");
         let now = bends(&forest);
         switch = switch.max(farthest(&last, &now));
@@ -548,7 +549,7 @@ fn a_small_tree_at_full_detail_simulates_a_coarser_prefix_and_holds_its_twigs_wi
         "largest change of a twig's bend in a frame: {ordinary:.4} m in ordinary frames, \
          {switch:.4} m across the switch; the held twigs were bent up to {snap:.4} m"
     );
-    assert_eq!(f.stats.joints - others, level1, "at 30 % only level 1's prefix is simulated");
+    assert_eq!(f.stats.joints - others, level1, "at 8 % only level 1's prefix is simulated");
     assert!(switch < 0.5 * snap, "held twigs jumped: {switch} m in a frame, bent {snap} m");
     assert!(switch < 2.0 * ordinary, "{switch} m in a frame against {ordinary} m");
     // Uploaded as shown: every drawn joint's palette, the held ones their ancestors'.

@@ -21,7 +21,10 @@
 //! hanging from simulated joint i adds force `D_i |u| u` and moment `(P_i − D_i o_i) × |u| u`
 //! about its origin, `D_i = Σ c_k`, `P_i = Σ c_k (o_k + arm_k)` — wood and leaves lumped
 //! apart, the leaves' with their reconfigured `|u| u` — precomputed per prefix. Joints switched back on restart at
-//! their static equilibrium and blend in over `blend_time`.
+//! their static equilibrium and blend in over `blend_time`; joints switched off fade out
+//! first (computed, frozen, their displayed rotation going to rest over `blend_time`) and
+//! are dropped once at rest. A dropped joint rests on its parent, so it shows its nearest
+//! simulated ancestor's palette ([`SwayBatch::anchors`]).
 //!
 //! Layout: instances are gathered in groups of [`LANES`]; within a group every array is
 //! (joint, …, lane), so each joint is computed for all lanes of a group at once and the
