@@ -1481,13 +1481,6 @@ fn coarse_wind_field(spec: &SceneSpec, radius: f32) -> Result<WindField, ForestE
 mod tests {
     use super::*;
 
-    /// Joint updates of lanes wanting `want` (each at least the trunk: a lane group steps
-    /// no less), 16 to a lane group, each group stepping its longest.
-    fn cost(want: impl Iterator<Item = u32>, trunk: usize) -> usize {
-        let w: Vec<usize> = want.map(|w| (w as usize).max(trunk)).collect();
-        w.chunks(LANES).map(|c| c.iter().max().unwrap_or(&0) * c.len()).sum()
-    }
-
     #[test]
     fn simulations_that_need_the_same_joints_are_stepped_together() {
         // Scene A from its default viewpoint: a few trees at full detail, most impostors.
@@ -1504,14 +1497,15 @@ mod tests {
         forest.step(dt);
         let (mut packed, mut scattered, mut sorted, mut stepped) = (0, 0, 0, 0);
         for s in &forest.species {
-            let trunk = s.order.trunk;
-            // The step just packed the lanes; `want` is what each lane's simulation asked for.
-            packed += cost(s.want.iter().copied(), trunk);
+            // The step just packed the lanes; `want` is what each lane's simulation asked
+            // for (the trunk at least: a lane group steps no less).
+            packed += lanes::stepped(&s.want) as usize;
             // Each simulation in the lane of its own number, as if nothing had been moved.
-            scattered += cost(s.lane_of.iter().map(|&l| s.want[l as usize]), trunk);
+            let own: Vec<u32> = s.lane_of.iter().map(|&l| s.want[l as usize]).collect();
+            scattered += lanes::stepped(&own) as usize;
             let mut w = s.want.clone();
             w.sort_unstable_by(|a, b| b.cmp(a));
-            sorted += cost(w.into_iter(), trunk);
+            sorted += lanes::stepped(&w) as usize;
             stepped += s.batch.joint_updates();
             for (g, &l) in s.lane_of.iter().enumerate() {
                 assert_eq!(s.group_of[l as usize] as usize, g, "lanes and groups agree");

@@ -164,10 +164,6 @@ mod tests {
     use super::*;
     use sylva_core::rng::SplitMix64;
 
-    fn cost(want: &[u32]) -> u64 {
-        stepped(want)
-    }
-
     fn pack(want: &[u32]) -> Vec<u32> {
         Packer::default().pack(want).to_vec()
     }
@@ -199,12 +195,12 @@ mod tests {
         assert_eq!(a, b, "packing moves simulations, it does not change them");
         let mut best = want.clone();
         best.sort_unstable_by(|x, y| y.cmp(x));
-        assert!(cost(&after) <= cost(&best), "no dearer than the wants sorted longest first");
+        assert!(stepped(&after) <= stepped(&best), "no dearer than the wants sorted longest first");
         assert!(
-            cost(&after) * 2 < cost(&want),
+            stepped(&after) * 2 < stepped(&want),
             "packed {} joint updates, scattered {}",
-            cost(&after),
-            cost(&want)
+            stepped(&after),
+            stepped(&want)
         );
     }
 
@@ -221,7 +217,7 @@ mod tests {
         assert_eq!(moving.len(), 2, "moved: {moving:?}");
         assert_eq!(dest[50] / LANES as u32, 1, "the near tree joins the group of near trees");
         let after = moved(&want);
-        assert_eq!(cost(&after), 16 * 500 + 16 * 500 + 16 * 10 + 16 * 10);
+        assert_eq!(stepped(&after), 16 * 500 + 16 * 500 + 16 * 10 + 16 * 10);
     }
 
     #[test]
@@ -234,7 +230,7 @@ mod tests {
         // With one near tree fewer, sixteen fit one lane group: they are gathered.
         let mut fewer = want.clone();
         fewer[0] = 10;
-        assert_eq!(cost(&moved(&fewer)), 16 * 500 + 16 * 10);
+        assert_eq!(stepped(&moved(&fewer)), 16 * 500 + 16 * 10);
     }
 
     #[test]
@@ -249,6 +245,6 @@ mod tests {
         // The near tree elsewhere: it moves to the lone lane, and one far tree to its place.
         want.swap(3, 16);
         let after = moved(&want);
-        assert_eq!(cost(&after), 16 + 100, "{after:?}");
+        assert_eq!(stepped(&after), 16 + 100, "{after:?}");
     }
 }
