@@ -301,11 +301,12 @@ impl SwayBatch {
         }
     }
 
-    /// For a registered prefix `prefix` (or the whole skeleton), per joint: the joint whose
-    /// palette it shows while a group simulates only `prefix` joints — itself within the
-    /// prefix, else its nearest simulated ancestor. A held joint rests on its parent, so
-    /// its palette (rest → animated) is its anchor's: a renderer drawing joints beyond the
-    /// prefix reads them there. `None` for a prefix not registered.
+    /// For a registered prefix `prefix`, per joint: the joint whose palette it shows while a
+    /// group simulates only `prefix` joints — itself within the prefix, else its nearest
+    /// simulated ancestor. A held joint rests on its parent, so its palette (rest →
+    /// animated) is its anchor's: a renderer drawing joints beyond the prefix reads them
+    /// there. `None` for the whole skeleton (every joint shows its own) or a prefix not
+    /// registered.
     pub fn anchors(&self, prefix: usize) -> Option<&[u32]> {
         self.anchors.iter().find(|(q, _)| *q == prefix).map(|(_, a)| a.as_slice())
     }
