@@ -822,13 +822,15 @@ impl Forest {
         let Some(&(p, g)) = self.trees.get(t) else { return Vec::new() };
         let s = &self.species[p.species as usize];
         let n = s.batch.species().len();
+        // Joints beyond what the lane's group simulates show their anchors' palettes.
+        let lane = s.lane_of[g as usize] as usize;
+        let simulated = s.batch.active(lane / LANES);
+        let anchors = s.batch.anchors(simulated);
         joints
             .iter()
             .map(|&j| {
                 if j < n {
-                    let lane = s.lane_of[g as usize] as usize;
-                    let simulated = s.batch.active(lane / LANES);
-                    let shown = match s.batch.anchors(simulated) {
+                    let shown = match anchors {
                         Some(a) if j >= simulated => a[j] as usize,
                         _ => j,
                     };
