@@ -44,9 +44,37 @@ impl Level {
 }
 
 /// Define `fn $name(args) body` compiled three times (AVX-512, AVX2, baseline), calling the
-/// widest variant [`Level::detect`] finds. Arguments are plain identifiers with types.
+/// widest variant [`Level::detect`] finds. Arguments are plain identifiers with types. One
+/// `const` generic parameter is allowed (`fn name<const W: usize>(…)`): each width a caller
+/// names is then compiled three times.
 #[macro_export]
 macro_rules! simd_kernel {
+    ($(#[$m:meta])* $vis:vis fn $name:ident<const $g:ident: $gt:ty>($($a:ident: $t:ty),* $(,)?) $body:block) => {
+        $(#[$m])*
+        $vis fn $name<const $g: $gt>($($a: $t),*) {
+            #[inline(always)]
+            fn imp<const $g: $gt>($($a: $t),*) $body
+            #[cfg(target_arch = "x86_64")]
+            #[target_feature(enable = "avx512f,avx512dq,avx512vl,avx2")]
+            fn wide<const $g: $gt>($($a: $t),*) {
+                imp::<$g>($($a),*)
+            }
+            #[cfg(target_arch = "x86_64")]
+            #[target_feature(enable = "avx2")]
+            fn avx2<const $g: $gt>($($a: $t),*) {
+                imp::<$g>($($a),*)
+            }
+            #[cfg(target_arch = "x86_64")]
+            match $crate::simd::Level::detect() {
+                // SAFETY: `detect` found these AVX-512 subsets on this CPU.
+                $crate::simd::Level::Avx512 => return unsafe { wide::<$g>($($a),*) },
+                // SAFETY: `detect` found AVX2 on this CPU.
+                $crate::simd::Level::Avx2 => return unsafe { avx2::<$g>($($a),*) },
+                $crate::simd::Level::Baseline => {}
+            }
+            imp::<$g>($($a),*)
+        }
+    };
     ($(#[$m:meta])* $vis:vis fn $name:ident($($a:ident: $t:ty),* $(,)?) $body:block) => {
         $(#[$m])*
         $vis fn $name($($a: $t),*) {

@@ -562,8 +562,8 @@ impl Forest {
             } else {
                 members.len().max(1)
             };
-            // Animation state and palettes take 92 bytes per joint and instance.
-            state_bytes += n_groups.div_ceil(LANES) * LANES * joints * 92;
+            // Animation state and palettes: 92 bytes per joint and lane stored.
+            state_bytes += SwayBatch::state_bytes(n_groups, joints);
             let limit = spec.max_state_mb.saturating_mul(1_000_000);
             if state_bytes > limit {
                 return Err(ForestError::TooLarge { bytes: state_bytes, limit });
@@ -1170,10 +1170,13 @@ impl Forest {
         out.slots.resize(self.lane_groups * LANES, PaletteSlot::default());
         for s in &self.species {
             let n = s.batch.species().len();
-            for (k, block) in s.batch.lane_palettes().chunks(n).enumerate() {
+            // Per joint, its 12 elements × `width` lanes.
+            let width = s.batch.width();
+            let joint = 12 * width;
+            for (k, block) in s.batch.lane_palettes().chunks(n * joint).enumerate() {
                 let lane = s.lane_base + k;
                 // The batch pads its last lane group to 16; copy only the simulated lanes.
-                let used = (s.groups.len() - k * LANES).min(LANES);
+                let used = (s.groups.len() - k * LANES).min(width);
                 let sims = lane * LANES..lane * LANES + used;
                 let need = &out.need[sims.clone()];
                 // The group's finest prefix: what the lane layout would send for each lane.
@@ -1198,11 +1201,13 @@ impl Forest {
                     }
                     out.palettes.resize(at, 0.0);
                     for j in 0..joints {
-                        let pal = &block[src(j)];
+                        let pal = &block[src(j) * joint..][..joint];
                         for (l, (&m, slot)) in need.iter().zip(slots.iter()).enumerate() {
                             if j < m as usize {
                                 let run = slot.base as usize + 12 * j;
-                                for (v, lanes) in out.palettes[run..run + 12].iter_mut().zip(pal) {
+                                for (v, lanes) in
+                                    out.palettes[run..run + 12].iter_mut().zip(pal.chunks(width))
+                                {
                                     *v = lanes[l];
                                 }
                             }
@@ -1215,15 +1220,15 @@ impl Forest {
                     *slot = PaletteSlot { base: base + l as u32, stride: used as u32 };
                 }
                 let copied = joints.min(simulated);
-                if used == LANES {
-                    out.palettes.extend_from_slice(block[..copied].as_flattened().as_flattened());
+                if used == width {
+                    out.palettes.extend_from_slice(&block[..copied * joint]);
                 } else {
-                    for lanes in block[..copied].iter().flatten() {
+                    for lanes in block[..copied * joint].chunks(width) {
                         out.palettes.extend_from_slice(&lanes[..used]);
                     }
                 }
                 for j in copied..joints {
-                    for lanes in &block[src(j)] {
+                    for lanes in block[src(j) * joint..][..joint].chunks(width) {
                         out.palettes.extend_from_slice(&lanes[..used]);
                     }
                 }

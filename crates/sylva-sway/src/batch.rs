@@ -29,7 +29,13 @@
 //! Layout: instances are gathered in groups of [`LANES`]; within a group every array is
 //! (joint, …, lane), so each joint is computed for all lanes of a group at once and the
 //! compiler vectorises across instances (AVX-512, AVX2 or the baseline, picked at run
-//! time; the same IEEE operations either way). Groups are independent and each is computed
+//! time; the same IEEE operations either way). A batch of fewer than [`LANES`] instances
+//! stores and computes only 1, 4 or 8 lanes ([`SwayBatch::width`]): the step costs per
+//! lane stored, so a species with a single simulation (a hero tree, or a heavy species'
+//! share of a scene's budget) does not pay for fifteen empty lanes. Each lane gets the
+//! same operations at any width, so an instance moves bit for bit as it would in a full
+//! group (the one choice made per group, series or full formula for the joint rotations,
+//! follows the largest angle among its lanes). Groups are independent and each is computed
 //! by the same sequence of operations whatever thread runs it, so results are bit-identical
 //! for any thread count. After the first step at a given dt nothing is allocated.
 
@@ -104,15 +110,18 @@ type Lump = [[f32; 4]; 2];
 pub struct SwayBatch {
     species: SwaySpecies,
     instances: usize,
-    /// Per group, per joint, per axis: bending angle (rad) and rate (rad/s), lanes inner.
-    theta: Vec<[Lanes; 2]>,
-    rate: Vec<[Lanes; 2]>,
+    /// Lanes stored per group: [`LANES`], or 1, 4 or 8 for a batch of fewer instances.
+    width: usize,
+    /// Per group, per joint, per axis: bending angle (rad) and rate (rad/s), `width` lanes
+    /// inner.
+    theta: Vec<f32>,
+    rate: Vec<f32>,
     /// Displayed fraction of each joint's rotation (animation-LOD blend), 0 … 1.
-    weight: Vec<Lanes>,
+    weight: Vec<f32>,
     /// Load scratch per (group, joint): force and moment accumulators.
-    loads: Vec<[Lanes; 6]>,
-    /// Palette scratch per (group, joint), lanes inner (parents are read from here).
-    pal_lanes: Vec<[Lanes; 12]>,
+    loads: Vec<f32>,
+    /// Palette scratch per (group, joint, element), lanes inner (parents are read from here).
+    pal_lanes: Vec<f32>,
     budget: Vec<u32>,
     /// Per group: joints simulated (a prefix).
     active: Vec<u32>,
@@ -221,13 +230,16 @@ impl SwayBatch {
     pub fn new(species: SwaySpecies, instances: usize) -> SwayBatch {
         let n = species.len();
         let groups = instances.div_ceil(LANES);
+        let width = Self::width_for(instances);
+        let slots = groups * n * width;
         SwayBatch {
             instances,
-            theta: vec![[ZERO; 2]; groups * n],
-            rate: vec![[ZERO; 2]; groups * n],
-            weight: vec![[1.0; LANES]; groups * n],
-            loads: vec![[ZERO; 6]; groups * n],
-            pal_lanes: vec![std::array::from_fn(|e| [IDENTITY[e]; LANES]); groups * n],
+            width,
+            theta: vec![0.0; 2 * slots],
+            rate: vec![0.0; 2 * slots],
+            weight: vec![1.0; slots],
+            loads: vec![0.0; 6 * slots],
+            pal_lanes: (0..12 * slots).map(|k| IDENTITY[k / width % 12]).collect(),
             budget: vec![n as u32; instances],
             active: vec![n as u32; groups],
             fresh: vec![n as u32; instances],
@@ -250,6 +262,28 @@ impl SwayBatch {
     /// Number of instances.
     pub fn instances(&self) -> usize {
         self.instances
+    }
+
+    /// Lanes stored and computed per group: [`LANES`], or for a batch of fewer instances
+    /// the first of 1, 4 and 8 that holds them all.
+    pub fn width(&self) -> usize {
+        self.width
+    }
+
+    /// The [`width`](Self::width) of a batch of `instances`.
+    pub fn width_for(instances: usize) -> usize {
+        match instances {
+            0..=1 => 1,
+            2..=4 => 4,
+            5..=8 => 8,
+            _ => LANES,
+        }
+    }
+
+    /// Bytes of animation state and palettes a batch of `instances` instances of a
+    /// `joints`-joint species holds (23 values per joint and stored lane).
+    pub fn state_bytes(instances: usize, joints: usize) -> usize {
+        instances.div_ceil(LANES) * Self::width_for(instances) * joints * 23 * 4
     }
 
     /// Set how many joints of instance `i` are simulated (the heaviest `budget`, by carried
@@ -349,13 +383,11 @@ impl SwayBatch {
     /// Bring instance `i`'s record of its current joints in line with its group's prefix:
     /// joints newly simulated for it restart at equilibrium (blend weight 0).
     fn refresh(&mut self, i: usize) {
-        let n = self.species.len();
+        let (n, w) = (self.species.len(), self.width);
         let (g, l) = (i / LANES, i % LANES);
         let (f, p) = (self.fresh[i] as usize, self.active[g] as usize);
-        if f < p {
-            for w in &mut self.weight[g * n + f..g * n + p] {
-                w[l] = 0.0;
-            }
+        for j in f..p {
+            self.weight[(g * n + j) * w + l] = 0.0;
         }
         self.fresh[i] = p as u32;
     }
@@ -370,22 +402,14 @@ impl SwayBatch {
         if a == b || a >= self.instances || b >= self.instances {
             return;
         }
-        let n = self.species.len();
-        let (ga, la, gb, lb) = (a / LANES * n, a % LANES, b / LANES * n, b % LANES);
         let m = self.fresh[a].max(self.fresh[b]) as usize;
         for j in 0..m {
-            let (x, y) = (ga + j, gb + j);
+            let (x, y) = (self.slot(a, j), self.slot(b, j));
             for k in 0..2 {
-                let t = self.theta[x][k][la];
-                self.theta[x][k][la] = self.theta[y][k][lb];
-                self.theta[y][k][lb] = t;
-                let r = self.rate[x][k][la];
-                self.rate[x][k][la] = self.rate[y][k][lb];
-                self.rate[y][k][lb] = r;
+                self.theta.swap(2 * x.0 + k * x.1 + x.2, 2 * y.0 + k * y.1 + y.2);
+                self.rate.swap(2 * x.0 + k * x.1 + x.2, 2 * y.0 + k * y.1 + y.2);
             }
-            let w = self.weight[x][la];
-            self.weight[x][la] = self.weight[y][lb];
-            self.weight[y][lb] = w;
+            self.weight.swap(x.0 + x.2, y.0 + y.2);
         }
         self.fresh.swap(a, b);
         self.budget.swap(a, b);
@@ -406,50 +430,55 @@ impl SwayBatch {
         self.budget[i] as usize
     }
 
-    fn slot(&self, i: usize, j: usize) -> (usize, usize) {
-        ((i / LANES) * self.species.len() + j, i % LANES)
+    /// Where joint `j` of instance `i` lies: (first value of its joint block in a
+    /// one-value-per-lane array, the block's width, its lane). A quantity with `m` values
+    /// per joint (2 angles, 12 palette elements) has value `k` at `m · block + k · width +
+    /// lane`.
+    fn slot(&self, i: usize, j: usize) -> (usize, usize, usize) {
+        let w = self.width;
+        (((i / LANES) * self.species.len() + j) * w, w, i % LANES)
     }
 
     /// Bending angles (rad) of joint `j` of instance `i`.
     pub fn angles(&self, i: usize, j: usize) -> [f32; 2] {
-        let (k, l) = self.slot(i, j);
-        [self.theta[k][0][l], self.theta[k][1][l]]
+        let (b, w, l) = self.slot(i, j);
+        [self.theta[2 * b + l], self.theta[2 * b + w + l]]
     }
 
     /// Displayed fraction of joint `j`'s rotation in instance `i` (animation-LOD blend).
     pub fn weight(&self, i: usize, j: usize) -> f32 {
-        let (k, l) = self.slot(i, j);
-        self.weight[k][l]
+        let (b, _, l) = self.slot(i, j);
+        self.weight[b + l]
     }
 
     /// Set the state of joint `j` of instance `i` (for probes and tests: a release test
     /// starts from a bent joint at rest).
     pub fn set_state(&mut self, i: usize, j: usize, angles: [f32; 2], rates: [f32; 2]) {
-        let (k, l) = self.slot(i, j);
+        let (b, w, l) = self.slot(i, j);
         for a in 0..2 {
-            self.theta[k][a][l] = angles[a];
-            self.rate[k][a][l] = rates[a];
+            self.theta[2 * b + a * w + l] = angles[a];
+            self.rate[2 * b + a * w + l] = rates[a];
         }
     }
 
     /// Joint `j`'s palette of instance `i`.
     pub fn palette(&self, i: usize, j: usize) -> Palette {
-        let m = &self.pal_lanes[(i / LANES) * self.species.len() + j];
-        std::array::from_fn(|e| m[e][i % LANES])
+        let (b, w, l) = self.slot(i, j);
+        std::array::from_fn(|e| self.pal_lanes[12 * b + e * w + l])
     }
 
-    /// Where instance `i`'s palettes lie in [`lane_palettes`](Self::lane_palettes),
-    /// flattened to `f32`s.
+    /// Where instance `i`'s palettes lie in [`lane_palettes`](Self::lane_palettes).
     pub fn palette_slot(&self, i: usize) -> PaletteSlot {
-        let group = i / LANES * self.species.len() * 12 * LANES;
-        PaletteSlot { base: (group + i % LANES) as u32, stride: LANES as u32 }
+        let (b, w, l) = self.slot(i, 0);
+        PaletteSlot { base: (12 * b + l) as u32, stride: w as u32 }
     }
 
     /// All palettes, as the step computes them: per group of [`LANES`] instances, per joint,
-    /// per matrix element (row-major 3×4), the group's lanes side by side — element e of
-    /// joint j of instance i is `lane_palettes()[(i / LANES) · joints + j][e][i % LANES]`. A
-    /// last, partial group is padded. Uploaded to the GPU as it is (see `sylva-forest`).
-    pub fn lane_palettes(&self) -> &[[Lanes; 12]] {
+    /// per matrix element (row-major 3×4), the group's [`width`](Self::width) lanes side by
+    /// side — element e of joint j of instance i is at `palette_slot(i).index(j, e)`, that is
+    /// `((i / LANES · joints + j) · 12 + e) · width + i % LANES`. A last, partial group of a
+    /// full-width batch is padded. Uploaded to the GPU as it is (see `sylva-forest`).
+    pub fn lane_palettes(&self) -> &[f32] {
         &self.pal_lanes
     }
 
@@ -472,26 +501,39 @@ impl SwayBatch {
             self.aero_dt.extend(sp.aero.iter().map(|a| a * dt));
             self.dt = dt;
         }
-        let n = sp.len();
         let blend = dt / sp.params.blend_time;
-        let (tr, aero, budget, ni) =
-            (&self.transitions, &self.aero_dt, &self.budget, self.instances);
-        let (keep, lumped) = (&self.keep, &self.lumped);
+        let ni = self.instances;
         self.updates = (0..self.instances.div_ceil(LANES))
             .map(|g| self.active[g] as usize * LANES.min(ni - g * LANES))
             .sum();
+        match self.width {
+            1 => self.step_lanes::<1>(blend, wind),
+            4 => self.step_lanes::<4>(blend, wind),
+            8 => self.step_lanes::<8>(blend, wind),
+            _ => self.step_lanes::<LANES>(blend, wind),
+        }
+    }
+
+    /// The step's groups, `W` (= [`SwayBatch::width`]) lanes each.
+    fn step_lanes<const W: usize>(&mut self, blend: f32, wind: &[[f32; 3]]) {
+        let n = self.species.len();
+        let sp = &self.species;
+        let (tr, aero, budget, ni) =
+            (&self.transitions, &self.aero_dt, &self.budget, self.instances);
+        let (keep, lumped) = (&self.keep, &self.lumped);
         self.theta
-            .par_chunks_mut(n)
-            .zip(self.rate.par_chunks_mut(n))
-            .zip(self.weight.par_chunks_mut(n))
-            .zip(self.loads.par_chunks_mut(n))
-            .zip(self.pal_lanes.par_chunks_mut(n))
+            .par_chunks_mut(2 * n * W)
+            .zip(self.rate.par_chunks_mut(2 * n * W))
+            .zip(self.weight.par_chunks_mut(n * W))
+            .zip(self.loads.par_chunks_mut(6 * n * W))
+            .zip(self.pal_lanes.par_chunks_mut(12 * n * W))
             .zip(self.active.par_iter_mut())
             .enumerate()
             .for_each(|(g, (((((theta, rate), weight), loads), lanes), active))| {
                 let mut u = [ZERO; 3];
                 let mut bud = [0u32; LANES];
-                for l in 0..LANES.min(ni - g * LANES) {
+                let used = W.min(ni - g * LANES);
+                for l in 0..used {
                     let w = wind.get(g * LANES + l).copied().unwrap_or([0.0; 3]);
                     for c in 0..3 {
                         u[c][l] = w[c];
@@ -501,10 +543,18 @@ impl SwayBatch {
                 let p = *active as usize;
                 let k = (keep[g] as usize).min(p);
                 let held = lumped.iter().find(|(q, _)| *q == p).map(|(_, v)| v.as_slice());
-                let mut st = Group { theta, rate, weight, loads, lanes, active: p, keep: k, held };
-                step_group(sp, tr, aero, blend, &bud, &u, &mut st);
+                let mut st = Group::<W> {
+                    theta: theta.as_chunks_mut::<W>().0.as_chunks_mut::<2>().0,
+                    rate: rate.as_chunks_mut::<W>().0.as_chunks_mut::<2>().0,
+                    weight: weight.as_chunks_mut::<W>().0,
+                    loads: loads.as_chunks_mut::<W>().0.as_chunks_mut::<6>().0,
+                    lanes: lanes.as_chunks_mut::<W>().0.as_chunks_mut::<12>().0,
+                    active: p,
+                    keep: k,
+                    held,
+                };
+                step_group::<W>(sp, tr, aero, blend, &bud, &u, &mut st);
                 // Joints fading out are dropped once every lane shows them at rest.
-                let used = LANES.min(ni - g * LANES);
                 if k < p && st.weight[k..p].iter().all(|w| w[..used].iter().all(|&x| x == 0.0)) {
                     *active = k as u32;
                 }
@@ -512,13 +562,13 @@ impl SwayBatch {
     }
 }
 
-/// One group's state, lanes inner.
-struct Group<'a> {
-    theta: &'a mut [[Lanes; 2]],
-    rate: &'a mut [[Lanes; 2]],
-    weight: &'a mut [Lanes],
-    loads: &'a mut [[Lanes; 6]],
-    lanes: &'a mut [[Lanes; 12]],
+/// One group's state, `W` lanes inner.
+struct Group<'a, const W: usize> {
+    theta: &'a mut [[[f32; W]; 2]],
+    rate: &'a mut [[[f32; W]; 2]],
+    weight: &'a mut [[f32; W]],
+    loads: &'a mut [[[f32; W]; 6]],
+    lanes: &'a mut [[[f32; W]; 12]],
     /// Joints simulated (a prefix).
     active: usize,
     /// Joints switched on (a prefix of the simulated ones; those beyond are fading out).
@@ -529,22 +579,22 @@ struct Group<'a> {
 
 simd_kernel! {
     /// Step one group, vectorised with the widest instruction set the CPU has.
-    fn step_group(
+    fn step_group<const W: usize>(
         sp: &SwaySpecies,
         tr: &[Transition],
         aero: &[f32],
         blend: f32,
         bud: &[u32; LANES],
         u: &[Lanes; 3],
-        st: &mut Group<'_>,
+        st: &mut Group<'_, W>,
     ) {
         let n = st.active.min(st.theta.len());
         // Leaves reconfigure: their drag is divided by 1 + |u| / U_r.
         let inv_ur = 1.0 / sp.params.leaf_reconfiguration_speed;
         // |u| u per lane for the held (rigid) joints' wood, and reconfigured for their leaves.
-        let mut q = [[ZERO; 3]; 2];
+        let mut q = [[[0.0f32; W]; 3]; 2];
         if st.held.is_some() {
-            for l in 0..LANES {
+            for l in 0..W {
                 let speed = (u[0][l] * u[0][l] + u[1][l] * u[1][l] + u[2][l] * u[2][l]).sqrt();
                 let leaves = speed / (1.0 + speed * inv_ur);
                 for c in 0..3 {
@@ -562,9 +612,9 @@ simd_kernel! {
             let (ra, w) = (&st.rate[i], &st.weight[i]);
             let li = &mut st.loads[i];
             // Simple lane loops, one quantity each, so they vectorise.
-            let mut rel = [ZERO; 3];
+            let mut rel = [[0.0f32; W]; 3];
             let g = aero[i];
-            for l in 0..LANES {
+            for l in 0..W {
                 // The segment's own motion enters the relative wind implicitly (backward Euler on
                 // the linearised drag damping): stable however light the segment and long the
                 // step; explicit use of the rate blows up for leafy twigs at 25 fps.
@@ -577,15 +627,15 @@ simd_kernel! {
                 rel[1][l] = u[1][l] - v[1];
                 rel[2][l] = u[2][l] - v[2];
             }
-            let mut f = [ZERO; 3];
-            for l in 0..LANES {
+            let mut f = [[0.0f32; W]; 3];
+            for l in 0..W {
                 let s = (rel[0][l] * rel[0][l] + rel[1][l] * rel[1][l] + rel[2][l] * rel[2][l]).sqrt();
                 let k = s * (drag + leaf / (1.0 + s * inv_ur));
                 f[0][l] = k * rel[0][l];
                 f[1][l] = k * rel[1][l];
                 f[2][l] = k * rel[2][l];
             }
-            for l in 0..LANES {
+            for l in 0..W {
                 li[0][l] += f[0][l];
                 li[1][l] += f[1][l];
                 li[2][l] += f[2][l];
@@ -596,7 +646,7 @@ simd_kernel! {
             if let Some(held) = st.held {
                 for (part, q) in held[i].iter().zip(&q) {
                     let [d, cx, cy, cz] = *part;
-                    for l in 0..LANES {
+                    for l in 0..W {
                         li[0][l] += d * q[0][l];
                         li[1][l] += d * q[1][l];
                         li[2][l] += d * q[2][l];
@@ -615,7 +665,7 @@ simd_kernel! {
                     let (a, b) = st.loads.split_at_mut(i);
                     (&mut a[p], &b[0])
                 };
-                for l in 0..LANES {
+                for l in 0..W {
                     let fi = [li[0][l], li[1][l], li[2][l]];
                     lp[0][l] += fi[0];
                     lp[1][l] += fi[1];
@@ -639,31 +689,31 @@ simd_kernel! {
             // on the bent joint (`lever_bend`). Below e = 0.1 rad the root's series,
             // e (1 − e²/2), is within 6e-5 of it and costs nothing; only a group with a lane above
             // it takes the Newton step, and each lane's factor depends on its own load alone.
-            let mut eqs = [ZERO; 2];
-            let mut e2 = ZERO;
+            let mut eqs = [[0.0f32; W]; 2];
+            let mut e2 = [0.0f32; W];
             let mut heavy = false;
-            for l in 0..LANES {
+            for l in 0..W {
                 let mom = [li[3][l], li[4][l], li[5][l]];
                 eqs[0][l] = dot(mom, ax) * t.inv_k;
                 eqs[1][l] = dot(mom, ay) * t.inv_k;
                 e2[l] = eqs[0][l] * eqs[0][l] + eqs[1][l] * eqs[1][l];
                 heavy |= e2[l] > LEVER_SERIES;
             }
-            let mut f = ZERO;
-            for l in 0..LANES {
+            let mut f = [0.0f32; W];
+            for l in 0..W {
                 f[l] = 1.0 - 0.5 * e2[l];
             }
             if heavy {
-                for l in 0..LANES {
+                for l in 0..W {
                     let full = lever_bend(e2[l]);
                     f[l] = if e2[l] > LEVER_SERIES { full } else { f[l] };
                 }
             }
-            for l in 0..LANES {
+            for l in 0..W {
                 eqs[0][l] *= f[l];
                 eqs[1][l] *= f[l];
             }
-            for l in 0..LANES {
+            for l in 0..W {
                 let active = on && rank < bud[l];
                 let restart = active && w[l] == 0.0;
                 for a in 0..2 {
@@ -686,14 +736,14 @@ simd_kernel! {
                 ra[1][l] = if over { 0.0 } else { ra[1][l] };
                 w[l] = if active { (w[l] + blend).min(1.0) } else { (w[l] - blend).max(0.0) };
             }
-            st.loads[i] = [ZERO; 6];
+            st.loads[i] = [[0.0f32; W]; 6];
             // (3) Palette, in the same sweep (the parent's is done): M_i = M_parent ·
             // (T(o) R_i T(−o)).
             let o = sp.origin[i];
             let (th, w) = (&st.theta[i], &st.weight[i]);
-            let mut phi = [ZERO; 3];
+            let mut phi = [[0.0f32; W]; 3];
             let mut small = true;
-            for l in 0..LANES {
+            for l in 0..W {
                 let (t0, t1) = (w[l] * th[0][l], w[l] * th[1][l]);
                 for c in 0..3 {
                     phi[c][l] = t0 * ax[c] + t1 * ay[c];
@@ -706,9 +756,9 @@ simd_kernel! {
             // Two copies of the lane loop, both branch-free: the common all-small-angle one, and
             // one for any angle.
             if small {
-                palette_lanes(&phi, o, parent, &mut rest[0], small_angle);
+                palette_lanes::<W>(&phi, o, parent, &mut rest[0], small_angle);
             } else {
-                palette_lanes(&phi, o, parent, &mut rest[0], any_angle);
+                palette_lanes::<W>(&phi, o, parent, &mut rest[0], any_angle);
             }
         }
     }
@@ -718,14 +768,14 @@ simd_kernel! {
 /// joint and the parent's palettes.
 #[cfg(not(feature = "glam"))]
 #[inline(always)]
-fn palette_lanes(
-    phi: &[Lanes; 3],
+fn palette_lanes<const W: usize>(
+    phi: &[[f32; W]; 3],
     o: [f32; 3],
-    parent: Option<&[Lanes; 12]>,
-    out: &mut [Lanes; 12],
+    parent: Option<&[[f32; W]; 12]>,
+    out: &mut [[f32; W]; 12],
     sc: impl Fn(f32) -> (f32, f32),
 ) {
-    for l in 0..LANES {
+    for l in 0..W {
         let ph = [phi[0][l], phi[1][l], phi[2][l]];
         let (s, c) = sc(dot(ph, ph));
         let r = rodrigues(ph, s, c);
@@ -754,11 +804,11 @@ fn palette_lanes(
 /// stores the matrices, one lane at a time as its types require.
 #[cfg(feature = "glam")]
 #[inline(always)]
-fn palette_lanes(
-    phi: &[Lanes; 3],
+fn palette_lanes<const W: usize>(
+    phi: &[[f32; W]; 3],
     o: [f32; 3],
-    parent: Option<&[Lanes; 12]>,
-    out: &mut [Lanes; 12],
+    parent: Option<&[[f32; W]; 12]>,
+    out: &mut [[f32; W]; 12],
     sc: impl Fn(f32) -> (f32, f32),
 ) {
     use glam::{Affine3A, Mat3A, Vec3A};
@@ -767,7 +817,7 @@ fn palette_lanes(
         matrix3: Mat3A::from_cols_array(&[m[0], m[4], m[8], m[1], m[5], m[9], m[2], m[6], m[10]]),
         translation: Vec3A::new(m[3], m[7], m[11]),
     };
-    for l in 0..LANES {
+    for l in 0..W {
         let ph = Vec3A::new(phi[0][l], phi[1][l], phi[2][l]);
         let (s, c) = sc(ph.length_squared());
         let r = rodrigues(ph.to_array(), s, c);
