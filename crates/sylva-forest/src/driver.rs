@@ -1192,23 +1192,28 @@ impl Forest {
                 let src = |j: usize| anchors.map_or(j, |a| a[j] as usize);
                 let own: usize = need.iter().map(|&m| (m as usize).min(n)).sum();
                 if own < joints * used {
-                    // Prefixes differ: each simulation's own, in a row. A gather, joint by
-                    // joint so each joint's block of 16 lanes is read once.
+                    // Prefixes differ: each simulation's own, in a row. A gather (a
+                    // transpose of lanes and elements), in tiles of joints small enough to
+                    // stay in cache while each lane's run is written out in order.
                     let mut at = out.palettes.len();
                     for (&m, slot) in need.iter().zip(slots.iter_mut()) {
                         *slot = PaletteSlot { base: at as u32, stride: 1 };
                         at += 12 * (m as usize).min(n);
                     }
                     out.palettes.resize(at, 0.0);
-                    for j in 0..joints {
-                        let pal = &block[src(j) * joint..][..joint];
+                    const TILE: usize = 32;
+                    for first in (0..joints).step_by(TILE) {
                         for (l, (&m, slot)) in need.iter().zip(slots.iter()).enumerate() {
-                            if j < m as usize {
-                                let run = slot.base as usize + 12 * j;
-                                for (v, lanes) in
-                                    out.palettes[run..run + 12].iter_mut().zip(pal.chunks(width))
-                                {
-                                    *v = lanes[l];
+                            let end = (m as usize).min(n).min(first + TILE);
+                            if end <= first {
+                                continue;
+                            }
+                            let run = slot.base as usize + 12 * first;
+                            let dst = out.palettes[run..].chunks_exact_mut(12);
+                            for (j, v) in (first..end).zip(dst) {
+                                let pal = &block[src(j) * joint..][..joint];
+                                for (e, x) in v.iter_mut().enumerate() {
+                                    *x = pal[e * width + l];
                                 }
                             }
                         }
