@@ -184,6 +184,47 @@ pub fn blade_contains(shape: u32, along: f32, across: f32, w: f32) -> bool {
     (0.0..=1.0).contains(&along) && across.abs() <= 0.5 * w * blade_profile(shape, along)
 }
 
+/// What a leaf's colour depends on besides the leaf: the blade shape, needles or not, and
+/// the colours at the blade's base and tip.
+struct LeafShading {
+    shape: u32,
+    needle: bool,
+    base: [f32; 3],
+    tip: [f32; 3],
+}
+
+/// The colour leaf `l` paints at `p` (cell units), or `None` where `p` is off the blade.
+fn leaf_colour(sh: &LeafShading, l: &LeafStroke, p: [f32; 2]) -> Option<[f32; 3]> {
+    let w = l.width / l.length;
+    let q = [p[0] - l.base[0], p[1] - l.base[1]];
+    let along = (q[0] * l.dir[0] + q[1] * l.dir[1]) / l.length;
+    if !(-0.3..=1.0).contains(&along) {
+        return None;
+    }
+    let across = (-q[0] * l.dir[1] + q[1] * l.dir[0]) / l.length;
+    if !blade_contains(sh.shape, along, across, w) {
+        return None;
+    }
+    let g = lerp3(sh.base, sh.tip, 0.5 * along.clamp(0.0, 1.0) + 0.5 * l.tint);
+    // Midrib a little lighter; edges a little darker.
+    let edge = (across.abs() / (0.5 * w)).min(1.0);
+    let k = if across.abs() < 0.012 && !sh.needle { 1.15 } else { 1.0 - 0.18 * edge };
+    let v = 0.85 + 0.3 * l.tint;
+    Some([g[0] * k * v, g[1] * k * v, g[2] * k * v])
+}
+
+/// Texels (x, y) of a `cell × cell` grid whose centres may lie in the box `lo … hi` (cell
+/// units), a texel of margin each side.
+fn texels(lo: [f32; 2], hi: [f32; 2], cell: u32) -> impl Iterator<Item = (u32, u32)> {
+    let range = |a: f32, b: f32| {
+        let first = ((a * cell as f32).floor() - 1.0).max(0.0) as u32;
+        let last = ((b * cell as f32).ceil() + 1.0).clamp(0.0, cell as f32) as u32;
+        first..last.max(first)
+    };
+    let (xs, ys) = (range(lo[0], hi[0]), range(lo[1], hi[1]));
+    ys.flat_map(move |y| xs.clone().map(move |x| (x, y)))
+}
+
 fn seg_distance(p: [f32; 2], a: [f32; 2], b: [f32; 2]) -> f32 {
     let ab = [b[0] - a[0], b[1] - a[1]];
     let ap = [p[0] - a[0], p[1] - a[1]];
@@ -312,6 +353,7 @@ pub fn leaf_atlas(species: &Species, seed: u64, size: u32) -> LeafAtlas {
     let base = lerp3([0.05, 0.15, 0.08], [0.26, 0.42, 0.08], shade);
     let tip = lerp3([0.09, 0.22, 0.12], [0.42, 0.56, 0.14], shade);
     let wood = [0.24, 0.17, 0.10];
+    let shading = LeafShading { shape: species.leaf_shape, needle, base, tip };
     let mut rgba = vec![0u8; (size * size * 4) as usize];
     let mut coverage = Vec::new();
     let mut counts = Vec::new();
@@ -321,39 +363,37 @@ pub fn leaf_atlas(species: &Species, seed: u64, size: u32) -> LeafAtlas {
             let (twigs, leaves) = cluster_layout(species, seed, c);
             counts.push(leaves.len() as u32);
             let mut opaque = 0usize;
+            // Each twig and leaf painted over the texels its bounds cover, in order (later
+            // leaves lie on top): the same texels as testing every stroke at every texel.
+            let mut paint: Vec<Option<[f32; 3]>> = vec![None; (cell * cell) as usize];
+            let at =
+                |x: u32, y: u32| [(x as f32 + 0.5) / cell as f32, (y as f32 + 0.5) / cell as f32];
+            for tw in &twigs {
+                let lo = [tw.0[0].min(tw.1[0]) - tw.2, tw.0[1].min(tw.1[1]) - tw.2];
+                let hi = [tw.0[0].max(tw.1[0]) + tw.2, tw.0[1].max(tw.1[1]) + tw.2];
+                for (x, y) in texels(lo, hi, cell) {
+                    if seg_distance(at(x, y), tw.0, tw.1) <= tw.2 {
+                        paint[(y * cell + x) as usize] = Some(wood);
+                    }
+                }
+            }
+            for l in &leaves {
+                let w = l.width / l.length;
+                // |along| ≤ 1 where the leaf is tested and |across| ≤ 0.5 w (0.62 w for the
+                // palmate blade): within this radius of the blade's base.
+                let r = l.length * (1.0 + 0.62 * w.max(1e-3));
+                let lo = [l.base[0] - r, l.base[1] - r];
+                let hi = [l.base[0] + r, l.base[1] + r];
+                for (x, y) in texels(lo, hi, cell) {
+                    if let Some(c) = leaf_colour(&shading, l, at(x, y)) {
+                        paint[(y * cell + x) as usize] = Some(c);
+                    }
+                }
+            }
             for y in 0..cell {
                 for x in 0..cell {
-                    let p = [(x as f32 + 0.5) / cell as f32, (y as f32 + 0.5) / cell as f32];
-                    // The last leaf painted over p wins (later leaves lie on top).
-                    let mut colour = None;
-                    for tw in &twigs {
-                        if seg_distance(p, tw.0, tw.1) <= tw.2 {
-                            colour = Some(wood);
-                        }
-                    }
-                    for l in &leaves {
-                        let q = [p[0] - l.base[0], p[1] - l.base[1]];
-                        let along = (q[0] * l.dir[0] + q[1] * l.dir[1]) / l.length;
-                        if !(-0.3..=1.0).contains(&along) {
-                            continue;
-                        }
-                        let across = (-q[0] * l.dir[1] + q[1] * l.dir[0]) / l.length;
-                        let w = l.width / l.length;
-                        if blade_contains(species.leaf_shape, along, across, w) {
-                            let g = lerp3(base, tip, 0.5 * along.clamp(0.0, 1.0) + 0.5 * l.tint);
-                            // Midrib a little lighter; edges a little darker.
-                            let edge = (across.abs() / (0.5 * w)).min(1.0);
-                            let k = if across.abs() < 0.012 && !needle {
-                                1.15
-                            } else {
-                                1.0 - 0.18 * edge
-                            };
-                            let v = 0.85 + 0.3 * l.tint;
-                            colour = Some([g[0] * k * v, g[1] * k * v, g[2] * k * v]);
-                        }
-                    }
                     let idx = (((cy * cell + y) * size + cx * cell + x) * 4) as usize;
-                    if let Some(g) = colour {
+                    if let Some(g) = paint[(y * cell + x) as usize] {
                         rgba[idx..idx + 4].copy_from_slice(&[
                             to_u8(g[0]),
                             to_u8(g[1]),
@@ -383,5 +423,55 @@ pub fn leaf_atlas(species: &Species, seed: u64, size: u32) -> LeafAtlas {
         span: species.leaf_scale * span_in_leaves(needle),
         leaves: counts,
         needles: needle,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The atlas paints each stroke over its bounds only; the result must be the texels a
+    /// test of every twig and leaf at every texel gives (twigs first, the last leaf on top),
+    /// colour and coverage, for every preset (broadleaves, the palmate maple, needles).
+    #[test]
+    fn painting_strokes_over_their_bounds_covers_the_same_texels_as_testing_them_all() {
+        for (name, _) in crate::PRESETS {
+            let sp = Species::preset(name).expect("preset");
+            let size = 128;
+            let atlas = leaf_atlas(&sp, 7, size);
+            let cell = size / ATLAS_CELLS;
+            let needle = is_needle(&sp);
+            let shade = sp.leaf_shade.clamp(0.0, 1.0);
+            let base = lerp3([0.05, 0.15, 0.08], [0.26, 0.42, 0.08], shade);
+            let tip = lerp3([0.09, 0.22, 0.12], [0.42, 0.56, 0.14], shade);
+            let sh = LeafShading { shape: sp.leaf_shape, needle, base, tip };
+            let mut painted = 0;
+            for c in 0..ATLAS_CELLS * ATLAS_CELLS {
+                let (twigs, leaves) = cluster_layout(&sp, 7, c);
+                let (cx, cy) = (c % ATLAS_CELLS, c / ATLAS_CELLS);
+                for y in 0..cell {
+                    for x in 0..cell {
+                        let p = [(x as f32 + 0.5) / cell as f32, (y as f32 + 0.5) / cell as f32];
+                        let mut colour = None;
+                        if twigs.iter().any(|tw| seg_distance(p, tw.0, tw.1) <= tw.2) {
+                            colour = Some([0.24, 0.17, 0.10]);
+                        }
+                        for l in &leaves {
+                            colour = leaf_colour(&sh, l, p).or(colour);
+                        }
+                        let idx = (((cy * cell + y) * size + cx * cell + x) * 4) as usize;
+                        let got = &atlas.image.rgba[idx..idx + 4];
+                        let want = match colour {
+                            Some(g) => [to_u8(g[0]), to_u8(g[1]), to_u8(g[2]), 255],
+                            None => [to_u8(base[0]), to_u8(base[1]), to_u8(base[2]), 0],
+                        };
+                        assert_eq!(got, want, "{name}: cell {c}, texel ({x}, {y})");
+                        painted += usize::from(colour.is_some());
+                    }
+                }
+            }
+            // It can fail: the strokes cover a good part of each atlas.
+            assert!(painted > (size * size / 10) as usize, "{name}: {painted} texels painted");
+        }
     }
 }
