@@ -562,7 +562,7 @@ impl Forest {
             } else {
                 members.len().max(1)
             };
-            // Animation state and palettes: 92 bytes per joint and lane stored.
+            // Animation state and palettes: 68 bytes per joint and lane stored.
             state_bytes += SwayBatch::state_bytes(n_groups, joints);
             let limit = spec.max_state_mb.saturating_mul(1_000_000);
             if state_bytes > limit {

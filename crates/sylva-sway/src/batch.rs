@@ -118,8 +118,6 @@ pub struct SwayBatch {
     rate: Vec<f32>,
     /// Displayed fraction of each joint's rotation (animation-LOD blend), 0 … 1.
     weight: Vec<f32>,
-    /// Load scratch per (group, joint): force and moment accumulators.
-    loads: Vec<f32>,
     /// Palette scratch per (group, joint, element), lanes inner (parents are read from here).
     pal_lanes: Vec<f32>,
     budget: Vec<u32>,
@@ -238,7 +236,6 @@ impl SwayBatch {
             theta: vec![0.0; 2 * slots],
             rate: vec![0.0; 2 * slots],
             weight: vec![1.0; slots],
-            loads: vec![0.0; 6 * slots],
             pal_lanes: (0..12 * slots).map(|k| IDENTITY[k / width % 12]).collect(),
             budget: vec![n as u32; instances],
             active: vec![n as u32; groups],
@@ -281,9 +278,11 @@ impl SwayBatch {
     }
 
     /// Bytes of animation state and palettes a batch of `instances` instances of a
-    /// `joints`-joint species holds (23 values per joint and stored lane).
+    /// `joints`-joint species holds (17 values per joint and stored lane: angles, rates,
+    /// blend weight, palette). The step's load accumulators are scratch, one group's per
+    /// thread.
     pub fn state_bytes(instances: usize, joints: usize) -> usize {
-        instances.div_ceil(LANES) * Self::width_for(instances) * joints * 23 * 4
+        instances.div_ceil(LANES) * Self::width_for(instances) * joints * 17 * 4
     }
 
     /// Set how many joints of instance `i` are simulated (the heaviest `budget`, by carried
@@ -525,11 +524,10 @@ impl SwayBatch {
             .par_chunks_mut(2 * n * W)
             .zip(self.rate.par_chunks_mut(2 * n * W))
             .zip(self.weight.par_chunks_mut(n * W))
-            .zip(self.loads.par_chunks_mut(6 * n * W))
             .zip(self.pal_lanes.par_chunks_mut(12 * n * W))
             .zip(self.active.par_iter_mut())
             .enumerate()
-            .for_each(|(g, (((((theta, rate), weight), loads), lanes), active))| {
+            .for_each(|(g, ((((theta, rate), weight), lanes), active))| {
                 let mut u = [ZERO; 3];
                 let mut bud = [0u32; LANES];
                 let used = W.min(ni - g * LANES);
@@ -543,23 +541,38 @@ impl SwayBatch {
                 let p = *active as usize;
                 let k = (keep[g] as usize).min(p);
                 let held = lumped.iter().find(|(q, _)| *q == p).map(|(_, v)| v.as_slice());
-                let mut st = Group::<W> {
-                    theta: theta.as_chunks_mut::<W>().0.as_chunks_mut::<2>().0,
-                    rate: rate.as_chunks_mut::<W>().0.as_chunks_mut::<2>().0,
-                    weight: weight.as_chunks_mut::<W>().0,
-                    loads: loads.as_chunks_mut::<W>().0.as_chunks_mut::<6>().0,
-                    lanes: lanes.as_chunks_mut::<W>().0.as_chunks_mut::<12>().0,
-                    active: p,
-                    keep: k,
-                    held,
-                };
-                step_group::<W>(sp, tr, aero, blend, &bud, &u, &mut st);
-                // Joints fading out are dropped once every lane shows them at rest.
-                if k < p && st.weight[k..p].iter().all(|w| w[..used].iter().all(|&x| x == 0.0)) {
-                    *active = k as u32;
-                }
+                // The load accumulators: this thread's scratch, all zero between steps
+                // (the kernel clears each joint's once it has used them).
+                LOADS.with_borrow_mut(|scratch| {
+                    if scratch.len() < 6 * p * W {
+                        scratch.resize(6 * p * W, 0.0);
+                    }
+                    let mut st = Group::<W> {
+                        theta: theta.as_chunks_mut::<W>().0.as_chunks_mut::<2>().0,
+                        rate: rate.as_chunks_mut::<W>().0.as_chunks_mut::<2>().0,
+                        weight: weight.as_chunks_mut::<W>().0,
+                        loads: scratch[..6 * p * W].as_chunks_mut::<W>().0.as_chunks_mut::<6>().0,
+                        lanes: lanes.as_chunks_mut::<W>().0.as_chunks_mut::<12>().0,
+                        active: p,
+                        keep: k,
+                        held,
+                    };
+                    step_group::<W>(sp, tr, aero, blend, &bud, &u, &mut st);
+                    // Joints fading out are dropped once every lane shows them at rest.
+                    let resting =
+                        st.weight[k..p].iter().all(|w| w[..used].iter().all(|&x| x == 0.0));
+                    if k < p && resting {
+                        *active = k as u32;
+                    }
+                });
             });
     }
+}
+
+thread_local! {
+    /// Per thread: the load accumulators of the group it steps, `6 · joints · W` values,
+    /// zero between groups.
+    static LOADS: std::cell::RefCell<Vec<f32>> = const { std::cell::RefCell::new(Vec::new()) };
 }
 
 /// One group's state, `W` lanes inner.
