@@ -530,6 +530,7 @@ impl Forest {
                 })
             })
             .collect();
+        let models: Vec<TreeModel> = models.into_iter().collect::<Result<_, _>>()?;
         let mut species = Vec::with_capacity(models.len());
         let mut trees: Vec<(Placement, u32)> = placements.iter().map(|&p| (p, 0)).collect();
         let total = trees.len().max(1);
@@ -537,9 +538,32 @@ impl Forest {
         let eye = start_camera(spec, radius).eye;
         let side = spec.side();
         let mut lane_base = 0;
-        let mut state_bytes = 0usize;
-        for (si, m) in models.into_iter().enumerate() {
-            let original = m?;
+        // Simulations per species: its share of `sim_joint_budget` in whole trees, or every
+        // tree its own without the wind-field LOD.
+        let members_of = |si: usize| trees.iter().filter(|t| t.0.species == si as u32).count();
+        let simulations = |trees_here: usize, joints: usize| {
+            let share = spec.sim_joint_budget as f64 * trees_here as f64 / total as f64;
+            if spec.lod.wind {
+                ((share / joints as f64) as usize).clamp(1, trees_here.max(1))
+            } else {
+                trees_here.max(1)
+            }
+        };
+        // The whole forest's animation state (68 bytes per joint and lane stored), refused
+        // before any is allocated.
+        let state_bytes: usize = models
+            .iter()
+            .enumerate()
+            .map(|(si, m)| {
+                let joints = m.tree.skeleton.len();
+                SwayBatch::state_bytes(simulations(members_of(si), joints), joints)
+            })
+            .sum();
+        let limit = spec.max_state_mb.saturating_mul(1_000_000);
+        if state_bytes > limit {
+            return Err(ForestError::TooLarge { bytes: state_bytes, limit });
+        }
+        for (si, original) in models.into_iter().enumerate() {
             // Joints in LOD order: each level's joints a prefix, the trunk first.
             let order = lod_order(&original);
             let model = original.reordered(&order.order).map_err(|e| ForestError::Species {
@@ -556,18 +580,7 @@ impl Forest {
                 .iter()
                 .map(|&t| morton(trees[t].0.position[0], trees[t].0.position[1], side))
                 .collect();
-            let share = spec.sim_joint_budget as f64 * members.len() as f64 / total as f64;
-            let n_groups = if spec.lod.wind {
-                ((share / joints as f64) as usize).clamp(1, members.len().max(1))
-            } else {
-                members.len().max(1)
-            };
-            // Animation state and palettes: 68 bytes per joint and lane stored.
-            state_bytes += SwayBatch::state_bytes(n_groups, joints);
-            let limit = spec.max_state_mb.saturating_mul(1_000_000);
-            if state_bytes > limit {
-                return Err(ForestError::TooLarge { bytes: state_bytes, limit });
-            }
+            let n_groups = simulations(members.len(), joints);
             let height = model.tree.stats.height;
             // The first groups, by distance from where the camera starts; each simulated
             // instance keeps the yaw of its first group's first tree.

@@ -165,6 +165,17 @@ fn the_animation_state_cap_is_the_scenes_and_refuses_before_building() {
     let e = Forest::new(&spec).expect_err("over a 1 MB cap");
     let text = e.to_string();
     assert!(text.contains("over the 1 MB cap") && text.contains("max_state_mb"), "{text}");
+    // The figure is the whole forest's, every species counted, wherever the cap falls: just
+    // under it the refusal names the same figure.
+    let Err(sylva_forest::ForestError::TooLarge { bytes, .. }) = Forest::new(&spec) else {
+        panic!("refused for its size");
+    };
+    assert!(spec.species.len() > 1 && bytes > 2_000_000, "{bytes} bytes");
+    spec.max_state_mb = bytes / 1_000_000 - 1;
+    match Forest::new(&spec) {
+        Err(sylva_forest::ForestError::TooLarge { bytes: again, .. }) => assert_eq!(again, bytes),
+        other => panic!("refused for its size just under the total: {:?}", other.err()),
+    }
     let e = SceneSpec::from_toml(
         "x.toml",
         "name = \"x\"\ntrees = 3\nspecies = [{ name = \"quaking_aspen\" }]\nmax_state_mb = 0\n",
