@@ -1188,7 +1188,8 @@ impl Forest {
             let joint = 12 * width;
             for (k, block) in s.batch.lane_palettes().chunks(n * joint).enumerate() {
                 let lane = s.lane_base + k;
-                // The batch pads its last lane group to 16; copy only the simulated lanes.
+                // The batch pads its last lane group (to 16, or a narrow batch to its 4 or 8
+                // lanes): copy only the simulated lanes.
                 let used = (s.groups.len() - k * LANES).min(width);
                 let sims = lane * LANES..lane * LANES + used;
                 let need = &out.need[sims.clone()];
