@@ -193,6 +193,23 @@ struct LeafShading {
     tip: [f32; 3],
 }
 
+/// Twig colour in the atlas.
+const WOOD: [f32; 3] = [0.24, 0.17, 0.10];
+
+impl LeafShading {
+    /// `species`' leaves: dark blue-green (fir) … light yellow-green (aspen) by its
+    /// `leaf_shade`, tips a little lighter.
+    fn of(species: &Species) -> LeafShading {
+        let shade = species.leaf_shade.clamp(0.0, 1.0);
+        LeafShading {
+            shape: species.leaf_shape,
+            needle: is_needle(species),
+            base: lerp3([0.05, 0.15, 0.08], [0.26, 0.42, 0.08], shade),
+            tip: lerp3([0.09, 0.22, 0.12], [0.42, 0.56, 0.14], shade),
+        }
+    }
+}
+
 /// The colour leaf `l` paints at `p` (cell units), or `None` where `p` is off the blade.
 fn leaf_colour(sh: &LeafShading, l: &LeafStroke, p: [f32; 2]) -> Option<[f32; 3]> {
     let w = l.width / l.length;
@@ -347,13 +364,8 @@ pub fn cluster_layout(species: &Species, seed: u64, cell: u32) -> (Vec<Twig>, Ve
 pub fn leaf_atlas(species: &Species, seed: u64, size: u32) -> LeafAtlas {
     let size = size.max(32);
     let cell = size / ATLAS_CELLS;
-    let needle = is_needle(species);
-    let shade = species.leaf_shade.clamp(0.0, 1.0);
-    // Dark blue-green (fir) … light yellow-green (aspen); tips a little lighter.
-    let base = lerp3([0.05, 0.15, 0.08], [0.26, 0.42, 0.08], shade);
-    let tip = lerp3([0.09, 0.22, 0.12], [0.42, 0.56, 0.14], shade);
-    let wood = [0.24, 0.17, 0.10];
-    let shading = LeafShading { shape: species.leaf_shape, needle, base, tip };
+    let shading = LeafShading::of(species);
+    let (needle, base) = (shading.needle, shading.base);
     let mut rgba = vec![0u8; (size * size * 4) as usize];
     let mut coverage = Vec::new();
     let mut counts = Vec::new();
@@ -373,7 +385,7 @@ pub fn leaf_atlas(species: &Species, seed: u64, size: u32) -> LeafAtlas {
                 let hi = [tw.0[0].max(tw.1[0]) + tw.2, tw.0[1].max(tw.1[1]) + tw.2];
                 for (x, y) in texels(lo, hi, cell) {
                     if seg_distance(at(x, y), tw.0, tw.1) <= tw.2 {
-                        paint[(y * cell + x) as usize] = Some(wood);
+                        paint[(y * cell + x) as usize] = Some(WOOD);
                     }
                 }
             }
@@ -440,11 +452,8 @@ mod tests {
             let size = 128;
             let atlas = leaf_atlas(&sp, 7, size);
             let cell = size / ATLAS_CELLS;
-            let needle = is_needle(&sp);
-            let shade = sp.leaf_shade.clamp(0.0, 1.0);
-            let base = lerp3([0.05, 0.15, 0.08], [0.26, 0.42, 0.08], shade);
-            let tip = lerp3([0.09, 0.22, 0.12], [0.42, 0.56, 0.14], shade);
-            let sh = LeafShading { shape: sp.leaf_shape, needle, base, tip };
+            let sh = LeafShading::of(&sp);
+            let base = sh.base;
             let mut painted = 0;
             for c in 0..ATLAS_CELLS * ATLAS_CELLS {
                 let (twigs, leaves) = cluster_layout(&sp, 7, c);
@@ -454,7 +463,7 @@ mod tests {
                         let p = [(x as f32 + 0.5) / cell as f32, (y as f32 + 0.5) / cell as f32];
                         let mut colour = None;
                         if twigs.iter().any(|tw| seg_distance(p, tw.0, tw.1) <= tw.2) {
-                            colour = Some([0.24, 0.17, 0.10]);
+                            colour = Some(WOOD);
                         }
                         for l in &leaves {
                             colour = leaf_colour(&sh, l, p).or(colour);
