@@ -60,7 +60,10 @@ use std::time::Instant;
 use bytemuck::{Pod, Zeroable};
 use rayon::prelude::*;
 use sylva_core::rng::mix64;
-use sylva_sway::{LANES, LeafParams, LeafSway, PaletteSlot, SwayBatch, SwayParams, SwaySpecies};
+use sylva_sway::{
+    IDENTITY, LANES, LeafParams, LeafSway, PaletteSlot, STATE_BYTES, SwayBatch, SwayParams,
+    SwaySpecies,
+};
 
 use sylva_tree::mesh::{LOD_LEVELS, TreeModel};
 use sylva_tree::{LodOrder, Species, lod_order};
@@ -91,7 +94,8 @@ pub enum ForestError {
     Wind(String),
     /// The simulation state would not fit the documented memory cap.
     #[error(
-        "the simulation would need {} MB of animation state, over the {} MB cap: lower \
+        "the simulation would need {} MB of animation state (every joint of every \
+         simulation without the animation LOD, the trunks with it), over the {} MB cap: lower \
          `sim_joint_budget`, keep the wind-field LOD on (instance groups), use fewer trees, or \
          raise the cap deliberately (scene `max_state_mb`, or --max-memory)",
         bytes / 1_000_000, limit / 1_000_000
@@ -257,6 +261,12 @@ pub struct FrameStats {
     pub simulated: usize,
     /// Joint updates (joints × simulated instances) of the last simulation step.
     pub joints: usize,
+    /// Bytes of animation state held (angles, rates, blend weights and palettes of the
+    /// joints each lane group simulates: the animation LOD sets it).
+    pub state_bytes: usize,
+    /// Lane groups that the memory cap (`max_state_mb`) kept at fewer joints than the
+    /// animation LOD asked for, in the last step.
+    pub state_capped: usize,
     /// Trees drawn as impostors (fully or fading in).
     pub impostors: usize,
     /// Trees drawn at two levels (cross-fading).
@@ -363,6 +373,10 @@ pub struct SpeciesRuntime {
     codes: Vec<u64>,
     /// Index of this species' first lane group in the forest's list of lane groups.
     lane_base: usize,
+    /// Bytes of animation state this species may hold (its share of `max_state_mb`).
+    state_cap: usize,
+    /// Lane groups the cap kept at fewer joints than they were asked for, last step.
+    capped: usize,
     /// Per group: the batch instance (lane) that simulates it. The animation LOD moves
     /// simulations between lanes (see `lanes.rs`); a group keeps its number.
     lane_of: Vec<u32>,
@@ -549,20 +563,36 @@ impl Forest {
                 trees_here.max(1)
             }
         };
-        // The whole forest's animation state (68 bytes per joint and lane stored), refused
-        // before any is allocated.
-        let state_bytes: usize = models
+        // The whole forest's animation state (68 bytes per joint and lane stored), per
+        // species: every joint of every simulation, and the trunks alone. A batch stores
+        // what it simulates, so with the animation LOD the trunks are what must fit (far
+        // trees step them and nothing else); without it, every joint. Refused before any is
+        // allocated.
+        let (full, floor): (Vec<usize>, Vec<usize>) = models
             .iter()
             .enumerate()
             .map(|(si, m)| {
                 let joints = m.tree.skeleton.len();
-                SwayBatch::state_bytes(simulations(members_of(si), joints), joints)
+                let trunk = lod_order(m).trunk;
+                let sims = simulations(members_of(si), joints);
+                (SwayBatch::state_bytes(sims, joints), SwayBatch::state_bytes(sims, trunk))
             })
-            .sum();
+            .unzip();
         let limit = spec.max_state_mb.saturating_mul(1_000_000);
-        if state_bytes > limit {
-            return Err(ForestError::TooLarge { bytes: state_bytes, limit });
+        let (all_full, all_floor) = (full.iter().sum::<usize>(), floor.iter().sum::<usize>());
+        let needed = if spec.lod.animation { all_floor } else { all_full };
+        if needed > limit {
+            return Err(ForestError::TooLarge { bytes: needed, limit });
         }
+        // Each species may hold its trunks and a share of the rest of the cap in proportion
+        // to its crowns (all of them where the whole forest fits): the animation LOD keeps a
+        // lane group at a coarser prefix rather than go over it (`FrameStats::state_capped`).
+        let spare = (all_full - all_floor).max(1) as f64;
+        let allowance = |si: usize| {
+            let share = (full[si] - floor[si]) as f64 / spare;
+            floor[si]
+                + ((limit - all_floor) as f64 * share).min((full[si] - floor[si]) as f64) as usize
+        };
         for (si, original) in models.into_iter().enumerate() {
             // Joints in LOD order: each level's joints a prefix, the trunk first.
             let order = lod_order(&original);
@@ -617,6 +647,8 @@ impl Forest {
                 members,
                 codes,
                 lane_base,
+                state_cap: allowance(si),
+                capped: 0,
                 lane_of: (0..n_groups as u32).collect(),
                 group_of: (0..n_groups as u32).collect(),
                 want: Vec::with_capacity(n_groups),
@@ -653,6 +685,10 @@ impl Forest {
                 ..LodSettings::default()
             },
             lane_groups: lane_base,
+            // Before any frame every joint is simulated: a forest stepped and then drawn (or
+            // read through `tree_palettes`) shows every joint's motion. A caller that draws
+            // builds a frame first, so that the first step already follows the animation LOD
+            // (and holds only the state it needs).
             want: (0..lane_base * LANES).map(|_| AtomicU32::new(u32::MAX)).collect(),
             shown: (0..lane_base * LANES).map(|_| AtomicU32::new(u32::MAX)).collect(),
             switches: vec![Switch::NONE; n_trees],
@@ -849,7 +885,7 @@ impl Forest {
                     };
                     s.batch.palette(lane, shown)
                 } else {
-                    [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0]
+                    IDENTITY
                 }
             })
             .collect()
@@ -1009,12 +1045,37 @@ impl Forest {
             let longest = &mut s.longest;
             longest.clear();
             longest.extend(want.chunks(LANES).map(|c| c.iter().copied().max().unwrap_or(0)));
+            // Bytes per joint stored of a lane group, and what the species holds now.
+            let per_joint = s.batch.width() * STATE_BYTES;
+            let mut held: usize = (0..longest.len()).map(|k| s.batch.reserved(k) * per_joint).sum();
+            s.capped = 0;
             for (k, &w) in longest.iter().enumerate() {
-                s.batch.set_active(k, if animation { w as usize } else { all });
+                let mut w = if animation { (w as usize).min(all) } else { all };
+                let reserved = s.batch.reserved(k);
+                if s.batch.prefix_for(w) > reserved {
+                    // Growing past the species' share of the memory cap: the group keeps the
+                    // finest registered prefix it already holds memory for, the trunk at
+                    // least.
+                    let more = (s.batch.prefix_for(w) - reserved) * per_joint;
+                    if held + more > s.state_cap {
+                        w = s
+                            .order
+                            .prefix
+                            .iter()
+                            .copied()
+                            .filter(|&p| p <= reserved)
+                            .max()
+                            .unwrap_or(0)
+                            .max(trunk);
+                        s.capped += 1;
+                    }
+                    held += s.batch.prefix_for(w).saturating_sub(reserved) * per_joint;
+                }
+                s.batch.set_active(k, w);
                 // Joints switched off fade out where a tree shows them; where none does, they
                 // go at once.
                 let end = shown.len().min(k * LANES + LANES);
-                if shown[k * LANES..end].iter().all(|&d| d <= w) {
+                if shown[k * LANES..end].iter().all(|&d| d as usize <= w) {
                     s.batch.settle(k);
                 }
             }
@@ -1186,7 +1247,10 @@ impl Forest {
             // Per joint, its 12 elements × `width` lanes.
             let width = s.batch.width();
             let joint = 12 * width;
-            for (k, block) in s.batch.lane_palettes().chunks(n * joint).enumerate() {
+            for k in 0..s.batch.groups() {
+                // The group stores (at least) the joints it simulates; those it does not
+                // are read at their anchors below.
+                let block = s.batch.group_palettes(k);
                 let lane = s.lane_base + k;
                 // The batch pads its last lane group (to 16, or a narrow batch to its 4 or 8
                 // lanes): copy only the simulated lanes.
@@ -1199,6 +1263,19 @@ impl Forest {
                     continue;
                 }
                 let slots = &mut out.slots[sims];
+                if s.batch.stored(k) == 0 {
+                    // Before the first step the batch stores nothing: every joint at rest.
+                    let base = out.palettes.len() as u32;
+                    for (l, slot) in slots.iter_mut().enumerate() {
+                        *slot = PaletteSlot { base: base + l as u32, stride: used as u32 };
+                    }
+                    for _ in 0..joints {
+                        for x in IDENTITY {
+                            out.palettes.extend(std::iter::repeat_n(x, used));
+                        }
+                    }
+                    continue;
+                }
                 // Joints drawn beyond what the group simulates (the animation LOD by size)
                 // rest on their parents: each shows its nearest simulated ancestor's palette.
                 let simulated = s.batch.active(k);
@@ -1256,6 +1333,8 @@ impl Forest {
             stats.coarse_wind += s.coarse_wind;
             stats.near_wind += s.near_wind;
             stats.joints += s.batch.joint_updates();
+            stats.state_bytes += s.batch.stored_bytes();
+            stats.state_capped += s.capped;
         }
         for (a, &v) in self.want.iter().zip(&out.want) {
             a.store(v, Ordering::Relaxed);

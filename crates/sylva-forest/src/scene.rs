@@ -240,9 +240,12 @@ pub struct SceneSpec {
     /// species beyond what fits share simulations (instance groups). Default 1 000 000.
     #[serde(default = "budget")]
     pub sim_joint_budget: usize,
-    /// Cap on the forest's animation state, MB (1 … 1 000 000; default 6000): a scene whose
-    /// simulation would need more is refused before anything is allocated. Raise it
-    /// deliberately for a machine with the memory.
+    /// Cap on the forest's animation state, MB (1 … 1 000 000; default 6000). A scene whose
+    /// simulation would need more even at its coarsest is refused before anything is
+    /// allocated: every joint of every simulation without the animation LOD, their trunks
+    /// with it. With the animation LOD a lane group stores only the joints it simulates, and
+    /// one that would grow past its species' share of the cap stays at a coarser prefix
+    /// (`FrameStats::state_capped`). Raise it deliberately for a machine with the memory.
     #[serde(default = "state_mb")]
     pub max_state_mb: usize,
     /// Changes to the sway model for every species (a `[sway]` table; keys as

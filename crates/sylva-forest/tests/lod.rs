@@ -4,6 +4,7 @@
 use sylva_forest::{
     Camera, Forest, FrameData, LodSettings, SceneSpec, blend_levels, hysteresis, lod_coordinate,
 };
+use sylva_sway::{LANES, STATE_BYTES, SwayBatch};
 
 #[test]
 fn level_is_monotone_in_projected_size_with_hysteresis_and_fades_sum_to_one() {
@@ -96,11 +97,24 @@ fn joints_not_drawn_are_neither_uploaded_nor_stepped() {
     let all: usize =
         forest.species.iter().map(|s| s.model.tree.skeleton.len() * s.simulated()).sum();
     assert!(f.stats.joints * 20 < all);
-    // The animation LOD off: every joint stepped again.
+    // Held: the trunks' animation state and nothing else (17 values per joint and lane
+    // stored; a lane group stores the joints it simulates).
+    let held = |forest: &Forest, joints: fn(&sylva_forest::SpeciesRuntime) -> usize| {
+        let lanes = |n: usize| n.div_ceil(LANES) * SwayBatch::width_for(n);
+        forest.species.iter().map(|s| joints(s) * lanes(s.simulated()) * STATE_BYTES).sum::<usize>()
+    };
+    assert_eq!(f.stats.state_bytes, held(&forest, |s| s.order.trunk), "the trunks' state alone");
+    // The animation LOD off: every joint stepped and held again.
     forest.set_lod(LodSettings { animation: false, ..forest.lod() });
     forest.step(1.0 / 30.0);
     forest.frame(&cam, 4.0 / 3.0, &mut f);
     assert_eq!(f.stats.joints, all);
+    assert_eq!(
+        f.stats.state_bytes,
+        held(&forest, |s| s.model.tree.skeleton.len()),
+        "every joint's"
+    );
+    assert_eq!(f.stats.state_capped, 0, "under the default cap");
     // The geometry LOD off: full detail, every joint of every drawn tree uploaded.
     forest.set_lod(LodSettings { geometry: false, ..forest.lod() });
     forest.frame(&cam, 4.0 / 3.0, &mut f);

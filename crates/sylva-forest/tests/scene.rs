@@ -155,11 +155,13 @@ fn table3_scenes_and_camera_paths_are_deterministic() {
 
 /// The animation-state cap is the scene's to set: the same scene builds under the default
 /// cap and is refused, naming the figure and the cap, under a smaller one; a cap outside
-/// 1 … 1 000 000 MB is refused naming the field.
+/// 1 … 1 000 000 MB is refused naming the field. Without the animation LOD every joint of
+/// every simulation is counted; with it, the trunks (what far trees step).
 #[test]
 fn the_animation_state_cap_is_the_scenes_and_refuses_before_building() {
     let mut spec = SceneSpec::builtin("small").expect("small");
     spec.lod.wind = false; // every tree simulated on its own: 5 trees, a few MB of state
+    spec.lod.animation = false;
     assert!(Forest::new(&spec).is_ok());
     spec.max_state_mb = 1;
     let e = Forest::new(&spec).expect_err("over a 1 MB cap");
@@ -176,12 +178,50 @@ fn the_animation_state_cap_is_the_scenes_and_refuses_before_building() {
         Err(sylva_forest::ForestError::TooLarge { bytes: again, .. }) => assert_eq!(again, bytes),
         other => panic!("refused for its size just under the total: {:?}", other.err()),
     }
+    // With the animation LOD the trunks must fit, and they do.
+    spec.lod.animation = true;
+    spec.max_state_mb = 1;
+    assert!(Forest::new(&spec).is_ok(), "the trunks of five trees fit in 1 MB");
     let e = SceneSpec::from_toml(
         "x.toml",
         "name = \"x\"\ntrees = 3\nspecies = [{ name = \"quaking_aspen\" }]\nmax_state_mb = 0\n",
     )
     .expect_err("zero cap");
     assert!(e.to_string().contains("`max_state_mb`"), "{e}");
+}
+
+/// Under a cap smaller than every joint's state, the animation LOD keeps lane groups at
+/// coarser prefixes instead of going over it: the state held never exceeds the cap, frame
+/// after frame, and the frames say how many groups were held back; under the default cap
+/// the same frames hold more than that and nothing is held back.
+#[test]
+fn the_animation_lod_keeps_the_state_under_the_cap() {
+    let mut spec = SceneSpec::builtin("small").expect("small");
+    spec.lod.wind = false;
+    let held = |spec: &SceneSpec| {
+        let mut forest = Forest::new(spec).expect("forest");
+        let cam = forest.default_camera();
+        let mut f = FrameData::default();
+        (0..8)
+            .map(|_| {
+                forest.step(1.0 / 30.0);
+                forest.frame(&cam, 4.0 / 3.0, &mut f);
+                (f.stats.state_bytes, f.stats.state_capped)
+            })
+            .collect::<Vec<_>>()
+    };
+    let free = held(&spec);
+    let most = free.iter().map(|h| h.0).max().unwrap_or(0);
+    assert!(free.iter().all(|h| h.1 == 0), "nothing held back under 6 GB: {free:?}");
+    // Half of what the default camera's trees hold, in whole MB.
+    let cap_mb = most / 2_000_000;
+    assert!(cap_mb >= 1, "the small scene holds {most} bytes");
+    spec.max_state_mb = cap_mb;
+    let capped = held(&spec);
+    for (k, &(bytes, _)) in capped.iter().enumerate() {
+        assert!(bytes <= cap_mb * 1_000_000, "frame {k}: {bytes} bytes over {cap_mb} MB");
+    }
+    assert!(capped.iter().any(|h| h.1 > 0), "the cap held some group back: {capped:?}");
 }
 
 /// One wind type for scenes and commands: a preset, a steady speed or a wind file, each

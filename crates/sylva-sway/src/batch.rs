@@ -37,7 +37,14 @@
 //! group (the one choice made per group, series or full formula for the joint rotations,
 //! follows the largest angle among its lanes). Groups are independent and each is computed
 //! by the same sequence of operations whatever thread runs it, so results are bit-identical
-//! for any thread count. After the first step at a given dt nothing is allocated.
+//! for any thread count.
+//!
+//! Storage follows the animation LOD: each group stores the state of the joints it simulates
+//! (its prefix, with those still fading out) and no others, allocated when its prefix grows
+//! and given back when it shrinks. Joints not stored are at rest; a joint switched back on
+//! restarts at its equilibrium, so nothing that was dropped is ever read. A forest of far
+//! trees that simulate their trunks holds the trunks' state, not the crowns'
+//! ([`SwayBatch::stored_bytes`]). Steps that change no prefix allocate nothing.
 
 use std::f32::consts::PI;
 
@@ -51,7 +58,8 @@ use crate::species::{SwaySpecies, Transition};
 /// to its animated position.
 pub type Palette = [f32; 12];
 
-const IDENTITY: Palette = [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0];
+/// The rest pose's palette (the identity): a joint not yet simulated.
+pub const IDENTITY: Palette = [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0];
 
 /// Instances per group: the vector width the joint loops run across.
 pub const LANES: usize = 16;
@@ -60,6 +68,10 @@ pub type Lanes = [f32; LANES];
 
 const ZERO: Lanes = [0.0; LANES];
 
+/// Bytes of animation state per joint and lane stored: 17 `f32` (two angles, two rates, the
+/// blend weight, the 3×4 palette).
+pub const STATE_BYTES: usize = 17 * 4;
+
 /// Largest bend of any joint from its parent, rad (1.2 rad, about 70°).
 pub const MAX_BEND: f32 = 1.2;
 
@@ -67,9 +79,10 @@ pub const MAX_BEND: f32 = 1.2;
 /// (row-major 3×4) of joint `j` is at `base + (12 j + e) · stride`.
 ///
 /// This is the palette lane layout, the one contract between the sway step, the forest's
-/// frame and the shaders: [`SwayBatch::lane_palettes`] (flattened) is such a buffer with
-/// `stride` = [`LANES`]; sylva-forest copies each lane group's block keeping the layout with
-/// `stride` = the lanes it simulates, and gives every drawn tree its slot
+/// frame and the shaders: [`SwayBatch::group_palettes`] is such a buffer for each lane
+/// group, with `stride` = its [`width`](SwayBatch::width); sylva-forest copies each lane
+/// group's block keeping the layout with `stride` = the lanes it simulates (or one
+/// simulation's palettes in a row, `stride` 1), and gives every drawn tree its slot
 /// (`Instance::palette`); the vertex shaders read it with `palette()` in sylva-render's
 /// `common.wgsl`. Tested on the simulation side (against [`SwayBatch::palette`]) and on the
 /// GPU side (the WGSL reader against [`PaletteSlot::read`]).
@@ -105,6 +118,89 @@ impl PaletteSlot {
 /// Lumped static drag of held joints: [D, c] of their wood, then of their leaves.
 type Lump = [[f32; 4]; 2];
 
+/// One group's stored state: its first `joints` joints (a prefix: those it simulates, and
+/// none beyond), `width` lanes inner. Joints not stored are at rest.
+///
+/// The memory behind it may hold more joints than are stored: a group whose prefix shrinks
+/// keeps its memory for [`TRIM_STEPS`] steps before giving it back, so a prefix that comes
+/// and goes (a tree at the edge of a level, lanes repacked) costs no allocation and no
+/// page faults each time.
+#[derive(Debug, Clone, Default)]
+struct Block {
+    /// Per joint, per axis: bending angle (rad) and rate (rad/s).
+    theta: Vec<f32>,
+    rate: Vec<f32>,
+    /// Displayed fraction of each joint's rotation (animation-LOD blend), 0 … 1.
+    weight: Vec<f32>,
+    /// Palettes per (joint, element) (parents are read from here).
+    pal: Vec<f32>,
+    /// Joints stored (the vectors hold at least these).
+    joints: usize,
+    /// Steps in a row this block has held memory for more joints than it stores.
+    idle: u32,
+}
+
+/// Steps a lane group keeps the memory of joints it no longer stores before giving it
+/// back (about two seconds at 30 frames a second).
+pub const TRIM_STEPS: u32 = 64;
+
+impl Block {
+    /// Joints the memory holds, at `width` lanes.
+    fn reserved(&self, width: usize) -> usize {
+        self.weight.len() / width
+    }
+
+    /// Store `joints` joints. Joints beyond the memory held are new, at rest (angles and
+    /// rates 0, palettes the identity, blend weight 1 as a batch starts); joints within it
+    /// keep what they held (nothing reads a joint that was not simulated before it restarts).
+    fn store(&mut self, joints: usize, width: usize) {
+        let have = self.reserved(width);
+        if joints > have {
+            // Exactly what is needed, so that the bytes held are the bytes counted.
+            let more = (joints - have) * width;
+            self.theta.reserve_exact(2 * more);
+            self.rate.reserve_exact(2 * more);
+            self.weight.reserve_exact(more);
+            self.pal.reserve_exact(12 * more);
+            self.theta.resize(2 * joints * width, 0.0);
+            self.rate.resize(2 * joints * width, 0.0);
+            self.weight.resize(joints * width, 1.0);
+            let from = self.pal.len();
+            self.pal.extend((from..12 * joints * width).map(|k| IDENTITY[k / width % 12]));
+        }
+        self.joints = joints;
+    }
+
+    /// Count a step: memory held beyond the joints stored for [`TRIM_STEPS`] steps in a row
+    /// is given back.
+    fn trim(&mut self, width: usize) {
+        if self.reserved(width) <= self.joints {
+            self.idle = 0;
+            return;
+        }
+        self.idle += 1;
+        if self.idle >= TRIM_STEPS {
+            let j = self.joints;
+            self.theta.truncate(2 * j * width);
+            self.rate.truncate(2 * j * width);
+            self.weight.truncate(j * width);
+            self.pal.truncate(12 * j * width);
+            for v in [&mut self.theta, &mut self.rate, &mut self.weight, &mut self.pal] {
+                v.shrink_to_fit();
+            }
+            self.idle = 0;
+        }
+    }
+
+    /// Bytes held.
+    fn bytes(&self) -> usize {
+        4 * (self.theta.capacity()
+            + self.rate.capacity()
+            + self.weight.capacity()
+            + self.pal.capacity())
+    }
+}
+
 /// Instances of one species and their animation state.
 #[derive(Debug, Clone)]
 pub struct SwayBatch {
@@ -112,14 +208,8 @@ pub struct SwayBatch {
     instances: usize,
     /// Lanes stored per group: [`LANES`], or 1, 4 or 8 for a batch of fewer instances.
     width: usize,
-    /// Per group, per joint, per axis: bending angle (rad) and rate (rad/s), `width` lanes
-    /// inner.
-    theta: Vec<f32>,
-    rate: Vec<f32>,
-    /// Displayed fraction of each joint's rotation (animation-LOD blend), 0 … 1.
-    weight: Vec<f32>,
-    /// Palette scratch per (group, joint, element), lanes inner (parents are read from here).
-    pal_lanes: Vec<f32>,
+    /// Per group: the state of the joints it stores (see [`Block`]).
+    blocks: Vec<Block>,
     budget: Vec<u32>,
     /// Per group: joints simulated (a prefix).
     active: Vec<u32>,
@@ -229,14 +319,11 @@ impl SwayBatch {
         let n = species.len();
         let groups = instances.div_ceil(LANES);
         let width = Self::width_for(instances);
-        let slots = groups * n * width;
         SwayBatch {
             instances,
             width,
-            theta: vec![0.0; 2 * slots],
-            rate: vec![0.0; 2 * slots],
-            weight: vec![1.0; slots],
-            pal_lanes: (0..12 * slots).map(|k| IDENTITY[k / width % 12]).collect(),
+            // Stored as the steps need them: nothing until the first step or set_active.
+            blocks: vec![Block::default(); groups],
             budget: vec![n as u32; instances],
             active: vec![n as u32; groups],
             fresh: vec![n as u32; instances],
@@ -278,11 +365,24 @@ impl SwayBatch {
     }
 
     /// Bytes of animation state and palettes a batch of `instances` instances of a
-    /// `joints`-joint species holds (17 values per joint and stored lane: angles, rates,
-    /// blend weight, palette). The step's load accumulators are scratch, one group's per
-    /// thread.
+    /// `joints`-joint species holds when every group stores `joints` joints (17 values per
+    /// joint and stored lane: angles, rates, blend weight, palette). The step's load
+    /// accumulators are scratch, one group's per thread.
     pub fn state_bytes(instances: usize, joints: usize) -> usize {
-        instances.div_ceil(LANES) * Self::width_for(instances) * joints * 17 * 4
+        instances.div_ceil(LANES) * Self::width_for(instances) * joints * STATE_BYTES
+    }
+
+    /// Bytes of animation state and palettes this batch holds now. A group stores the
+    /// joints it simulates and no others (those beyond are at rest), so this follows the
+    /// animation LOD, a few seconds behind as a prefix shrinks ([`TRIM_STEPS`]): a forest
+    /// of far trees that simulate their trunks holds the trunks'.
+    pub fn stored_bytes(&self) -> usize {
+        self.blocks.iter().map(Block::bytes).sum()
+    }
+
+    /// Number of lane groups ([`LANES`] instances each, the last one partial).
+    pub fn groups(&self) -> usize {
+        self.blocks.len()
     }
 
     /// Set how many joints of instance `i` are simulated (the heaviest `budget`, by carried
@@ -354,13 +454,10 @@ impl SwayBatch {
     /// on is decided per instance: a joint an instance was already simulating (in this
     /// group or, moved by [`SwayBatch::swap_instances`], in another) carries on as it was.
     pub fn set_active(&mut self, group: usize, joints: usize) {
-        let n = self.species.len();
         if group >= self.active.len() {
             return;
         }
-        let p =
-            self.lumped.iter().map(|(q, _)| *q).filter(|&q| q >= joints).min().unwrap_or(n).min(n)
-                as u32;
+        let p = self.prefix_for(joints) as u32;
         self.keep[group] = p;
         // Before the first step every joint is at rest: nothing to fade.
         if p >= self.active[group] || self.dt.is_nan() {
@@ -369,6 +466,13 @@ impl SwayBatch {
                 self.refresh(i);
             }
         }
+    }
+
+    /// The prefix [`SwayBatch::set_active`] simulates when asked for `joints` joints: the
+    /// smallest registered prefix that holds them, or every joint.
+    pub fn prefix_for(&self, joints: usize) -> usize {
+        let n = self.species.len();
+        self.lumped.iter().map(|(q, _)| *q).filter(|&q| q >= joints).min().unwrap_or(n).min(n)
     }
 
     /// Drop at once the joints group `group` is fading out (see
@@ -382,11 +486,17 @@ impl SwayBatch {
     /// Bring instance `i`'s record of its current joints in line with its group's prefix:
     /// joints newly simulated for it restart at equilibrium (blend weight 0).
     fn refresh(&mut self, i: usize) {
-        let (n, w) = (self.species.len(), self.width);
+        let w = self.width;
         let (g, l) = (i / LANES, i % LANES);
         let (f, p) = (self.fresh[i] as usize, self.active[g] as usize);
-        for j in f..p {
-            self.weight[(g * n + j) * w + l] = 0.0;
+        if f < p {
+            let block = &mut self.blocks[g];
+            if block.joints < p {
+                block.store(p, w);
+            }
+            for j in f..p {
+                block.weight[j * w + l] = 0.0;
+            }
         }
         self.fresh[i] = p as u32;
     }
@@ -401,14 +511,35 @@ impl SwayBatch {
         if a == b || a >= self.instances || b >= self.instances {
             return;
         }
-        let m = self.fresh[a].max(self.fresh[b]) as usize;
-        for j in 0..m {
-            let (x, y) = (self.slot(a, j), self.slot(b, j));
-            for k in 0..2 {
-                self.theta.swap(2 * x.0 + k * x.1 + x.2, 2 * y.0 + k * y.1 + y.2);
-                self.rate.swap(2 * x.0 + k * x.1 + x.2, 2 * y.0 + k * y.1 + y.2);
+        let (m, w) = (self.fresh[a].max(self.fresh[b]) as usize, self.width);
+        let (ga, gb) = (a / LANES, b / LANES);
+        for g in [ga, gb] {
+            if self.blocks[g].joints < m {
+                self.blocks[g].store(m, w);
             }
-            self.weight.swap(x.0 + x.2, y.0 + y.2);
+        }
+        let (la, lb) = (a % LANES, b % LANES);
+        let at = |j: usize, k: usize, l: usize| (2 * j + k) * w + l;
+        if ga == gb {
+            let x = &mut self.blocks[ga];
+            for j in 0..m {
+                for k in 0..2 {
+                    x.theta.swap(at(j, k, la), at(j, k, lb));
+                    x.rate.swap(at(j, k, la), at(j, k, lb));
+                }
+                x.weight.swap(j * w + la, j * w + lb);
+            }
+        } else {
+            let (lo, hi) = self.blocks.split_at_mut(ga.max(gb));
+            let (first, second) = (&mut lo[ga.min(gb)], &mut hi[0]);
+            let (x, y) = if ga < gb { (first, second) } else { (second, first) };
+            for j in 0..m {
+                for k in 0..2 {
+                    std::mem::swap(&mut x.theta[at(j, k, la)], &mut y.theta[at(j, k, lb)]);
+                    std::mem::swap(&mut x.rate[at(j, k, la)], &mut y.rate[at(j, k, lb)]);
+                }
+                std::mem::swap(&mut x.weight[j * w + la], &mut y.weight[j * w + lb]);
+            }
         }
         self.fresh.swap(a, b);
         self.budget.swap(a, b);
@@ -429,56 +560,89 @@ impl SwayBatch {
         self.budget[i] as usize
     }
 
-    /// Where joint `j` of instance `i` lies: (first value of its joint block in a
-    /// one-value-per-lane array, the block's width, its lane). A quantity with `m` values
-    /// per joint (2 angles, 12 palette elements) has value `k` at `m · block + k · width +
-    /// lane`.
-    fn slot(&self, i: usize, j: usize) -> (usize, usize, usize) {
-        let w = self.width;
-        (((i / LANES) * self.species.len() + j) * w, w, i % LANES)
+    /// Where joint `j` of instance `i` lies: (its group, the first value of its joint block
+    /// in a one-value-per-lane array of the group's [`Block`], its lane), or `None` where the
+    /// group does not store the joint. A quantity with `m` values per joint (2 angles, 12
+    /// palette elements) has value `k` at `m · block + k · width + lane`.
+    fn slot(&self, i: usize, j: usize) -> Option<(usize, usize, usize)> {
+        let (g, w) = (i / LANES, self.width);
+        (j < self.blocks.get(g)?.joints).then_some((g, j * w, i % LANES))
     }
 
-    /// Bending angles (rad) of joint `j` of instance `i`.
+    /// Joints group `group` stores: those it simulates (with those fading out), at least.
+    /// The others are at rest.
+    pub fn stored(&self, group: usize) -> usize {
+        self.blocks.get(group).map_or(0, |b| b.joints)
+    }
+
+    /// Joints group `group` holds memory for: those it stores, and for up to
+    /// [`TRIM_STEPS`] steps those it stored before.
+    pub fn reserved(&self, group: usize) -> usize {
+        self.blocks.get(group).map_or(0, |b| b.reserved(self.width))
+    }
+
+    /// Bending angles (rad) of joint `j` of instance `i`; 0 for a joint not stored (at rest).
     pub fn angles(&self, i: usize, j: usize) -> [f32; 2] {
-        let (b, w, l) = self.slot(i, j);
-        [self.theta[2 * b + l], self.theta[2 * b + w + l]]
+        let Some((g, b, l)) = self.slot(i, j) else { return [0.0; 2] };
+        let (t, w) = (&self.blocks[g].theta, self.width);
+        [t[2 * b + l], t[2 * b + w + l]]
     }
 
-    /// Displayed fraction of joint `j`'s rotation in instance `i` (animation-LOD blend).
+    /// Displayed fraction of joint `j`'s rotation in instance `i` (animation-LOD blend); 0
+    /// for a joint not stored.
     pub fn weight(&self, i: usize, j: usize) -> f32 {
-        let (b, _, l) = self.slot(i, j);
-        self.weight[b + l]
+        self.slot(i, j).map_or(0.0, |(g, b, l)| self.blocks[g].weight[b + l])
     }
 
     /// Set the state of joint `j` of instance `i` (for probes and tests: a release test
-    /// starts from a bent joint at rest).
+    /// starts from a bent joint at rest). Stores the joint (and those before it) if its
+    /// group did not.
     pub fn set_state(&mut self, i: usize, j: usize, angles: [f32; 2], rates: [f32; 2]) {
-        let (b, w, l) = self.slot(i, j);
+        let (g, w) = (i / LANES, self.width);
+        if i >= self.instances || j >= self.species.len() {
+            return;
+        }
+        if self.blocks[g].joints <= j {
+            self.blocks[g].store(j + 1, w);
+        }
+        let (block, b, l) = (&mut self.blocks[g], j * w, i % LANES);
         for a in 0..2 {
-            self.theta[2 * b + a * w + l] = angles[a];
-            self.rate[2 * b + a * w + l] = rates[a];
+            block.theta[2 * b + a * w + l] = angles[a];
+            block.rate[2 * b + a * w + l] = rates[a];
         }
     }
 
-    /// Joint `j`'s palette of instance `i`.
+    /// Joint `j`'s palette of instance `i`. A joint its group does not store rests on its
+    /// parent and shows its nearest simulated ancestor's palette (see
+    /// [`SwayBatch::anchors`]); one never simulated shows the identity.
     pub fn palette(&self, i: usize, j: usize) -> Palette {
-        let (b, w, l) = self.slot(i, j);
-        std::array::from_fn(|e| self.pal_lanes[12 * b + e * w + l])
+        let g = i / LANES;
+        let shown = match self.slot(i, j) {
+            Some(_) => j,
+            None => match self.anchors(self.active(g)) {
+                Some(a) if j < a.len() => a[j] as usize,
+                _ => return IDENTITY,
+            },
+        };
+        let Some((g, b, l)) = self.slot(i, shown) else { return IDENTITY };
+        let w = self.width;
+        std::array::from_fn(|e| self.blocks[g].pal[12 * b + e * w + l])
     }
 
-    /// Where instance `i`'s palettes lie in [`lane_palettes`](Self::lane_palettes).
+    /// Where instance `i`'s palettes lie in its group's
+    /// [`group_palettes`](Self::group_palettes).
     pub fn palette_slot(&self, i: usize) -> PaletteSlot {
-        let (b, w, l) = self.slot(i, 0);
-        PaletteSlot { base: (12 * b + l) as u32, stride: w as u32 }
+        PaletteSlot { base: (i % LANES) as u32, stride: self.width as u32 }
     }
 
-    /// All palettes, as the step computes them: per group of [`LANES`] instances, per joint,
-    /// per matrix element (row-major 3×4), the group's [`width`](Self::width) lanes side by
-    /// side — element e of joint j of instance i is at `palette_slot(i).index(j, e)`, that is
-    /// `((i / LANES · joints + j) · 12 + e) · width + i % LANES`. A last, partial group of a
-    /// full-width batch is padded. Uploaded to the GPU as it is (see `sylva-forest`).
-    pub fn lane_palettes(&self) -> &[f32] {
-        &self.pal_lanes
+    /// The palettes of group `group` (instances `16 group … 16 group + 15`), as the step
+    /// computes them: per joint the group stores ([`SwayBatch::stored`]), per matrix element
+    /// (row-major 3×4), the group's [`width`](Self::width) lanes side by side — element e
+    /// of joint j of instance i is at `palette_slot(i).index(j, e)`, that is `(12 j + e) ·
+    /// width + i % LANES`. A last, partial group of a full-width batch is padded. Copied to
+    /// the GPU as it is (see `sylva-forest`). Empty for a group out of range.
+    pub fn group_palettes(&self, group: usize) -> &[f32] {
+        self.blocks.get(group).map_or(&[], |b| b.pal.as_slice())
     }
 
     /// Advance every instance by `dt` seconds (> 0) in the wind `wind[i]` (m/s, tree space,
@@ -490,6 +654,14 @@ impl SwayBatch {
         }
         for i in 0..self.instances {
             self.refresh(i);
+        }
+        // Each group stores what it simulates: joints it now needs are stored (at rest where
+        // new), joints it dropped are no longer stored and their memory is given back after
+        // TRIM_STEPS steps (nothing reads them: a joint switched back on restarts).
+        let w = self.width;
+        for (block, &p) in self.blocks.iter_mut().zip(&self.active) {
+            block.store(p as usize, w);
+            block.trim(w);
         }
         let sp = &self.species;
         if dt != self.dt {
@@ -515,19 +687,13 @@ impl SwayBatch {
 
     /// The step's groups, `W` (= [`SwayBatch::width`]) lanes each.
     fn step_lanes<const W: usize>(&mut self, blend: f32, wind: &[[f32; 3]]) {
-        let n = self.species.len();
         let sp = &self.species;
         let (tr, aero, budget, ni) =
             (&self.transitions, &self.aero_dt, &self.budget, self.instances);
         let (keep, lumped) = (&self.keep, &self.lumped);
-        self.theta
-            .par_chunks_mut(2 * n * W)
-            .zip(self.rate.par_chunks_mut(2 * n * W))
-            .zip(self.weight.par_chunks_mut(n * W))
-            .zip(self.pal_lanes.par_chunks_mut(12 * n * W))
-            .zip(self.active.par_iter_mut())
-            .enumerate()
-            .for_each(|(g, ((((theta, rate), weight), lanes), active))| {
+        self.blocks.par_iter_mut().zip(self.active.par_iter_mut()).enumerate().for_each(
+            |(g, (block, active))| {
+                let Block { theta, rate, weight, pal: lanes, .. } = block;
                 let mut u = [ZERO; 3];
                 let mut bud = [0u32; LANES];
                 let used = W.min(ni - g * LANES);
@@ -565,7 +731,8 @@ impl SwayBatch {
                         *active = k as u32;
                     }
                 });
-            });
+            },
+        );
     }
 }
 

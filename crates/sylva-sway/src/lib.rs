@@ -18,7 +18,10 @@ pub mod params;
 pub mod probe;
 pub mod species;
 
-pub use batch::{LANES, Lanes, Palette, PaletteSlot, SwayBatch, rotation_of, transform};
+pub use batch::{
+    IDENTITY, LANES, Lanes, Palette, PaletteSlot, STATE_BYTES, SwayBatch, TRIM_STEPS, rotation_of,
+    transform,
+};
 pub use frontal::{Frontal, frontal_area};
 pub use leaves::{LeafParams, LeafSway};
 pub use params::{CROWN_DRAG_SPEED, NEEDLE_LEAF_DRAG, SwayParamError, SwayParams};

@@ -20,9 +20,10 @@ fn palette_slots_address_each_instances_own_palettes() {
         for _ in 0..20 {
             b.step(1.0 / 30.0, &wind);
         }
-        let flat = b.lane_palettes();
-        assert_eq!(flat.len(), n.div_ceil(LANES) * width * joints * 12, "{n}: lanes stored");
+        assert_eq!(b.groups(), n.div_ceil(LANES));
         for i in 0..n {
+            let flat = b.group_palettes(i / LANES);
+            assert_eq!(flat.len(), width * joints * 12, "{n}: lanes stored");
             let slot = b.palette_slot(i);
             assert_eq!(slot.stride as usize, width);
             for j in 0..joints {
@@ -40,6 +41,7 @@ fn palette_slots_address_each_instances_own_palettes() {
             assert_ne!(b.palette(0, top), b.palette(1, top));
         }
         // A slot past the buffer reads nothing rather than panicking.
+        let flat = b.group_palettes(0);
         let past = PaletteSlot { base: flat.len() as u32, stride: 1 };
         assert_eq!(past.read(flat, 0), None);
     }

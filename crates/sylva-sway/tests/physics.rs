@@ -211,7 +211,9 @@ fn batches_are_bit_identical_for_one_and_two_threads() {
             for _ in 0..200 {
                 b.step(1.0 / 30.0, &winds);
             }
-            b.lane_palettes().iter().map(|x| x.to_bits()).collect::<Vec<u32>>()
+            (0..b.groups())
+                .flat_map(|g| b.group_palettes(g).iter().map(|x| x.to_bits()))
+                .collect::<Vec<u32>>()
         })
     };
     assert_eq!(run(1), run(2));

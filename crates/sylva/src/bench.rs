@@ -187,7 +187,7 @@ fn sway(a: SwayBench) -> anyhow::Result<()> {
                 })
                 .collect::<Vec<f64>>()
         });
-        std::hint::black_box(batch.lane_palettes());
+        std::hint::black_box(batch.group_palettes(0));
         let step = median(&mut times);
         let joints = (n * a.instances) as f64;
         println!(

@@ -309,6 +309,10 @@ pub fn render(a: &RenderArgs) -> anyhow::Result<RenderReport> {
     let mut step = Vec::new();
     let bar = indicatif::ProgressBar::new(frames as u64);
     let aspect = w as f32 / h as f32;
+    // A frame for the first camera before the first step: the animation LOD then simulates
+    // (and stores) from the start only what is drawn.
+    let first = if follow { forest.camera_at(dt) } else { fixed };
+    forest.frame(&first, aspect, &mut frame);
     for i in 0..frames {
         let camera = if follow { forest.camera_at((i + 1) as f32 * dt) } else { fixed };
         let t = Instant::now();

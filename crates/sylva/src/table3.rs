@@ -3,7 +3,8 @@
 //! then with each LOD off in turn; per configuration: frames per second, ms per frame split
 //! into simulation (wind sample + sway step), frame building (culling, levels, buckets,
 //! palette copy) and rendering (upload, draw, read back), triangles, draw calls, joint
-//! updates, bytes uploaded, simulated trees, and the image error (mean FLIP through the
+//! updates, bytes uploaded, animation state held (and lane groups the memory cap kept
+//! coarser, in the note), simulated trees, and the image error (mean FLIP through the
 //! `nv-flip` crate, SSIM through `image-compare`) of the last frame against the
 //! full-detail frame at the same time and camera. Warm-up frames are excluded from the medians.
 //!
@@ -93,6 +94,10 @@ struct Cell {
     upload_mb: f64,
     /// The most uploaded in one timed frame (the target is per frame).
     upload_max_mb: f64,
+    /// The most animation state held in one timed frame, MB.
+    state_mb: f64,
+    /// The most lane groups the memory cap held back in one timed frame.
+    capped: usize,
     simulated: usize,
     impostors: f64,
     ssim: Option<f64>,
@@ -202,6 +207,8 @@ fn run_config(
             cell.joints += frame.stats.joints as f64;
             cell.upload_mb += frame.stats.uploaded_bytes as f64 / 1e6;
             cell.upload_max_mb = cell.upload_max_mb.max(frame.stats.uploaded_bytes as f64 / 1e6);
+            cell.state_mb = cell.state_mb.max(frame.stats.state_bytes as f64 / 1e6);
+            cell.capped = cell.capped.max(frame.stats.state_capped);
             cell.impostors += frame.stats.impostors as f64;
         }
         if last {
@@ -219,11 +226,20 @@ fn run_config(
     cell.frame_ms = median(&mut build);
     cell.render_ms = (!draw.is_empty()).then(|| median(&mut draw));
     cell.simulated = frame.stats.simulated;
+    if cell.capped > 0 {
+        cell.note = format!(
+            "memory cap: up to {} lane groups kept coarser (raise --max-memory)",
+            cell.capped
+        );
+    }
     if render_all == Some(false) {
-        cell.note = match &cell.image {
-            Some(_) => "over --max-triangles: rendered once (last frame)".into(),
-            None => "over --max-image-triangles: not rendered".into(),
+        let why = std::mem::take(&mut cell.note);
+        let sep = if why.is_empty() { "" } else { "; " };
+        let what = match &cell.image {
+            Some(_) => "over --max-triangles: rendered once (last frame)",
+            None => "over --max-image-triangles: not rendered",
         };
+        cell.note = format!("{what}{sep}{why}");
     }
     Ok(cell)
 }
@@ -332,7 +348,7 @@ pub fn run(a: Table3Bench) -> anyhow::Result<()> {
             }
             let cell = run_config(&spec, &mut gpu, &a, (w, h), (g, an, wi), false)?;
             println!(
-                "  {label:<24} {:>7} fps  sim {:>6.1} ms  frame {:>6.1} ms  render {:>8} ms  {:>7.2} M tris  {:>6.0} draws  {:>9.0} joints  {:>7.2} MB up (max {:.2})  {}",
+                "  {label:<24} {:>7} fps  sim {:>6.1} ms  frame {:>6.1} ms  render {:>8} ms  {:>7.2} M tris  {:>6.0} draws  {:>9.0} joints  {:>7.2} MB up (max {:.2})  {:>8.1} MB state  {}",
                 cell.fps().map_or("—".into(), |f| format!("{f:.2}")),
                 cell.sim_ms,
                 cell.frame_ms,
@@ -342,6 +358,7 @@ pub fn run(a: Table3Bench) -> anyhow::Result<()> {
                 cell.joints,
                 cell.upload_mb,
                 cell.upload_max_mb,
+                cell.state_mb,
                 cell.note
             );
             cells.push(cell);
@@ -614,18 +631,18 @@ fn write_outputs(
         writeln!(md, "\nPer configuration (medians over the timed frames; means for counts):\n");
     let _ = writeln!(
         md,
-        "| scene | configuration | sim ms | frame ms | render ms | M triangles | draws | joint updates | MB uploaded: mean / max | simulated trees | impostors | FLIP vs full detail | SSIM vs full detail | note |"
+        "| scene | configuration | sim ms | frame ms | render ms | M triangles | draws | joint updates | MB uploaded: mean / max | MB animation state | simulated trees | impostors | FLIP vs full detail | SSIM vs full detail | note |"
     );
-    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     let mut csv = String::from(
-        "scene,trees,configuration,fps,sim_ms,frame_ms,render_ms,triangles,draws,joint_updates,uploaded_mb,uploaded_max_mb,simulated,impostors,flip,ssim\n",
+        "scene,trees,configuration,fps,sim_ms,frame_ms,render_ms,triangles,draws,joint_updates,uploaded_mb,uploaded_max_mb,state_mb,simulated,impostors,flip,ssim\n",
     );
     for (name, trees, cells) in results {
         for (c, (label, ..)) in cells.iter().zip(CONFIGS) {
             let opt = |v: Option<f64>, p: usize| v.map_or("—".into(), |v| format!("{v:.p$}"));
             let _ = writeln!(
                 md,
-                "| {name} | {label} | {:.1} | {:.1} | {} | {:.2} | {:.0} | {:.0} | {:.2} / {:.2} | {} | {:.0} | {} | {} | {} |",
+                "| {name} | {label} | {:.1} | {:.1} | {} | {:.2} | {:.0} | {:.0} | {:.2} / {:.2} | {:.1} | {} | {:.0} | {} | {} | {} |",
                 c.sim_ms,
                 c.frame_ms,
                 opt(c.render_ms, 0),
@@ -634,6 +651,7 @@ fn write_outputs(
                 c.joints,
                 c.upload_mb,
                 c.upload_max_mb,
+                c.state_mb,
                 c.simulated,
                 c.impostors,
                 opt(c.flip, 3),
@@ -642,7 +660,7 @@ fn write_outputs(
             );
             let _ = writeln!(
                 csv,
-                "{name},{trees},{label},{},{:.3},{:.3},{},{:.0},{:.0},{:.0},{:.3},{:.3},{},{:.0},{},{}",
+                "{name},{trees},{label},{},{:.3},{:.3},{},{:.0},{:.0},{:.0},{:.3},{:.3},{:.3},{},{:.0},{},{}",
                 c.fps().map_or(String::new(), |f| format!("{f:.3}")),
                 c.sim_ms,
                 c.frame_ms,
@@ -652,6 +670,7 @@ fn write_outputs(
                 c.joints,
                 c.upload_mb,
                 c.upload_max_mb,
+                c.state_mb,
                 c.simulated,
                 c.impostors,
                 c.flip.map_or(String::new(), |s| format!("{s:.4}")),

@@ -100,8 +100,9 @@ fn wind_info_reads_swf_and_bts_alike() {
     assert!(!ok && text.contains("wind info"), "{text}");
 }
 
-/// `--max-memory` sets the forest's animation-state cap: below what the scene needs, the
-/// render is refused before the simulation is built, naming the cap and how to raise it.
+/// `--max-memory` sets the forest's animation-state cap: below what the scene needs (every
+/// joint of every tree, without the animation LOD), the render is refused before the
+/// simulation is built, naming the cap and how to raise it.
 #[test]
 fn render_refuses_a_forest_over_its_memory_cap() {
     let out = temp("capped");
@@ -111,6 +112,7 @@ fn render_refuses_a_forest_over_its_memory_cap() {
         "--scene",
         "small",
         "--no-wind-lod",
+        "--no-animation-lod",
         "--max-memory",
         "0.0001",
         "--out",
@@ -449,6 +451,8 @@ fn table3_with_all_lods_only_runs_that_configuration_and_its_image_error() {
     // Uploads: the largest frame's at least the mean.
     let up = |name| rows[0][col(name)].parse::<f64>().expect(name);
     assert!(up("uploaded_max_mb") >= up("uploaded_mb") && up("uploaded_mb") > 0.0, "{csv}");
+    // The animation state held: some, and far less than a GB for five trees.
+    assert!(up("state_mb") > 0.0 && up("state_mb") < 1000.0, "{csv}");
     // The others did not run, and say so.
     for r in &rows[1..] {
         assert!(r[tris] == "0" && r[flip].is_empty(), "{csv}");

@@ -330,7 +330,15 @@ impl Viewer {
     /// The scene's own camera path as the one to replay (when it has one).
     fn with_scene_path(mut self) -> Viewer {
         self.path = self.forest.spec.camera_path.clone();
+        self.prime();
         self
+    }
+
+    /// Build a first frame for the camera before the forest is stepped, so that the first
+    /// step already follows the animation LOD (a forest never drawn simulates every joint
+    /// of every simulation). The aspect is a guess; the next drawn frame sets it.
+    fn prime(&mut self) {
+        self.forest.frame(&self.orbit.camera(), 1.5, &mut self.frame);
     }
 
     /// Apply one change.
@@ -538,6 +546,7 @@ impl Viewer {
                     self.orbit = Orbit::from_camera(&self.forest.default_camera());
                     self.selected = None;
                     self.history.clear();
+                    self.prime();
                     Some(Finished::Scene)
                 }
                 Some(Err(e)) => {
