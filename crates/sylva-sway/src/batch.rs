@@ -151,22 +151,25 @@ impl Block {
     }
 
     /// Store `joints` joints. Joints beyond the memory held are new, at rest (angles and
-    /// rates 0, palettes the identity, blend weight 1 as a batch starts); joints within it
-    /// keep what they held (nothing reads a joint that was not simulated before it restarts).
+    /// rates 0, blend weight 1 as a batch starts; their palettes are computed by the step
+    /// that simulates them, and read through [`SwayBatch::palette`] only once simulated);
+    /// joints within it keep what they held (nothing reads a joint that was not simulated
+    /// before it restarts).
     fn store(&mut self, joints: usize, width: usize) {
-        let have = self.reserved(width);
-        if joints > have {
-            // Exactly what is needed, so that the bytes held are the bytes counted.
-            let more = (joints - have) * width;
-            self.theta.reserve_exact(2 * more);
-            self.rate.reserve_exact(2 * more);
-            self.weight.reserve_exact(more);
-            self.pal.reserve_exact(12 * more);
-            self.theta.resize(2 * joints * width, 0.0);
-            self.rate.resize(2 * joints * width, 0.0);
-            self.weight.resize(joints * width, 1.0);
-            let from = self.pal.len();
-            self.pal.extend((from..12 * joints * width).map(|k| IDENTITY[k / width % 12]));
+        if joints > self.reserved(width) {
+            // Exactly what is needed, so that the bytes held are the bytes counted, and
+            // zeroed by the allocator: a large block comes as fresh pages with no fill.
+            let grow = |v: &mut Vec<f32>, len: usize| {
+                let mut new = vec![0.0f32; len];
+                new[..v.len()].copy_from_slice(v);
+                *v = new;
+            };
+            let have = self.weight.len();
+            grow(&mut self.theta, 2 * joints * width);
+            grow(&mut self.rate, 2 * joints * width);
+            grow(&mut self.pal, 12 * joints * width);
+            grow(&mut self.weight, joints * width);
+            self.weight[have..].fill(1.0);
         }
         self.joints = joints;
     }
@@ -612,17 +615,18 @@ impl SwayBatch {
         }
     }
 
-    /// Joint `j`'s palette of instance `i`. A joint its group does not store rests on its
+    /// Joint `j`'s palette of instance `i`. A joint its group does not simulate rests on its
     /// parent and shows its nearest simulated ancestor's palette (see
-    /// [`SwayBatch::anchors`]); one never simulated shows the identity.
+    /// [`SwayBatch::anchors`]); before the first step every joint shows the identity.
     pub fn palette(&self, i: usize, j: usize) -> Palette {
         let g = i / LANES;
-        let shown = match self.slot(i, j) {
-            Some(_) => j,
-            None => match self.anchors(self.active(g)) {
+        let shown = if j < self.active(g) {
+            j
+        } else {
+            match self.anchors(self.active(g)) {
                 Some(a) if j < a.len() => a[j] as usize,
                 _ => return IDENTITY,
-            },
+            }
         };
         let Some((g, b, l)) = self.slot(i, shown) else { return IDENTITY };
         let w = self.width;

@@ -53,11 +53,15 @@ fn held_joints_cost_nothing_and_hold_no_memory() {
         }
     }
     assert_eq!(b.active(1), order.trunk, "dropped once at rest");
-    // At rest on its parent, a held joint's palette (computed in the last fading step) is
-    // its nearest simulated ancestor's: what a renderer shows for it from now on.
+    // At rest on its parent, a held joint's own palette (computed in the last fading step,
+    // still in the group's block) is its nearest simulated ancestor's: what a renderer shows
+    // for it from now on, and what `palette` returns for it.
     let anchors = b.anchors(order.trunk).expect("registered prefix").to_vec();
+    let (block, slot) = (b.group_palettes(1), b.palette_slot(LANES));
     for j in order.trunk..n {
-        let (own, shown) = (b.palette(LANES, j), b.palette(LANES, anchors[j] as usize));
+        let own = slot.read(block, j).expect("still stored");
+        let shown = b.palette(LANES, anchors[j] as usize);
+        assert_eq!(b.palette(LANES, j), shown);
         assert!((anchors[j] as usize) < order.trunk);
         let gap = own.iter().zip(&shown).map(|(a, c)| (a - c).abs()).fold(0.0, f32::max);
         assert!(gap < 1e-5, "joint {j}: palette {gap} off its anchor's");
