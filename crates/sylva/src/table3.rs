@@ -52,7 +52,8 @@ pub struct Table3Bench {
     #[arg(value_parser = crate::finite::<f32>, long)]
     lod_fraction: Option<f32>,
     /// Memory the animation state may take, GB (default: the scene's cap, at most three
-    /// quarters of the free memory): raise it to run the wind-field LOD off on C and D.
+    /// quarters of the free memory). Over it, lane groups are kept at coarser prefixes (a
+    /// note says how many); without the animation LOD the forest is refused.
     #[arg(value_parser = crate::finite::<f64>, long)]
     max_memory: Option<f64>,
     /// Run only the configuration with all LODs, and its image error against full detail
