@@ -110,6 +110,11 @@ fn figures(ui: &mut Ui, v: &Viewer) {
         row("trees drawn", format!("{} of {} ({} impostors)", s.drawn, s.trees, s.impostors));
         row("joints stepped", s.joints.to_string());
         row("uploaded", format!("{:.2} MB a frame", s.uploaded_bytes as f64 / 1e6));
+        let capped = match s.state_capped {
+            0 => String::new(),
+            n => format!(", {n} groups held coarser by the cap"),
+        };
+        row("animation state", format!("{:.1} MB{capped}", s.state_bytes as f64 / 1e6));
         row("simulated time", format!("{:.1} s", v.forest.time()));
     });
 }
