@@ -222,6 +222,37 @@ fn the_animation_lod_keeps_the_state_under_the_cap() {
         assert!(bytes <= cap_mb * 1_000_000, "frame {k}: {bytes} bytes over {cap_mb} MB");
     }
     assert!(capped.iter().any(|h| h.1 > 0), "the cap held some group back: {capped:?}");
+    // Which groups the cap holds back is decided in a fixed order: the same frames with one
+    // thread or two.
+    let frames = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
+        pool.install(|| {
+            let mut forest = Forest::new(&spec).expect("forest");
+            let cam = forest.default_camera();
+            let mut f = FrameData::default();
+            for _ in 0..6 {
+                forest.step(1.0 / 30.0);
+                forest.frame(&cam, 4.0 / 3.0, &mut f);
+            }
+            (f.palettes.iter().map(|v| v.to_bits()).collect::<Vec<_>>(), f.stats.state_capped)
+        })
+    };
+    let (one, two) = (frames(1), frames(2));
+    assert!(one.1 > 0 && one == two, "capped frames differ between 1 and 2 threads");
+    // The animation LOD switched off while running asks for every joint of every tree, more
+    // than the cap: the groups stay coarser and the state under the cap.
+    let mut forest = Forest::new(&spec).expect("forest");
+    let cam = forest.default_camera();
+    let mut f = FrameData::default();
+    forest.frame(&cam, 4.0 / 3.0, &mut f);
+    forest.set_lod(sylva_forest::LodSettings { animation: false, ..forest.lod() });
+    for k in 0..4 {
+        forest.step(1.0 / 30.0);
+        forest.frame(&cam, 4.0 / 3.0, &mut f);
+        let bytes = f.stats.state_bytes;
+        assert!(bytes <= cap_mb * 1_000_000, "frame {k}: {bytes} bytes over {cap_mb} MB");
+        assert!(f.stats.state_capped > 0, "frame {k}: every joint would not fit");
+    }
 }
 
 /// One wind type for scenes and commands: a preset, a steady speed or a wind file, each

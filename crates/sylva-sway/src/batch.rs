@@ -41,10 +41,11 @@
 //!
 //! Storage follows the animation LOD: each group stores the state of the joints it simulates
 //! (its prefix, with those still fading out) and no others, allocated when its prefix grows
-//! and given back when it shrinks. Joints not stored are at rest; a joint switched back on
-//! restarts at its equilibrium, so nothing that was dropped is ever read. A forest of far
-//! trees that simulate their trunks holds the trunks' state, not the crowns'
-//! ([`SwayBatch::stored_bytes`]). Steps that change no prefix allocate nothing.
+//! and given back [`TRIM_STEPS`] steps after it shrinks. Joints not stored are at rest; a
+//! joint switched back on restarts at its equilibrium, so nothing that was dropped is ever
+//! read. A forest of far trees that simulate their trunks holds the trunks' state, not the
+//! crowns' ([`SwayBatch::stored_bytes`]). Once prefixes have stayed put for [`TRIM_STEPS`]
+//! steps, a step allocates nothing.
 
 use std::f32::consts::PI;
 
