@@ -1,7 +1,8 @@
 //! Property: any scene with every field inside its documented range builds a forest (or is
 //! refused with the documented animation-state cap), and its frames are well formed: every
-//! drawn instance lies in a bucket, every palette value a drawn tree reads is finite, and
-//! no more trees are drawn than exist. The scene goes through its TOML text, as a user's
+//! drawn instance lies in a bucket, every palette value a drawn tree reads is finite, no
+//! more trees are drawn than exist, and the animation state held stays under the cap
+//! (drawn between 1 MB and 1 GB). The scene goes through its TOML text, as a user's
 //! file would.
 //!
 //! proptest draws the scenes from a fixed seed and shrinks a failure. Scenes stay small (up
@@ -23,8 +24,9 @@ fn scene() -> impl Strategy<Value = SceneSpec> {
         (0.0f32..=0.9, 0.0f32..=30.0, (0.5f32..=3.5).prop_map(|e| 10f32.powf(e))),
         (0usize..4, -720.0f32..=720.0, (0.0f32..=6.3).prop_map(|e| 10f32.powf(e) as usize + 1)),
         (any::<[bool; 3]>(), (-1.0f32..=2.0).prop_map(|e| 10f32.powf(e)), 1u32..=6),
+        (0.0f32..=3.0).prop_map(|e| 10f32.powf(e) as usize),
     )
-        .prop_map(|(basic, mix, ground, wind, lod)| {
+        .prop_map(|(basic, mix, ground, wind, lod, cap_mb)| {
             let mut s = SceneSpec::builtin("small").expect("small scene");
             (s.seed, s.trees, s.spacing) = basic;
             s.species = mix
@@ -38,6 +40,7 @@ fn scene() -> impl Strategy<Value = SceneSpec> {
             (s.wind_direction_deg, s.sim_joint_budget) = (wind.1, wind.2);
             [s.lod.geometry, s.lod.animation, s.lod.wind] = lod.0;
             (s.lod.fraction, s.lod.far_level) = (lod.1, lod.2);
+            s.max_state_mb = cap_mb;
             s.camera = None;
             s.camera_path.clear();
             s
@@ -63,6 +66,13 @@ fn any_scene_inside_the_ranges_builds_and_draws_well_formed_frames() {
             forest.frame(&camera, 16.0 / 9.0, &mut frame);
         }
         prop_assert!(frame.stats.drawn <= spec.trees);
+        // The animation state never goes past the cap, however small.
+        prop_assert!(
+            frame.stats.state_bytes <= spec.max_state_mb * 1_000_000,
+            "{} bytes of state over {} MB",
+            frame.stats.state_bytes,
+            spec.max_state_mb
+        );
         prop_assert_eq!(
             frame.buckets.iter().map(|b| b.count as usize).sum::<usize>(),
             frame.instances.len()
