@@ -567,13 +567,14 @@ impl Forest {
         // species: every joint of every simulation, and the trunks alone. A batch stores
         // what it simulates, so with the animation LOD the trunks are what must fit (far
         // trees step them and nothing else); without it, every joint. Refused before any is
-        // allocated.
+        // allocated. Joints go in LOD order: each level's joints a prefix, the trunk first.
+        let orders: Vec<LodOrder> = models.iter().map(lod_order).collect();
         let (full, floor): (Vec<usize>, Vec<usize>) = models
             .iter()
+            .zip(&orders)
             .enumerate()
-            .map(|(si, m)| {
-                let joints = m.tree.skeleton.len();
-                let trunk = lod_order(m).trunk;
+            .map(|(si, (m, order))| {
+                let (joints, trunk) = (m.tree.skeleton.len(), order.trunk);
                 let sims = simulations(members_of(si), joints);
                 (SwayBatch::state_bytes(sims, joints), SwayBatch::state_bytes(sims, trunk))
             })
@@ -593,9 +594,7 @@ impl Forest {
             floor[si]
                 + ((limit - all_floor) as f64 * share).min((full[si] - floor[si]) as f64) as usize
         };
-        for (si, original) in models.into_iter().enumerate() {
-            // Joints in LOD order: each level's joints a prefix, the trunk first.
-            let order = lod_order(&original);
+        for (si, (original, order)) in models.into_iter().zip(orders).enumerate() {
             let model = original.reordered(&order.order).map_err(|e| ForestError::Species {
                 name: spec.species[si].name.clone(),
                 message: e.to_string(),
