@@ -870,24 +870,9 @@ impl Forest {
         let Some(&(p, g)) = self.trees.get(t) else { return Vec::new() };
         let s = &self.species[p.species as usize];
         let n = s.batch.species().len();
-        // Joints beyond what the lane's group simulates show their anchors' palettes.
+        // Joints beyond what the lane simulates show their anchors' palettes.
         let lane = s.lane_of[g as usize] as usize;
-        let simulated = s.batch.active(lane / LANES);
-        let anchors = s.batch.anchors(simulated);
-        joints
-            .iter()
-            .map(|&j| {
-                if j < n {
-                    let shown = match anchors {
-                        Some(a) if j >= simulated => a[j] as usize,
-                        _ => j,
-                    };
-                    s.batch.palette(lane, shown)
-                } else {
-                    IDENTITY
-                }
-            })
-            .collect()
+        joints.iter().map(|&j| if j < n { s.batch.palette(lane, j) } else { IDENTITY }).collect()
     }
 
     /// Replace the wind (e.g. one [`wind_field`] synthesised in the background for a changed
@@ -1071,6 +1056,11 @@ impl Forest {
                     held += s.batch.prefix_for(w).saturating_sub(reserved) * per_joint;
                 }
                 s.batch.set_active(k, w);
+                // Each lane its own prefix within the group's: a lane group holding one near
+                // tree among far ones steps the near tree's crown in its lane alone.
+                for i in k * LANES..want.len().min(k * LANES + LANES) {
+                    s.batch.set_lane_active(i, if animation { want[i] as usize } else { all });
+                }
                 // Joints switched off fade out where a tree shows them; where none does, they
                 // go at once.
                 let end = shown.len().min(k * LANES + LANES);
@@ -1275,13 +1265,16 @@ impl Forest {
                     }
                     continue;
                 }
-                // Joints drawn beyond what the group simulates (the animation LOD by size)
-                // rest on their parents: each shows its nearest simulated ancestor's palette.
-                let simulated = s.batch.active(k);
+                // Joints drawn beyond what a lane simulates (the animation LOD by size) rest
+                // on their parents: each shows its nearest simulated ancestor's palette.
+                let first = k * LANES;
+                let simulated_in = |l: usize| s.batch.simulated(first + l);
+                let simulated = (0..used).map(simulated_in).min().unwrap_or(0);
+                let uniform = (0..used).all(|l| simulated_in(l) == simulated);
                 let anchors = if joints > simulated { s.batch.anchors(simulated) } else { None };
                 let src = |j: usize| anchors.map_or(j, |a| a[j] as usize);
                 let own: usize = need.iter().map(|&m| (m as usize).min(n)).sum();
-                if own < joints * used {
+                if own < joints * used || !uniform {
                     // Prefixes differ: each simulation's own, in a row. A gather (a
                     // transpose of lanes and elements), in tiles of joints small enough to
                     // stay in cache while each lane's run is written out in order.
@@ -1291,16 +1284,23 @@ impl Forest {
                         at += 12 * (m as usize).min(n);
                     }
                     out.palettes.resize(at, 0.0);
+                    // Each lane's own anchors where its simulated prefix is its own.
+                    let mut lane_src = [None; LANES];
+                    for (l, a) in lane_src.iter_mut().enumerate().take(used) {
+                        let sim = simulated_in(l);
+                        *a = if joints > sim { s.batch.anchors(sim) } else { None };
+                    }
                     const TILE: usize = 32;
-                    for first in (0..joints).step_by(TILE) {
+                    for start in (0..joints).step_by(TILE) {
                         for (l, (&m, slot)) in need.iter().zip(slots.iter()).enumerate() {
-                            let end = (m as usize).min(n).min(first + TILE);
-                            if end <= first {
+                            let end = (m as usize).min(n).min(start + TILE);
+                            if end <= start {
                                 continue;
                             }
-                            let run = slot.base as usize + 12 * first;
+                            let run = slot.base as usize + 12 * start;
                             let dst = out.palettes[run..].chunks_exact_mut(12);
-                            for (j, v) in (first..end).zip(dst) {
+                            let src = |j: usize| lane_src[l].map_or(j, |a| a[j] as usize);
+                            for (j, v) in (start..end).zip(dst) {
                                 let pal = &block[src(j) * joint..][..joint];
                                 for (e, x) in v.iter_mut().enumerate() {
                                     *x = pal[e * width + l];

@@ -452,9 +452,23 @@ fn near_tree_among_far_ones(count: usize) {
     cam.eye = [p0[0] + 12.0 * dx / len, p0[1] + 12.0 * dy / len, p0[2] + 5.0];
     cam.target = [centre[0], centre[1], p0[2] + 5.0];
     let mut f = FrameData::default();
-    for _ in 0..3 {
+    // A frame first (what to simulate), then a second of steps: the far trees' crowns,
+    // simulated before any frame, fade out in their lanes (half a second).
+    forest.frame(&cam, 4.0 / 3.0, &mut f);
+    for _ in 0..30 {
         forest.step(1.0 / 30.0);
         forest.frame(&cam, 4.0 / 3.0, &mut f);
+    }
+    // Stepped, in the group of 16 lanes: the whole skeleton in the lanes of the trees at
+    // full detail (tree 0 and the next nearest) alone, the trunk in the others' — not every
+    // lane to tree 0's prefix, `count` whole skeletons. (Eight lanes with three trees at
+    // full detail cost less stepped together: `SwayBatch::step`.)
+    let all = forest.species[0].joints_drawn(0);
+    let stepped = f.stats.joints;
+    if count > 8 {
+        assert!(stepped < 3 * all, "{stepped} joint updates ({all} a tree)");
+    } else {
+        assert_eq!(stepped, count * all);
     }
     // Finest level each drawn tree reads, by its instance's trunk position.
     let sp = &forest.species[0];

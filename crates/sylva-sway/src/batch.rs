@@ -26,6 +26,15 @@
 //! are dropped once at rest. A dropped joint rests on its parent, so it shows its nearest
 //! simulated ancestor's palette ([`SwayBatch::anchors`]).
 //!
+//! Each instance may also ask for its own prefix within its group's
+//! ([`SwayBatch::set_lane_active`]): one tree near the camera among far ones in a group. Its
+//! lane-mates fade out the joints beyond their own and are then left at rest there, and the
+//! step picks, per group, which lanes to step alone (at width 1, on a copy of the lane's
+//! state) and which together to the longest prefix among them: the cheapest split by the
+//! measured cost of a joint at each width (a joint of a 16-lane group costs about 4.4 of
+//! one lane alone on AVX-512). A group of 16 far trunks and one near crown then costs one
+//! crown and 16 trunks, not 16 crowns.
+//!
 //! Layout: instances are gathered in groups of [`LANES`]; within a group every array is
 //! (joint, …, lane), so each joint is computed for all lanes of a group at once and the
 //! compiler vectorises across instances (AVX-512, AVX2 or the baseline, picked at run
@@ -224,13 +233,22 @@ pub struct SwayBatch {
     /// `keep` to `active` are still computed, frozen, their displayed rotation blending to
     /// rest; once every one is at rest the group drops them.
     keep: Vec<u32>,
+    /// Per instance: the prefix it asks for itself ([`SwayBatch::set_lane_active`]; every
+    /// joint unless set). Within its group's prefix, an instance's joints beyond it fade out.
+    want: Vec<u32>,
+    /// Per instance: joints beyond this are at rest in its lane (blend weight 0), so a step
+    /// may leave them out for this lane.
+    live: Vec<u32>,
+    /// Per instance: the joints the last step computed for it (its palettes beyond are not
+    /// current; it shows them at their anchors).
+    stepped: Vec<u32>,
     /// Registered prefixes and, per joint of each, the lumped static drag [D, c] with
     /// `c = P − D o` (see the module documentation), of the wood and of the leaves.
     lumped: Vec<(usize, Vec<Lump>)>,
     /// Per registered prefix, per joint: the joint whose palette it shows when the prefix is
     /// simulated (itself within the prefix, else its nearest simulated ancestor).
     anchors: Vec<(usize, Vec<u32>)>,
-    /// Joint updates (joints × instances) of the last step.
+    /// Joint updates (joints computed, summed over instances) of the last step.
     updates: usize,
     transitions: Vec<Transition>,
     /// Per joint, aerodynamic damping rate per unit wind speed × dt (see `loads`).
@@ -332,6 +350,9 @@ impl SwayBatch {
             active: vec![n as u32; groups],
             fresh: vec![n as u32; instances],
             keep: vec![n as u32; groups],
+            want: vec![n as u32; instances],
+            live: vec![n as u32; instances],
+            stepped: vec![n as u32; instances],
             lumped: Vec::new(),
             anchors: Vec::new(),
             updates: 0,
@@ -475,8 +496,7 @@ impl SwayBatch {
     /// The prefix [`SwayBatch::set_active`] simulates when asked for `joints` joints: the
     /// smallest registered prefix that holds them, or every joint.
     pub fn prefix_for(&self, joints: usize) -> usize {
-        let n = self.species.len();
-        self.lumped.iter().map(|(q, _)| *q).filter(|&q| q >= joints).min().unwrap_or(n).min(n)
+        round_up(&self.lumped, self.species.len(), joints)
     }
 
     /// Drop at once the joints group `group` is fading out (see
@@ -485,6 +505,29 @@ impl SwayBatch {
         if let Some(&k) = self.keep.get(group) {
             self.active[group] = self.active[group].min(k);
         }
+    }
+
+    /// Simulate only the first `joints` joints of instance `i` (rounded up as
+    /// [`SwayBatch::set_active`] rounds), within its group's prefix: its joints beyond fade
+    /// out (computed, frozen, blending to rest) and are then left out of its lane. A group
+    /// whose lanes want very different prefixes — one tree near the camera among far ones —
+    /// then steps the longest of them in that lane alone, and the rest of the group to the
+    /// prefix its other lanes need, rather than every lane to the longest (see
+    /// [`SwayBatch::step`]). Every joint unless set; out-of-range indices are ignored.
+    pub fn set_lane_active(&mut self, i: usize, joints: usize) {
+        let p = self.prefix_for(joints) as u32;
+        if let Some(w) = self.want.get_mut(i) {
+            *w = p;
+        }
+    }
+
+    /// Joints of instance `i` the last step computed: its group's prefix, or less where its
+    /// own prefix ([`SwayBatch::set_lane_active`]) let the step leave the rest out of its
+    /// lane. Joints beyond rest on their parents: read them at their
+    /// [`anchors`](SwayBatch::anchors), as [`SwayBatch::palette`] does.
+    pub fn simulated(&self, i: usize) -> usize {
+        let a = self.active(i / LANES);
+        self.stepped.get(i).map_or(0, |&s| (s as usize).min(a))
     }
 
     /// Bring instance `i`'s record of its current joints in line with its group's prefix:
@@ -503,6 +546,8 @@ impl SwayBatch {
             }
         }
         self.fresh[i] = p as u32;
+        // Joints not current are at rest (reset to weight 0 when simulated again).
+        self.live[i] = self.live[i].min(p as u32);
     }
 
     /// Exchange the whole animation state of instances `a` and `b` (angles, rates, blend
@@ -546,6 +591,8 @@ impl SwayBatch {
             }
         }
         self.fresh.swap(a, b);
+        self.live.swap(a, b);
+        self.want.swap(a, b);
         self.budget.swap(a, b);
     }
 
@@ -554,7 +601,8 @@ impl SwayBatch {
         self.active.get(group).copied().unwrap_or(0) as usize
     }
 
-    /// Joint updates (joints stepped × instances) of the last step.
+    /// Joint updates of the last step: per instance the joints computed for it (its group's
+    /// prefix, or its own where it was stepped alone), summed.
     pub fn joint_updates(&self) -> usize {
         self.updates
     }
@@ -620,11 +668,11 @@ impl SwayBatch {
     /// parent and shows its nearest simulated ancestor's palette (see
     /// [`SwayBatch::anchors`]); before the first step every joint shows the identity.
     pub fn palette(&self, i: usize, j: usize) -> Palette {
-        let g = i / LANES;
-        let shown = if j < self.active(g) {
+        let simulated = self.simulated(i);
+        let shown = if j < simulated {
             j
         } else {
-            match self.anchors(self.active(g)) {
+            match self.anchors(simulated) {
                 Some(a) if j < a.len() => a[j] as usize,
                 _ => return IDENTITY,
             }
@@ -678,27 +726,31 @@ impl SwayBatch {
             self.dt = dt;
         }
         let blend = dt / sp.params.blend_time;
-        let ni = self.instances;
-        self.updates = (0..self.instances.div_ceil(LANES))
-            .map(|g| self.active[g] as usize * LANES.min(ni - g * LANES))
-            .sum();
         match self.width {
             1 => self.step_lanes::<1>(blend, wind),
             4 => self.step_lanes::<4>(blend, wind),
             8 => self.step_lanes::<8>(blend, wind),
             _ => self.step_lanes::<LANES>(blend, wind),
         }
+        self.updates = self.stepped.iter().map(|&s| s as usize).sum();
     }
 
     /// The step's groups, `W` (= [`SwayBatch::width`]) lanes each.
     fn step_lanes<const W: usize>(&mut self, blend: f32, wind: &[[f32; 3]]) {
         let sp = &self.species;
-        let (tr, aero, budget, ni) =
-            (&self.transitions, &self.aero_dt, &self.budget, self.instances);
+        let (tr, aero, budget, want, ni) =
+            (&self.transitions, &self.aero_dt, &self.budget, &self.want, self.instances);
         let (keep, lumped) = (&self.keep, &self.lumped);
-        self.blocks.par_iter_mut().zip(self.active.par_iter_mut()).enumerate().for_each(
-            |(g, (block, active))| {
-                let Block { theta, rate, weight, pal: lanes, .. } = block;
+        let held = |p: usize| lumped.iter().find(|(q, _)| *q == p).map(|(_, v)| v.as_slice());
+        let n = sp.len();
+        let lanes_of = self.live.par_chunks_mut(LANES).zip(self.stepped.par_chunks_mut(LANES));
+        self.blocks
+            .par_iter_mut()
+            .zip(self.active.par_iter_mut())
+            .zip(lanes_of)
+            .enumerate()
+            .for_each(|(g, ((block, active), (live, stepped)))| {
+                let Block { theta, rate, weight, pal, .. } = block;
                 let mut u = [ZERO; 3];
                 let mut bud = [0u32; LANES];
                 let used = W.min(ni - g * LANES);
@@ -711,40 +763,173 @@ impl SwayBatch {
                 }
                 let p = *active as usize;
                 let k = (keep[g] as usize).min(p);
-                let held = lumped.iter().find(|(q, _)| *q == p).map(|(_, v)| v.as_slice());
-                // The load accumulators: this thread's scratch, all zero between steps
-                // (the kernel clears each joint's once it has used them).
-                LOADS.with_borrow_mut(|scratch| {
-                    if scratch.len() < 6 * p * W {
-                        scratch.resize(6 * p * W, 0.0);
+                // Per lane: the prefix it keeps switched on, and the one it must be stepped
+                // to (its joints beyond are at rest and stay so unstepped).
+                let mut on = [k as u32; LANES];
+                let mut need = [0usize; LANES];
+                for l in 0..used {
+                    on[l] = on[l].min(want[g * LANES + l]);
+                    need[l] = (live[l].max(on[l]) as usize).min(p);
+                }
+                let (head, solo) = plan_lanes(&need[..used], W);
+                SCRATCH.with_borrow_mut(|(loads, copies)| {
+                    // Lanes stepped alone, each as a group of one (the kernel at width 1, the
+                    // same operations as a batch of that instance alone): a copy of its
+                    // state in a row, stepped, and written back after the group's step.
+                    copies.clear();
+                    for l in (0..used).filter(|&l| solo >> l & 1 == 1) {
+                        let r = need[l];
+                        let at = copies.len();
+                        copies.resize(at + 17 * r, 0.0);
+                        let (th, rest) = copies[at..].split_at_mut(2 * r);
+                        let (ra, rest) = rest.split_at_mut(2 * r);
+                        let (wt, pl) = rest.split_at_mut(r);
+                        lane_copy(theta, th, W, l, true);
+                        lane_copy(rate, ra, W, l, true);
+                        lane_copy(weight, wt, W, l, true);
+                        lane_copy(pal, pl, W, l, true);
+                        if loads.len() < 6 * r {
+                            loads.resize(6 * r, 0.0);
+                        }
+                        let mut one = Group::<1> {
+                            theta: th.as_chunks_mut::<1>().0.as_chunks_mut::<2>().0,
+                            rate: ra.as_chunks_mut::<1>().0.as_chunks_mut::<2>().0,
+                            weight: wt.as_chunks_mut::<1>().0,
+                            loads: loads[..6 * r].as_chunks_mut::<1>().0.as_chunks_mut::<6>().0,
+                            lanes: pl.as_chunks_mut::<1>().0.as_chunks_mut::<12>().0,
+                            active: r,
+                            on: [on[l]; LANES],
+                            held: held(r),
+                        };
+                        let mut u1 = [ZERO; 3];
+                        for c in 0..3 {
+                            u1[c][0] = u[c][l];
+                        }
+                        let mut b1 = [0u32; LANES];
+                        b1[0] = bud[l];
+                        step_group::<1>(sp, tr, aero, blend, &b1, &u1, &mut one);
                     }
-                    let mut st = Group::<W> {
-                        theta: theta.as_chunks_mut::<W>().0.as_chunks_mut::<2>().0,
-                        rate: rate.as_chunks_mut::<W>().0.as_chunks_mut::<2>().0,
-                        weight: weight.as_chunks_mut::<W>().0,
-                        loads: scratch[..6 * p * W].as_chunks_mut::<W>().0.as_chunks_mut::<6>().0,
-                        lanes: lanes.as_chunks_mut::<W>().0.as_chunks_mut::<12>().0,
-                        active: p,
-                        keep: k,
-                        held,
-                    };
-                    step_group::<W>(sp, tr, aero, blend, &bud, &u, &mut st);
-                    // Joints fading out are dropped once every lane shows them at rest.
-                    let resting =
-                        st.weight[k..p].iter().all(|w| w[..used].iter().all(|&x| x == 0.0));
-                    if k < p && resting {
-                        *active = k as u32;
+                    // The rest of the group, every lane to `head` (the lanes stepped alone
+                    // too, overwritten below).
+                    if head > 0 {
+                        if loads.len() < 6 * head * W {
+                            loads.resize(6 * head * W, 0.0);
+                        }
+                        let mut st = Group::<W> {
+                            theta: theta.as_chunks_mut::<W>().0.as_chunks_mut::<2>().0,
+                            rate: rate.as_chunks_mut::<W>().0.as_chunks_mut::<2>().0,
+                            weight: weight.as_chunks_mut::<W>().0,
+                            loads: loads[..6 * head * W]
+                                .as_chunks_mut::<W>()
+                                .0
+                                .as_chunks_mut::<6>()
+                                .0,
+                            lanes: pal.as_chunks_mut::<W>().0.as_chunks_mut::<12>().0,
+                            active: head,
+                            on,
+                            held: held(head),
+                        };
+                        step_group::<W>(sp, tr, aero, blend, &bud, &u, &mut st);
+                    }
+                    let mut at = 0;
+                    for l in (0..used).filter(|&l| solo >> l & 1 == 1) {
+                        let r = need[l];
+                        let (th, rest) = copies[at..].split_at_mut(2 * r);
+                        let (ra, rest) = rest.split_at_mut(2 * r);
+                        let (wt, rest) = rest.split_at_mut(r);
+                        lane_copy(theta, th, W, l, false);
+                        lane_copy(rate, ra, W, l, false);
+                        lane_copy(weight, wt, W, l, false);
+                        lane_copy(pal, &mut rest[..12 * r], W, l, false);
+                        at += 17 * r;
                     }
                 });
-            },
-        );
+                // What each lane now has live: its switched-on prefix, and the joints beyond
+                // it still fading out (the last one not yet at rest).
+                for l in 0..used {
+                    stepped[l] = if solo >> l & 1 == 1 { need[l] } else { head } as u32;
+                    let (kl, was) = (on[l] as usize, live[l] as usize);
+                    let fading = (kl..was.min(need[l])).rev().find(|&j| weight[j * W + l] != 0.0);
+                    // Rounded up to a registered prefix, as every prefix a step takes is.
+                    live[l] = fading.map_or(kl, |j| round_up(lumped, n, j + 1)).max(kl) as u32;
+                }
+                // Joints fading out are dropped once every lane shows them at rest.
+                if k < p && live.iter().all(|&x| x as usize <= k) {
+                    *active = k as u32;
+                }
+            });
     }
 }
 
+/// Copy one lane of a lane-interleaved array (values per joint, `width` lanes inner) to or
+/// from `row` (the same values per joint, one lane), as long as `row`: `to_row` true reads
+/// the lanes.
+#[inline]
+fn lane_copy(lanes: &mut [f32], row: &mut [f32], width: usize, lane: usize, to_row: bool) {
+    for (v, x) in row.iter_mut().enumerate() {
+        let y = &mut lanes[v * width + lane];
+        if to_row {
+            *x = *y;
+        } else {
+            *y = *x;
+        }
+    }
+}
+
+/// The smallest registered prefix holding `joints` joints (every joint, `n`, if none does).
+fn round_up(lumped: &[(usize, Vec<Lump>)], n: usize, joints: usize) -> usize {
+    lumped.iter().map(|(q, _)| *q).filter(|&q| q >= joints).min().unwrap_or(n).min(n)
+}
+
+/// Relative cost of one joint of a group step at `width` lanes, against one lane alone
+/// (the narrow-batch figures of docs/benchmarks.md: a black tupelo steps 1.3, 3.9, 4.2 and
+/// 5.7 ms at 1, 4, 8 and 16 lanes on AVX-512) — what a wide group saves is memory traffic
+/// more than arithmetic.
+fn width_cost(width: usize) -> f32 {
+    match width {
+        0..=1 => 1.0,
+        2..=4 => 3.0,
+        5..=8 => 3.2,
+        _ => 4.4,
+    }
+}
+
+/// A lane stepped alone costs one lane's step and the copies of its state in and out: in
+/// scene D's forest a black tupelo's whole skeleton took 2.2 ms stepped alone against the
+/// 1.3 ms of the same step in a batch of its own (copies, and a colder cache).
+const ALONE_COST: f32 = 1.7;
+
+/// Which lanes of a group to step alone: (the prefix the group steps every lane to, a bit
+/// per lane stepped alone). From the joints each lane must be stepped to, the cheapest of
+/// stepping the `m` longest alone and the rest together, for every `m` (none alone: the
+/// longest, as a group always stepped).
+fn plan_lanes(need: &[usize], width: usize) -> (usize, u32) {
+    let mut order: [usize; LANES] = std::array::from_fn(|l| l);
+    let order = &mut order[..need.len()];
+    order.sort_by_key(|&l| std::cmp::Reverse(need[l]));
+    let together = width_cost(width);
+    let (mut best, mut best_m, mut alone) = (f32::INFINITY, 0, 0.0);
+    for m in 0..=order.len() {
+        let head = order.get(m).map_or(0, |&l| need[l]);
+        let cost = together * head as f32 + alone;
+        if cost < best {
+            (best, best_m) = (cost, m);
+        }
+        if let Some(&l) = order.get(m) {
+            alone += ALONE_COST * need[l] as f32;
+        }
+    }
+    let head = order.get(best_m).map_or(0, |&l| need[l]);
+    (head, order[..best_m].iter().fold(0, |b, &l| b | 1 << l))
+}
+
+type Scratch = (Vec<f32>, Vec<f32>);
+
 thread_local! {
-    /// Per thread: the load accumulators of the group it steps, `6 · joints · W` values,
-    /// zero between groups.
-    static LOADS: std::cell::RefCell<Vec<f32>> = const { std::cell::RefCell::new(Vec::new()) };
+    /// Per thread: the load accumulators of the group it steps (`6 · joints · W` values,
+    /// zero between groups), and the states of the lanes it steps alone.
+    static SCRATCH: std::cell::RefCell<Scratch> =
+        const { std::cell::RefCell::new((Vec::new(), Vec::new())) };
 }
 
 /// One group's state, `W` lanes inner.
@@ -756,8 +941,9 @@ struct Group<'a, const W: usize> {
     lanes: &'a mut [[[f32; W]; 12]],
     /// Joints simulated (a prefix).
     active: usize,
-    /// Joints switched on (a prefix of the simulated ones; those beyond are fading out).
-    keep: usize,
+    /// Per lane: joints switched on (a prefix of the simulated ones; those beyond are
+    /// fading out).
+    on: [u32; LANES],
     /// Lumped static drag of the held joints, per simulated joint (none: all simulated).
     held: Option<&'a [Lump]>,
 }
@@ -865,7 +1051,6 @@ simd_kernel! {
         for i in 0..n {
             let t = &tr[i];
             let rank = sp.rank[i];
-            let on = i < st.keep;
             let [ax, ay] = sp.axes[i];
             let li = &st.loads[i];
             let (th, ra, w) = (&mut st.theta[i], &mut st.rate[i], &mut st.weight[i]);
@@ -899,7 +1084,7 @@ simd_kernel! {
                 eqs[1][l] *= f[l];
             }
             for l in 0..W {
-                let active = on && rank < bud[l];
+                let active = i < st.on[l] as usize && rank < bud[l];
                 let restart = active && w[l] == 0.0;
                 for a in 0..2 {
                     let eq = eqs[a][l];

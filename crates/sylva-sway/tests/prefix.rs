@@ -190,3 +190,69 @@ fn an_instance_moved_to_another_lane_carries_on_as_it_was() {
     }
     assert_eq!(moved.joint_updates(), LANES * n + LANES * order.trunk);
 }
+
+/// One tree near the camera among fifteen far ones in a lane group: each lane simulates its
+/// own prefix. The far lanes fade their crowns out (no jump), then the group steps their
+/// trunks together and the near tree's whole skeleton in its lane alone — which moves it
+/// bit for bit as a batch of that one tree does — rather than all sixteen to the longest
+/// prefix. A far lane switched back on blends its crown in from rest.
+#[test]
+fn a_near_tree_among_far_ones_steps_its_crown_alone() {
+    let (model, order) = aspen();
+    let sp = SwaySpecies::new(&model.tree.skeleton, SwayParams::default()).expect("species");
+    let all = sp.len();
+    let near = 3;
+    let wind: Vec<[f32; 3]> =
+        (0..LANES).map(|i| [3.0 + 0.25 * i as f32, 0.4 - 0.05 * i as f32, 0.1]).collect();
+    let mut group = SwayBatch::new(sp.clone(), LANES);
+    let mut alone = SwayBatch::new(sp, 1);
+    for b in [&mut group, &mut alone] {
+        b.set_prefixes(&order.prefix);
+        b.set_prefixes(&[order.prefix.as_slice(), &[order.trunk]].concat());
+    }
+    let trunk = group.prefix_for(order.trunk);
+    assert!(trunk < all / 10, "the trunk ({trunk} joints) is a small part of {all}");
+    for i in (0..LANES).filter(|&i| i != near) {
+        group.set_lane_active(i, order.trunk);
+    }
+    let dt = 1.0 / 30.0;
+    let blend_steps = (SwayParams::default().blend_time / dt).ceil() as usize;
+    let top = all - 1;
+    let mut last_weight = 1.0;
+    for step in 0..3 * blend_steps {
+        group.step(dt, &wind);
+        alone.step(dt, &wind[near..=near]);
+        // The near tree, wide or alone, moves exactly as a batch of it alone.
+        assert_eq!(group.palette(near, top), alone.palette(0, top), "step {step}");
+        // A far lane's crown fades out: it never jumps by more than a blend step.
+        let w = group.weight(0, top);
+        assert!(w <= last_weight && last_weight - w <= dt / 0.5 + 1e-6, "step {step}: {w}");
+        last_weight = w;
+        if step < blend_steps - 1 {
+            // Still fading: every lane is stepped to the whole skeleton.
+            assert_eq!(group.joint_updates(), LANES * all, "step {step}");
+        }
+    }
+    assert_eq!(last_weight, 0.0, "the far crowns are at rest");
+    // Faded: the near tree's joints in its lane alone, the others' trunks.
+    assert_eq!(group.joint_updates(), all + (LANES - 1) * trunk);
+    assert_eq!(group.simulated(near), all);
+    for j in 0..all {
+        assert_eq!(group.palette(near, j), alone.palette(0, j), "joint {j}");
+    }
+    // A far lane shows the joints beyond its trunk at their anchors (it rests there).
+    let anchors = group.anchors(trunk).expect("registered");
+    assert_eq!(group.simulated(0), trunk);
+    for j in [trunk, all / 2, top] {
+        assert_eq!(group.palette(0, j), group.palette(0, anchors[j] as usize), "joint {j}");
+    }
+    // The far lanes' trunks still move.
+    assert_ne!(group.palette(0, trunk - 1), group.palette(1, trunk - 1));
+    // A far lane switched back on restarts its crown at rest and blends it in.
+    group.set_lane_active(7, all);
+    group.step(dt, &wind);
+    assert_eq!(group.simulated(7), all);
+    let w = group.weight(7, top);
+    assert!(w > 0.0 && w <= dt / 0.5 + 1e-6, "blending in: {w}");
+    assert_eq!(group.joint_updates(), 2 * all + (LANES - 2) * trunk, "two lanes alone");
+}
