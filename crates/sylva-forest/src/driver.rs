@@ -1270,7 +1270,9 @@ impl Forest {
                 let first = k * LANES;
                 let simulated_in = |l: usize| s.batch.simulated(first + l);
                 let simulated = (0..used).map(simulated_in).min().unwrap_or(0);
-                let uniform = (0..used).all(|l| simulated_in(l) == simulated);
+                // Lanes stepped alone keep their palettes in a row of their own.
+                let alone = |l: usize| s.batch.lane_palettes(first + l);
+                let uniform = (0..used).all(|l| simulated_in(l) == simulated && alone(l).is_none());
                 let anchors = if joints > simulated { s.batch.anchors(simulated) } else { None };
                 let src = |j: usize| anchors.map_or(j, |a| a[j] as usize);
                 let own: usize = need.iter().map(|&m| (m as usize).min(n)).sum();
@@ -1300,6 +1302,12 @@ impl Forest {
                             let run = slot.base as usize + 12 * start;
                             let dst = out.palettes[run..].chunks_exact_mut(12);
                             let src = |j: usize| lane_src[l].map_or(j, |a| a[j] as usize);
+                            if let Some(row) = alone(l) {
+                                for (j, v) in (start..end).zip(dst) {
+                                    v.copy_from_slice(&row[12 * src(j)..][..12]);
+                                }
+                                continue;
+                            }
                             for (j, v) in (start..end).zip(dst) {
                                 let pal = &block[src(j) * joint..][..joint];
                                 for (e, x) in v.iter_mut().enumerate() {

@@ -148,6 +148,12 @@ struct Block {
     joints: usize,
     /// Steps in a row this block has held memory for more joints than it stores.
     idle: u32,
+    /// Lanes the last step stepped alone (a bit each): their palettes are in `side`, not
+    /// in `pal`.
+    alone: u32,
+    /// Per lane stepped alone: its palettes, 12 per joint in a row, for the joints it
+    /// simulates (empty for the others).
+    side: Vec<Vec<f32>>,
 }
 
 /// Steps a lane group keeps the memory of joints it no longer stores before giving it
@@ -210,7 +216,8 @@ impl Block {
         4 * (self.theta.capacity()
             + self.rate.capacity()
             + self.weight.capacity()
-            + self.pal.capacity())
+            + self.pal.capacity()
+            + self.side.iter().map(Vec::capacity).sum::<usize>())
     }
 }
 
@@ -677,9 +684,27 @@ impl SwayBatch {
                 _ => return IDENTITY,
             }
         };
+        if let Some(row) = self.lane_palettes(i) {
+            return row.get(12 * shown..12 * shown + 12).map_or(IDENTITY, |p| {
+                let mut m = [0.0; 12];
+                m.copy_from_slice(p);
+                m
+            });
+        }
         let Some((g, b, l)) = self.slot(i, shown) else { return IDENTITY };
         let w = self.width;
         std::array::from_fn(|e| self.blocks[g].pal[12 * b + e * w + l])
+    }
+
+    /// The palettes of instance `i` where the last step stepped it alone (see
+    /// [`SwayBatch::set_lane_active`]): 12 per joint (row-major 3×4) in a row, for its
+    /// [`simulated`](SwayBatch::simulated) joints; its values in
+    /// [`group_palettes`](SwayBatch::group_palettes) are then not current. `None` for an
+    /// instance stepped with its group.
+    pub fn lane_palettes(&self, i: usize) -> Option<&[f32]> {
+        let b = self.blocks.get(i / LANES)?;
+        let l = i % LANES;
+        (b.alone >> l & 1 == 1).then(|| b.side[l].as_slice())
     }
 
     /// Where instance `i`'s palettes lie in its group's
@@ -693,7 +718,9 @@ impl SwayBatch {
     /// (row-major 3×4), the group's [`width`](Self::width) lanes side by side — element e
     /// of joint j of instance i is at `palette_slot(i).index(j, e)`, that is `(12 j + e) ·
     /// width + i % LANES`. A last, partial group of a full-width batch is padded. Copied to
-    /// the GPU as it is (see `sylva-forest`). Empty for a group out of range.
+    /// the GPU as it is (see `sylva-forest`). A lane the last step stepped alone has its
+    /// palettes in [`lane_palettes`](SwayBatch::lane_palettes) instead. Empty for a group
+    /// out of range.
     pub fn group_palettes(&self, group: usize) -> &[f32] {
         self.blocks.get(group).map_or(&[], |b| b.pal.as_slice())
     }
@@ -750,7 +777,7 @@ impl SwayBatch {
             .zip(lanes_of)
             .enumerate()
             .for_each(|(g, ((block, active), (live, stepped)))| {
-                let Block { theta, rate, weight, pal, .. } = block;
+                let Block { theta, rate, weight, pal, alone, side, .. } = block;
                 let mut u = [ZERO; 3];
                 let mut bud = [0u32; LANES];
                 let used = W.min(ni - g * LANES);
@@ -772,22 +799,35 @@ impl SwayBatch {
                     need[l] = (live[l].max(on[l]) as usize).min(p);
                 }
                 let (head, solo) = plan_lanes(&need[..used], W);
+                // Palettes of lanes stepped alone are kept in a row of their own (the step
+                // computes every palette it steps afresh, so a lane that rejoins its group
+                // needs nothing copied back).
+                if side.len() < W {
+                    side.resize(W, Vec::new());
+                }
+                for (l, v) in side.iter_mut().enumerate() {
+                    if solo >> l & 1 == 0 && v.capacity() > 0 {
+                        *v = Vec::new();
+                    }
+                }
+                *alone = solo;
                 SCRATCH.with_borrow_mut(|(loads, copies)| {
                     // Lanes stepped alone, each as a group of one (the kernel at width 1, the
                     // same operations as a batch of that instance alone): a copy of its
-                    // state in a row, stepped, and written back after the group's step.
+                    // angles, rates and weights in a row, stepped, and written back after
+                    // the group's step; its palettes computed into its own row.
                     copies.clear();
                     for l in (0..used).filter(|&l| solo >> l & 1 == 1) {
                         let r = need[l];
                         let at = copies.len();
-                        copies.resize(at + 17 * r, 0.0);
+                        copies.resize(at + 5 * r, 0.0);
                         let (th, rest) = copies[at..].split_at_mut(2 * r);
-                        let (ra, rest) = rest.split_at_mut(2 * r);
-                        let (wt, pl) = rest.split_at_mut(r);
+                        let (ra, wt) = rest.split_at_mut(2 * r);
                         lane_copy(theta, th, W, l, true);
                         lane_copy(rate, ra, W, l, true);
                         lane_copy(weight, wt, W, l, true);
-                        lane_copy(pal, pl, W, l, true);
+                        let pl = &mut side[l];
+                        pl.resize(12 * r, 0.0);
                         if loads.len() < 6 * r {
                             loads.resize(6 * r, 0.0);
                         }
@@ -836,12 +876,10 @@ impl SwayBatch {
                         let r = need[l];
                         let (th, rest) = copies[at..].split_at_mut(2 * r);
                         let (ra, rest) = rest.split_at_mut(2 * r);
-                        let (wt, rest) = rest.split_at_mut(r);
                         lane_copy(theta, th, W, l, false);
                         lane_copy(rate, ra, W, l, false);
-                        lane_copy(weight, wt, W, l, false);
-                        lane_copy(pal, &mut rest[..12 * r], W, l, false);
-                        at += 17 * r;
+                        lane_copy(weight, &mut rest[..r], W, l, false);
+                        at += 5 * r;
                     }
                 });
                 // What each lane now has live: its switched-on prefix, and the joints beyond

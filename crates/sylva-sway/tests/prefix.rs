@@ -237,6 +237,9 @@ fn a_near_tree_among_far_ones_steps_its_crown_alone() {
     // Faded: the near tree's joints in its lane alone, the others' trunks.
     assert_eq!(group.joint_updates(), all + (LANES - 1) * trunk);
     assert_eq!(group.simulated(near), all);
+    // Its palettes are kept in a row of their own; its mates' in the group's lanes.
+    assert_eq!(group.lane_palettes(near).map(<[f32]>::len), Some(12 * all));
+    assert!(group.lane_palettes(0).is_none());
     for j in 0..all {
         assert_eq!(group.palette(near, j), alone.palette(0, j), "joint {j}");
     }
