@@ -932,9 +932,10 @@ fn width_cost(width: usize) -> f32 {
     }
 }
 
-/// A lane stepped alone costs one lane's step and the copies of its state in and out: in
-/// scene D's forest a black tupelo's whole skeleton took 2.2 ms stepped alone against the
-/// 1.3 ms of the same step in a batch of its own (copies, and a colder cache).
+/// A lane stepped alone costs one lane's step and the copies of its angles, rates and
+/// weights in and out, strided across its group's lanes: in scene D's forest a black
+/// tupelo's whole skeleton steps in about 1.8 ms alone in its group of eight, against
+/// 1.1–1.3 ms in a batch of its own (docs/benchmarks.md).
 const ALONE_COST: f32 = 1.7;
 
 /// Which lanes of a group to step alone: (the prefix the group steps every lane to, a bit
