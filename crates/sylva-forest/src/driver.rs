@@ -588,11 +588,14 @@ impl Forest {
         // Each species may hold its trunks and a share of the rest of the cap in proportion
         // to its crowns (all of them where the whole forest fits): the animation LOD keeps a
         // lane group at a coarser prefix rather than go over it (`FrameStats::state_capped`).
+        // Where the forest fits, a fifth more: the rows of palettes of simulations stepped
+        // alone (`SwayBatch::set_alone_limit`), at most two lanes' of a group of 16 and one
+        // of 8 or 4, 48 bytes a joint against the group's 68 per joint and lane (≤ 18 %).
         let spare = (all_full - all_floor).max(1) as f64;
         let allowance = |si: usize| {
             let share = (full[si] - floor[si]) as f64 / spare;
-            floor[si]
-                + ((limit - all_floor) as f64 * share).min((full[si] - floor[si]) as f64) as usize
+            let most = (full[si] - floor[si]) as f64 + full[si] as f64 / 5.0;
+            floor[si] + ((limit - all_floor) as f64 * share).min(most) as usize
         };
         for (si, (original, order)) in models.into_iter().zip(orders).enumerate() {
             let model = original.reordered(&order.order).map_err(|e| ForestError::Species {
@@ -1068,6 +1071,8 @@ impl Forest {
                     s.batch.settle(k);
                 }
             }
+            // What the cap leaves to the rows of palettes of simulations stepped alone.
+            s.batch.set_alone_limit(s.state_cap.saturating_sub(held));
             for (i, g) in s.groups.iter_mut().enumerate() {
                 let lane = s.lane_of[i] as usize;
                 // Wind-field LOD: groups whose trees are all impostors (or out of view) read

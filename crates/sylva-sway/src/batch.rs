@@ -128,6 +128,19 @@ impl PaletteSlot {
 /// Lumped static drag of held joints: [D, c] of their wood, then of their leaves.
 type Lump = [[f32; 4]; 2];
 
+/// How a step splits one group's lanes.
+#[derive(Debug, Clone, Copy, Default)]
+struct Plan {
+    /// Per lane: the prefix it keeps switched on, and the one it is stepped to at least
+    /// (its joints beyond are at rest).
+    on: [u32; LANES],
+    need: [u32; LANES],
+    /// The prefix the group steps its lanes to together, and the lanes stepped alone (a
+    /// bit each).
+    head: u32,
+    solo: u32,
+}
+
 /// One group's stored state: its first `joints` joints (a prefix: those it simulates, and
 /// none beyond), `width` lanes inner. Joints not stored are at rest.
 ///
@@ -249,6 +262,11 @@ pub struct SwayBatch {
     /// Per instance: the joints the last step computed for it (its palettes beyond are not
     /// current; it shows them at their anchors).
     stepped: Vec<u32>,
+    /// Bytes the rows of palettes of lanes stepped alone may hold in all
+    /// ([`SwayBatch::set_alone_limit`]).
+    alone_limit: usize,
+    /// Per group, the step's split of its lanes (decided in group order before the step).
+    plans: Vec<Plan>,
     /// Registered prefixes and, per joint of each, the lumped static drag [D, c] with
     /// `c = P − D o` (see the module documentation), of the wood and of the leaves.
     lumped: Vec<(usize, Vec<Lump>)>,
@@ -360,6 +378,8 @@ impl SwayBatch {
             want: vec![n as u32; instances],
             live: vec![n as u32; instances],
             stepped: vec![n as u32; instances],
+            alone_limit: usize::MAX,
+            plans: Vec::new(),
             lumped: Vec::new(),
             anchors: Vec::new(),
             updates: 0,
@@ -526,6 +546,14 @@ impl SwayBatch {
         if let Some(w) = self.want.get_mut(i) {
             *w = p;
         }
+    }
+
+    /// Let the rows of palettes of lanes stepped alone hold at most `bytes` in all (they
+    /// count in [`stored_bytes`](SwayBatch::stored_bytes)): a caller keeping the state
+    /// under a memory cap gives them what the cap leaves. Groups are served in order; one
+    /// whose lanes would go past it steps them together. No limit unless set.
+    pub fn set_alone_limit(&mut self, bytes: usize) {
+        self.alone_limit = bytes;
     }
 
     /// Joints of instance `i` the last step computed: its group's prefix, or less where its
@@ -753,6 +781,7 @@ impl SwayBatch {
             self.dt = dt;
         }
         let blend = dt / sp.params.blend_time;
+        self.plan();
         match self.width {
             1 => self.step_lanes::<1>(blend, wind),
             4 => self.step_lanes::<4>(blend, wind),
@@ -762,12 +791,46 @@ impl SwayBatch {
         self.updates = self.stepped.iter().map(|&s| s as usize).sum();
     }
 
+    /// Decide each group's split for the step: per lane the prefix it keeps on and the one
+    /// it must be stepped to, and which lanes go alone — within the rows' byte limit,
+    /// served in group order so that the outcome does not depend on threads.
+    fn plan(&mut self) {
+        let (ni, w) = (self.instances, self.width);
+        let mut left = self.alone_limit;
+        self.plans.resize(self.blocks.len(), Plan::default());
+        for (g, plan) in self.plans.iter_mut().enumerate() {
+            let p = self.active[g] as usize;
+            let k = (self.keep[g] as usize).min(p);
+            let used = w.min(ni - g * LANES);
+            let mut on = [k as u32; LANES];
+            let mut need = [0usize; LANES];
+            for l in 0..used {
+                let i = g * LANES + l;
+                on[l] = on[l].min(self.want[i]);
+                need[l] = (self.live[i].max(on[l]) as usize).min(p);
+            }
+            let (mut head, mut solo) = plan_lanes(&need[..used], w);
+            // Bytes of the rows the lanes alone will hold (a row is kept, not shrunk).
+            let side = &self.blocks[g].side;
+            let bytes: usize = (0..used)
+                .filter(|&l| solo >> l & 1 == 1)
+                .map(|l| 4 * (12 * need[l]).max(side.get(l).map_or(0, Vec::capacity)))
+                .sum();
+            if bytes > left {
+                (head, solo) = (need[..used].iter().copied().max().unwrap_or(0), 0);
+            } else {
+                left -= bytes;
+            }
+            *plan = Plan { on, need: need.map(|x| x as u32), head: head as u32, solo };
+        }
+    }
+
     /// The step's groups, `W` (= [`SwayBatch::width`]) lanes each.
     fn step_lanes<const W: usize>(&mut self, blend: f32, wind: &[[f32; 3]]) {
         let sp = &self.species;
-        let (tr, aero, budget, want, ni) =
-            (&self.transitions, &self.aero_dt, &self.budget, &self.want, self.instances);
-        let (keep, lumped) = (&self.keep, &self.lumped);
+        let (tr, aero, budget, ni) =
+            (&self.transitions, &self.aero_dt, &self.budget, self.instances);
+        let (keep, lumped, plans) = (&self.keep, &self.lumped, &self.plans);
         let held = |p: usize| lumped.iter().find(|(q, _)| *q == p).map(|(_, v)| v.as_slice());
         let n = sp.len();
         let lanes_of = self.live.par_chunks_mut(LANES).zip(self.stepped.par_chunks_mut(LANES));
@@ -790,15 +853,8 @@ impl SwayBatch {
                 }
                 let p = *active as usize;
                 let k = (keep[g] as usize).min(p);
-                // Per lane: the prefix it keeps switched on, and the one it must be stepped
-                // to (its joints beyond are at rest and stay so unstepped).
-                let mut on = [k as u32; LANES];
-                let mut need = [0usize; LANES];
-                for l in 0..used {
-                    on[l] = on[l].min(want[g * LANES + l]);
-                    need[l] = (live[l].max(on[l]) as usize).min(p);
-                }
-                let (head, solo) = plan_lanes(&need[..used], W);
+                let Plan { on, need, head, solo } = plans[g];
+                let (need, head) = (need.map(|x| x as usize), head as usize);
                 // Palettes of lanes stepped alone are kept in a row of their own (the step
                 // computes every palette it steps afresh, so a lane that rejoins its group
                 // needs nothing copied back).
@@ -826,7 +882,12 @@ impl SwayBatch {
                         lane_copy(theta, th, W, l, true);
                         lane_copy(rate, ra, W, l, true);
                         lane_copy(weight, wt, W, l, true);
+                        // Grown exactly (the bytes counted are the bytes held); its values are
+                        // all written by the step.
                         let pl = &mut side[l];
+                        if pl.capacity() < 12 * r {
+                            *pl = vec![0.0; 12 * r];
+                        }
                         pl.resize(12 * r, 0.0);
                         if loads.len() < 6 * r {
                             loads.resize(6 * r, 0.0);

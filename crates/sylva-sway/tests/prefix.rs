@@ -258,4 +258,18 @@ fn a_near_tree_among_far_ones_steps_its_crown_alone() {
     let w = group.weight(7, top);
     assert!(w > 0.0 && w <= dt / 0.5 + 1e-6, "blending in: {w}");
     assert_eq!(group.joint_updates(), 2 * all + (LANES - 2) * trunk, "two lanes alone");
+    // The rows of palettes of lanes alone stay within the limit a caller sets (under a
+    // memory cap): a byte short of the two rows, the group steps its lanes together and
+    // gives the rows back; with room for them, the two lanes go alone again.
+    let rows = 2 * 12 * all * 4;
+    let with_rows = group.stored_bytes();
+    group.set_alone_limit(rows - 1);
+    group.step(dt, &wind);
+    assert_eq!(group.joint_updates(), LANES * all, "together");
+    assert!(group.lane_palettes(near).is_none());
+    assert_eq!(group.stored_bytes(), with_rows - rows);
+    group.set_alone_limit(rows);
+    group.step(dt, &wind);
+    assert_eq!(group.joint_updates(), 2 * all + (LANES - 2) * trunk, "alone again");
+    assert_eq!(group.stored_bytes(), with_rows);
 }
