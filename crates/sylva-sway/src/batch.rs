@@ -30,7 +30,9 @@
 //! ([`SwayBatch::set_lane_active`]): one tree near the camera among far ones in a group. Its
 //! lane-mates fade out the joints beyond their own and are then left at rest there, and the
 //! step picks, per group, which lanes to step alone (at width 1, on a copy of the lane's
-//! state) and which together to the longest prefix among them: the cheapest split by the
+//! angles, rates and weights, its palettes kept in a row of their own,
+//! [`SwayBatch::lane_palettes`]) and which together to the longest prefix among them —
+//! within what [`SwayBatch::set_alone_limit`] lets those rows hold: the cheapest split by the
 //! measured cost of a joint at each width (a joint of a 16-lane group costs about 4.4 of
 //! one lane alone on AVX-512). A group of 16 far trunks and one near crown then costs one
 //! crown and 16 trunks, not 16 crowns.
@@ -858,7 +860,7 @@ impl SwayBatch {
                 // Palettes of lanes stepped alone are kept in a row of their own (the step
                 // computes every palette it steps afresh, so a lane that rejoins its group
                 // needs nothing copied back).
-                if side.len() < W {
+                if solo != 0 && side.len() < W {
                     side.resize(W, Vec::new());
                 }
                 for (l, v) in side.iter_mut().enumerate() {
