@@ -259,7 +259,8 @@ pub struct FrameStats {
     pub triangles: usize,
     /// Simulated instances (instance groups).
     pub simulated: usize,
-    /// Joint updates (joints × simulated instances) of the last simulation step.
+    /// Joint updates of the last simulation step: per simulated instance the joints
+    /// computed for it, summed (`SwayBatch::joint_updates`).
     pub joints: usize,
     /// Bytes of animation state held (angles, rates, blend weights and palettes of the
     /// joints each lane group simulates: the animation LOD sets it).
