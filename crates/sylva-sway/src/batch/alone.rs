@@ -1,0 +1,212 @@
+//! One lane stepped on its own: a batch of one instance, or a lane a group steps alone.
+//!
+//! The same IEEE operations, in the same order for every value, as [`step_group`] at width
+//! 1 — an instance moves bit for bit as it does in any group — with the passes split by
+//! what depends on what. Across lanes there is nothing to vectorise at width 1, but across
+//! joints most of the step is independent: a joint's own drag, its spring and its local
+//! rotation need nothing from any other joint. Only two short sweeps are chained along the
+//! skeleton: the loads passed from tips inwards, and the palettes composed root outwards.
+//! Kept apart from the rest, those independent parts run as plain loops over the joints
+//! (which the processor overlaps, and the compiler vectorises where it can), where the
+//! fused sweep made each joint wait for the one before it.
+//!
+//! [`step_group`]: super::step_group
+
+use sylva_core::simd_kernel;
+use sylva_core::v3::{cross, dot};
+
+use super::{
+    Group, LANES, LEVER_SERIES, Lanes, MAX_BEND, any_angle, compose, lever_bend, local_palette,
+    small_angle,
+};
+use crate::species::{SwaySpecies, Transition};
+
+/// Joints per chunk of the spring pass.
+const CHUNK: usize = 16;
+
+simd_kernel! {
+    /// Step lane 0 of `st` (`W` is 1: the lane layout of a group of one).
+    pub(super) fn step<const W: usize>(
+        sp: &SwaySpecies,
+        tr: &[Transition],
+        aero: &[f32],
+        blend: f32,
+        bud: &[u32; LANES],
+        u: &[Lanes; 3],
+        st: &mut Group<'_, W>,
+    ) {
+        debug_assert_eq!(W, 1);
+        let n = st.active.min(st.theta.len());
+        let inv_ur = 1.0 / sp.params.leaf_reconfiguration_speed;
+        let u = [u[0][0], u[1][0], u[2][0]];
+        let speed = (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt();
+        let (on, bud) = (st.on[0] as usize, bud[0]);
+        // (1a) Each joint's own drag and its moment about the joint, kept in the joint's
+        // palette slot (free until pass 2 writes it).
+        for i in 0..n {
+            let [ax, ay] = sp.axes[i];
+            let arm = sp.arm[i];
+            let (drag, leaf) = (sp.drag[i], sp.leaf_drag[i]);
+            let ra = st.rate[i];
+            let implicit = st.weight[i][0] / (1.0 + aero[i] * speed);
+            let (r0, r1) = (implicit * ra[0][0], implicit * ra[1][0]);
+            let om = [r0 * ax[0] + r1 * ay[0], r0 * ax[1] + r1 * ay[1], r0 * ax[2] + r1 * ay[2]];
+            let v = cross(om, arm);
+            let rel = [u[0] - v[0], u[1] - v[1], u[2] - v[2]];
+            let s = (rel[0] * rel[0] + rel[1] * rel[1] + rel[2] * rel[2]).sqrt();
+            let k = s * (drag + leaf / (1.0 + s * inv_ur));
+            let f = [k * rel[0], k * rel[1], k * rel[2]];
+            let own = &mut st.lanes[i];
+            own[0][0] = f[0];
+            own[1][0] = f[1];
+            own[2][0] = f[2];
+            own[3][0] = arm[1] * f[2] - arm[2] * f[1];
+            own[4][0] = arm[2] * f[0] - arm[0] * f[2];
+            own[5][0] = arm[0] * f[1] - arm[1] * f[0];
+        }
+        // (1b) Tips inwards: a joint's loads are its subtree's (added by its children, all
+        // after it), then its own, then the lumped drag of the joints held beyond it; they
+        // pass to its parent.
+        let leaves = speed / (1.0 + speed * inv_ur);
+        let q = [
+            [speed * u[0], speed * u[1], speed * u[2]],
+            [leaves * u[0], leaves * u[1], leaves * u[2]],
+        ];
+        for i in (0..n).rev() {
+            let own = &st.lanes[i];
+            let li = &mut st.loads[i];
+            for c in 0..6 {
+                li[c][0] += own[c][0];
+            }
+            if let Some(held) = st.held {
+                for (part, q) in held[i].iter().zip(&q) {
+                    let [d, cx, cy, cz] = *part;
+                    li[0][0] += d * q[0];
+                    li[1][0] += d * q[1];
+                    li[2][0] += d * q[2];
+                    li[3][0] += cy * q[2] - cz * q[1];
+                    li[4][0] += cz * q[0] - cx * q[2];
+                    li[5][0] += cx * q[1] - cy * q[0];
+                }
+            }
+            let p = sp.parent[i];
+            if p != sylva_tree::NO_PARENT {
+                let p = p as usize;
+                let (o, op) = (sp.origin[i], sp.origin[p]);
+                let r = [o[0] - op[0], o[1] - op[1], o[2] - op[2]];
+                let (lp, li) = {
+                    let (a, b) = st.loads.split_at_mut(i);
+                    (&mut a[p], &b[0])
+                };
+                let fi = [li[0][0], li[1][0], li[2][0]];
+                lp[0][0] += fi[0];
+                lp[1][0] += fi[1];
+                lp[2][0] += fi[2];
+                lp[3][0] += li[3][0] + (r[1] * fi[2] - r[2] * fi[1]);
+                lp[4][0] += li[4][0] + (r[2] * fi[0] - r[0] * fi[2]);
+                lp[5][0] += li[5][0] + (r[0] * fi[1] - r[1] * fi[0]);
+            }
+        }
+        // (2) Springs and blend weights, then each joint's rotation about its rest position
+        // (T(o) R_i T(−o)) into its palette slot; the loads cleared for the next step. In
+        // chunks of joints gathered into lane arrays, so the loops vectorise across joints
+        // (a chunk's lanes past the last joint compute on zeros and are not written back).
+        let (tr, axes, rank, origin) = (&tr[..n], &sp.axes[..n], &sp.rank[..n], &sp.origin[..n]);
+        for first in (0..n).step_by(CHUNK) {
+            let m = CHUNK.min(n - first);
+            let joints = first..first + m;
+            let mut eqs = [[0.0f32; CHUNK]; 2];
+            let mut th = [[0.0f32; CHUNK]; 2];
+            let mut ra = [[0.0f32; CHUNK]; 2];
+            let mut w = [0.0f32; CHUNK];
+            let mut a = [[0.0f32; CHUNK]; 4];
+            let mut axis = [[[0.0f32; CHUNK]; 3]; 2];
+            let mut active = [false; CHUNK];
+            for (j, i) in joints.clone().enumerate() {
+                let (t, li, [ax, ay]) = (&tr[i], &st.loads[i], axes[i]);
+                let mom = [li[3][0], li[4][0], li[5][0]];
+                eqs[0][j] = dot(mom, ax) * t.inv_k;
+                eqs[1][j] = dot(mom, ay) * t.inv_k;
+                for c in 0..2 {
+                    th[c][j] = st.theta[i][c][0];
+                    ra[c][j] = st.rate[i][c][0];
+                }
+                w[j] = st.weight[i][0];
+                a[0][j] = t.a11;
+                a[1][j] = t.a12;
+                a[2][j] = t.a21;
+                a[3][j] = t.a22;
+                for c in 0..3 {
+                    axis[0][c][j] = ax[c];
+                    axis[1][c][j] = ay[c];
+                }
+                active[j] = i < on && rank[i] < bud;
+                st.loads[i] = [[0.0; W]; 6];
+            }
+            for j in 0..CHUNK {
+                let e2 = eqs[0][j] * eqs[0][j] + eqs[1][j] * eqs[1][j];
+                let full = lever_bend(e2);
+                let f = if e2 > LEVER_SERIES { full } else { 1.0 - 0.5 * e2 };
+                eqs[0][j] *= f;
+                eqs[1][j] *= f;
+            }
+            for j in 0..CHUNK {
+                let restart = active[j] && w[j] == 0.0;
+                for c in 0..2 {
+                    let eq = eqs[c][j];
+                    let x = if restart { 0.0 } else { th[c][j] - eq };
+                    let v = if restart { 0.0 } else { ra[c][j] };
+                    let (nx, nv) = (a[0][j] * x + a[1][j] * v + eq, a[2][j] * x + a[3][j] * v);
+                    th[c][j] = if active[j] { nx } else { th[c][j] };
+                    ra[c][j] = if active[j] { nv } else { ra[c][j] };
+                }
+                let b2 = th[0][j] * th[0][j] + th[1][j] * th[1][j];
+                let over = b2 > MAX_BEND * MAX_BEND;
+                let k = if over { MAX_BEND / b2.sqrt() } else { 1.0 };
+                th[0][j] *= k;
+                th[1][j] *= k;
+                ra[0][j] = if over { 0.0 } else { ra[0][j] };
+                ra[1][j] = if over { 0.0 } else { ra[1][j] };
+                w[j] = if active[j] { (w[j] + blend).min(1.0) } else { (w[j] - blend).max(0.0) };
+            }
+            let mut phi = [[0.0f32; CHUNK]; 3];
+            let mut sc = [[0.0f32; CHUNK]; 2];
+            for j in 0..CHUNK {
+                let (t0, t1) = (w[j] * th[0][j], w[j] * th[1][j]);
+                for c in 0..3 {
+                    phi[c][j] = t0 * axis[0][c][j] + t1 * axis[1][c][j];
+                }
+                let a2 = phi[0][j] * phi[0][j] + phi[1][j] * phi[1][j] + phi[2][j] * phi[2][j];
+                let (small, any) = (small_angle(a2), any_angle(a2));
+                let (s, c) = if a2 < 0.25 { small } else { any };
+                sc[0][j] = s;
+                sc[1][j] = c;
+            }
+            for (j, i) in joints.enumerate() {
+                for c in 0..2 {
+                    st.theta[i][c][0] = th[c][j];
+                    st.rate[i][c][0] = ra[c][j];
+                }
+                st.weight[i][0] = w[j];
+                let ph = [phi[0][j], phi[1][j], phi[2][j]];
+                let local = local_palette(ph, origin[i], sc[0][j], sc[1][j]);
+                for (e, x) in local.into_iter().enumerate() {
+                    st.lanes[i][e][0] = x;
+                }
+            }
+        }
+        // (3) Palettes, root outwards: M_i = M_parent · (T(o) R_i T(−o)).
+        for i in 0..n {
+            let p = sp.parent[i];
+            if p != sylva_tree::NO_PARENT {
+                let (before, rest) = st.lanes.split_at_mut(i);
+                let parent = std::array::from_fn(|e| before[p as usize][e][0]);
+                let local = std::array::from_fn(|e| rest[0][e][0]);
+                let m = compose(&parent, &local);
+                for (e, x) in m.into_iter().enumerate() {
+                    rest[0][e][0] = x;
+                }
+            }
+        }
+    }
+}
