@@ -1009,6 +1009,13 @@ fn width_cost(width: usize) -> f32 {
 /// weights in and out, strided across its group's lanes: in scene D's forest a black
 /// tupelo's whole skeleton steps in about 1.8 ms alone in its group of eight, against
 /// 1.1–1.3 ms in a batch of its own (docs/benchmarks.md).
+///
+/// These costs predate the single-lane kernel (`alone`), which made a lane alone about 30 %
+/// cheaper (a tupelo now steps in 0.77, 3.4, 3.9 and 4.3 ms at 1, 4, 8 and 16 lanes, and
+/// alone in a group of 8 or 16 in 1.3 or 1.6 times its batch-of-one time). Refitted to
+/// those figures, scenes A and D stepped the same within the noise, and a group of three
+/// lanes needing the same few joints went all alone, each with a row of palettes, at a
+/// tie in cost: the older, more cautious figures are kept.
 const ALONE_COST: f32 = 1.7;
 
 /// Which lanes of a group to step alone: (the prefix the group steps every lane to, a bit
