@@ -6,9 +6,10 @@
 //! joints most of the step is independent: a joint's own drag, its spring and its local
 //! rotation need nothing from any other joint. Only two short sweeps are chained along the
 //! skeleton: the loads passed from tips inwards, and the palettes composed root outwards.
-//! Kept apart from the rest, those independent parts run as plain loops over the joints
-//! (which the processor overlaps, and the compiler vectorises where it can), where the
-//! fused sweep made each joint wait for the one before it.
+//! Kept apart from the rest, those independent parts run as plain loops over the joints,
+//! which the processor overlaps (the spring pass in chunks of 16 joints gathered into lane
+//! arrays, which the compiler vectorises), where the fused sweep made each joint wait for
+//! the one before it.
 //!
 //! [`step_group`]: super::step_group
 
