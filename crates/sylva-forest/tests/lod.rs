@@ -151,7 +151,16 @@ fn moving_closer_switches_levels_through_a_cross_fade_and_the_crown_blends_in() 
             c.eye[i] = far.eye[i] + (near.eye[i] - far.eye[i]) * t.powf(0.3);
         }
         forest.step(1.0 / 30.0);
+        // The same frame written over a buffer of other values (NaN, and longer than it
+        // needs): the palettes are written over the last frame's, and nothing of what the
+        // buffer held may show through.
+        let mut poisoned = f.clone();
+        poisoned.palettes.fill(f32::NAN);
+        poisoned.palettes.resize(f.palettes.len() + 4096, f32::NAN);
         forest.frame(&c, 4.0 / 3.0, &mut f);
+        forest.frame(&c, 4.0 / 3.0, &mut poisoned);
+        let bits = |f: &FrameData| f.palettes.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+        assert!(bits(&poisoned) == bits(&f), "frame {k}: palettes depend on the buffer's past");
         fading += f.stats.fading;
         levels_seen.extend(f.buckets.iter().map(|b| b.lod));
         assert!(f.palettes.iter().all(|v| v.is_finite()));
