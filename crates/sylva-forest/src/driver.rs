@@ -354,6 +354,48 @@ pub struct FrameData {
     slots: Vec<PaletteSlot>,
     /// Per simulation (as `need`): joints the next step is to simulate for it.
     want: Vec<u32>,
+    /// The pass over the trees, a run of them at a time.
+    runs: Vec<TreeRun>,
+    /// `need` and `want` as the runs raise them.
+    need_max: Maxima,
+    want_max: Maxima,
+}
+
+/// Trees a frame's pass takes at a time (the runs go in parallel).
+const TREE_RUN: usize = 4096;
+
+/// What a run of trees adds to a frame: its draws' keys in tree order, and its counts.
+#[derive(Debug, Clone, Default)]
+struct TreeRun {
+    keys: Vec<(u32, u32)>,
+    stats: FrameStats,
+}
+
+/// Per-simulation maxima that the runs of trees raise together.
+#[derive(Debug, Default)]
+struct Maxima(Vec<AtomicU32>);
+
+impl Clone for Maxima {
+    fn clone(&self) -> Maxima {
+        Maxima(self.0.iter().map(|m| AtomicU32::new(m.load(Ordering::Relaxed))).collect())
+    }
+}
+
+impl Maxima {
+    /// `n` zeros (no allocation once grown).
+    fn reset(&mut self, n: usize) {
+        self.0.clear();
+        self.0.resize_with(n, || AtomicU32::new(0));
+    }
+
+    /// Raise entry `i` to `v` at least (a plain load where it is already there, as it is for
+    /// most trees of a group).
+    fn raise(&self, i: usize, v: u32) {
+        let m = &self.0[i];
+        if m.load(Ordering::Relaxed) < v {
+            m.fetch_max(v, Ordering::Relaxed);
+        }
+    }
 }
 
 impl FrameData {
@@ -1135,10 +1177,9 @@ impl Forest {
             out.lod_state.clear();
             out.lod_state.resize(self.trees.len(), f32::NAN);
         }
-        out.want.clear();
-        out.want.resize(self.lane_groups * LANES, 0);
-        out.need.clear();
-        out.need.resize(self.lane_groups * LANES, 0);
+        let sims = self.lane_groups * LANES;
+        out.need_max.reset(sims);
+        out.want_max.reset(sims);
         let lod = self.lod;
         let mut stats = FrameStats { trees: self.trees.len(), ..FrameStats::default() };
         let cone = camera.cone(aspect);
@@ -1150,66 +1191,107 @@ impl Forest {
             let chain = self.species[species as usize].model.lods.len() as u32;
             lod.geometry && level >= lod.far_level.min(chain)
         };
-        for (i, (p, g)) in self.trees.iter().enumerate() {
-            let sp = &self.species[p.species as usize];
-            let h = sp.model.tree.stats.height * p.scale;
-            let c = [p.position[0], p.position[1], p.position[2] + 0.5 * h];
-            if !cone.may_see(c, 0.75 * h) {
-                continue;
-            }
-            let chain = sp.model.lods.len() as u32;
-            let far = lod.far_level.min(chain);
-            // Joints level `l` draws (a prefix in LOD order).
-            let joints = |l: u32| {
-                if lod.geometry && l >= far { sp.order.trunk } else { sp.order.prefix[l as usize] }
-            };
-            let frac = cone.screen_fraction(c, h);
-            let (a, b, sim, x) = if lod.geometry {
-                let x = lod_coordinate(frac, lod.fraction);
-                let x = hysteresis(out.lod_state[i], x, lod.hysteresis);
-                let before = out.lod_state[i];
-                if !before.is_nan() && before.floor() != x.floor() {
-                    stats.level_changes += 1;
+        // The trees in runs of TREE_RUN, the runs in parallel: each fills its own keys,
+        // merged below in run order, and raises the per-simulation maxima (which do not
+        // depend on order), so the frame is the same for any number of threads.
+        let runs = self.trees.len().div_ceil(TREE_RUN);
+        if out.runs.len() < runs {
+            out.runs.resize_with(runs, TreeRun::default);
+        }
+        let (need_max, want_max) = (&out.need_max, &out.want_max);
+        out.runs[..runs]
+            .par_iter_mut()
+            .zip(out.lod_state.par_chunks_mut(TREE_RUN))
+            .zip(self.trees.par_chunks(TREE_RUN))
+            .enumerate()
+            .for_each(|(r, ((run, states), trees))| {
+                run.keys.clear();
+                run.stats = FrameStats::default();
+                for (k, ((p, g), state)) in trees.iter().zip(states).enumerate() {
+                    let i = r * TREE_RUN + k;
+                    let sp = &self.species[p.species as usize];
+                    let h = sp.model.tree.stats.height * p.scale;
+                    let c = [p.position[0], p.position[1], p.position[2] + 0.5 * h];
+                    if !cone.may_see(c, 0.75 * h) {
+                        continue;
+                    }
+                    let chain = sp.model.lods.len() as u32;
+                    let far = lod.far_level.min(chain);
+                    // Joints level `l` draws (a prefix in LOD order).
+                    let joints = |l: u32| {
+                        if lod.geometry && l >= far {
+                            sp.order.trunk
+                        } else {
+                            sp.order.prefix[l as usize]
+                        }
+                    };
+                    let frac = cone.screen_fraction(c, h);
+                    let (a, b, sim, x) = if lod.geometry {
+                        let x = lod_coordinate(frac, lod.fraction);
+                        let x = hysteresis(*state, x, lod.hysteresis);
+                        let before = *state;
+                        if !before.is_nan() && before.floor() != x.floor() {
+                            run.stats.level_changes += 1;
+                        }
+                        *state = x;
+                        let (a, b, _) = blend_levels(x, far, lod.band);
+                        (a, b, blend_levels((x - SIM_MARGIN).max(0.0), far, 0.0).0, x)
+                    } else {
+                        (0, 0, 0, f32::NAN)
+                    };
+                    // Joints to simulate: the geometry's choice half a level ahead, or coarser by
+                    // projected size (the joints it draws beyond are held, shown at rest on their
+                    // parents).
+                    let moving = if lod.geometry && sim >= far {
+                        sp.order.trunk
+                    } else {
+                        // With the geometry LOD on, from its coordinate (and so its hysteresis), so
+                        // the two agree wherever their thresholds do.
+                        let by_size = if x.is_nan() {
+                            lod_coordinate(frac, ANIMATION_FRACTION)
+                        } else {
+                            x + (ANIMATION_FRACTION / lod.fraction).ln() / 3f32.ln()
+                        } - SIM_MARGIN;
+                        let level = sim.max(by_size.max(0.0) as u32) as usize;
+                        sp.order.prefix[level.min(sp.order.prefix.len() - 1)]
+                    };
+                    // The tree's group, and the one it is fading out of after a regroup.
+                    let switch = self.switches[i].fading(self.time, self.regroup_fade);
+                    let sw = self.switches[i];
+                    run.stats.group_changes +=
+                        (sw.from != u32::MAX && sw.at > previous && sw.at <= self.time) as usize;
+                    for (group, old) in
+                        [(*g, false)].into_iter().chain(switch.map(|(_, f)| (f, true)))
+                    {
+                        let own = sp.lane_base * LANES + sp.lane_of[group as usize] as usize;
+                        need_max.raise(own, joints(a) as u32);
+                        want_max.raise(own, moving as u32);
+                        for level in a..=b {
+                            run.keys.push((
+                                level * n_species + p.species,
+                                i as u32 | (old as u32) << 31,
+                            ));
+                        }
+                    }
+                    run.stats.drawn += 1;
+                    run.stats.regrouping += switch.is_some() as usize;
+                    run.stats.fading += (a != b) as usize;
+                    run.stats.impostors += (lod.geometry && b >= lod.far_level.min(chain)) as usize;
                 }
-                out.lod_state[i] = x;
-                let (a, b, _) = blend_levels(x, far, lod.band);
-                (a, b, blend_levels((x - SIM_MARGIN).max(0.0), far, 0.0).0, x)
-            } else {
-                (0, 0, 0, f32::NAN)
-            };
-            // Joints to simulate: the geometry's choice half a level ahead, or coarser by
-            // projected size (the joints it draws beyond are held, shown at rest on their
-            // parents).
-            let moving = if lod.geometry && sim >= far {
-                sp.order.trunk
-            } else {
-                // With the geometry LOD on, from its coordinate (and so its hysteresis), so
-                // the two agree wherever their thresholds do.
-                let by_size = if x.is_nan() {
-                    lod_coordinate(frac, ANIMATION_FRACTION)
-                } else {
-                    x + (ANIMATION_FRACTION / lod.fraction).ln() / 3f32.ln()
-                } - SIM_MARGIN;
-                let level = sim.max(by_size.max(0.0) as u32) as usize;
-                sp.order.prefix[level.min(sp.order.prefix.len() - 1)]
-            };
-            // The tree's group, and the one it is fading out of after a regroup.
-            let switch = self.switches[i].fading(self.time, self.regroup_fade);
-            let sw = self.switches[i];
-            stats.group_changes +=
-                (sw.from != u32::MAX && sw.at > previous && sw.at <= self.time) as usize;
-            for (group, old) in [(*g, false)].into_iter().chain(switch.map(|(_, f)| (f, true))) {
-                let own = sp.lane_base * LANES + sp.lane_of[group as usize] as usize;
-                out.need[own] = out.need[own].max(joints(a) as u32);
-                out.want[own] = out.want[own].max(moving as u32);
-                for level in a..=b {
-                    out.keys.push((level * n_species + p.species, i as u32 | (old as u32) << 31));
-                }
-            }
-            stats.drawn += 1;
-            stats.regrouping += switch.is_some() as usize;
-            stats.fading += (a != b) as usize;
-            stats.impostors += (lod.geometry && b >= lod.far_level.min(chain)) as usize;
+            });
+        out.need.clear();
+        out.need.extend(out.need_max.0.iter().map(|m| m.load(Ordering::Relaxed)));
+        out.want.clear();
+        out.want.extend(out.want_max.0.iter().map(|m| m.load(Ordering::Relaxed)));
+        for run in &out.runs[..runs] {
+            out.keys.extend_from_slice(&run.keys);
+            let r = &run.stats;
+            stats.level_changes += r.level_changes;
+            stats.group_changes += r.group_changes;
+            stats.drawn += r.drawn;
+            stats.regrouping += r.regrouping;
+            stats.fading += r.fading;
+            stats.impostors += r.impostors;
         }
         // Into (level, species) order, trees in order within each: a counting sort, the
         // keys being few (levels × species).

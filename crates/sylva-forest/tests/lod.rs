@@ -179,26 +179,77 @@ fn moving_closer_switches_levels_through_a_cross_fade_and_the_crown_blends_in() 
     assert!(fading > 0, "no tree ever cross-faded");
 }
 
+/// Same frames for 1 and 2 threads: the small scene, and one of 9 000 trees whose pass over
+/// the trees goes in several runs at once (4 096 trees a run), merged in order: impostors
+/// keep tree order within their bucket.
 #[test]
 fn frames_are_deterministic_for_any_thread_count() {
-    let run = |threads: usize| {
+    let run = |threads: usize, trees: usize| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
         pool.install(|| {
-            let spec = SceneSpec::builtin("small").expect("small");
+            let mut spec = SceneSpec::builtin("small").expect("small");
+            spec.trees = trees;
             let mut forest = Forest::new(&spec).expect("forest");
-            let cam = forest.default_camera();
+            let mut cam = forest.default_camera();
+            if trees > 5 {
+                // From above the forest's edge, most of it in view, near and far.
+                cam = far_camera(&forest);
+                for i in 0..3 {
+                    cam.eye[i] = cam.target[i] + (cam.eye[i] - cam.target[i]) / 12.0;
+                }
+            }
             let mut f = FrameData::default();
-            for _ in 0..20 {
+            for _ in 0..(if trees > 5 { 6 } else { 20 }) {
                 forest.step(1.0 / 25.0);
                 forest.frame(&cam, 1.5, &mut f);
             }
-            (f.palettes.iter().map(|v| v.to_bits()).collect::<Vec<_>>(), f.instances.clone())
+            if trees > 5 {
+                // Impostors are drawn in tree order within their bucket, whichever run each
+                // tree was visited in.
+                let index: std::collections::HashMap<[u32; 3], usize> = (0..trees)
+                    .filter_map(|t| forest.placement(t).map(|p| (p.position.map(f32::to_bits), t)))
+                    .collect();
+                for b in &f.buckets {
+                    if b.lod < forest.species[b.species as usize].model.lods.len() as u32 {
+                        continue;
+                    }
+                    let draws = &f.instances[b.first as usize..][..b.count as usize];
+                    let order: Vec<usize> =
+                        draws.iter().map(|i| index[&i.position.map(f32::to_bits)]).collect();
+                    assert!(order.is_sorted(), "impostors out of tree order");
+                }
+            }
+            let s = &f.stats;
+            // Trees seen among the first run's and among the others.
+            let seen = |r: std::ops::Range<usize>| r.filter(|&t| f.level(t).is_some()).count();
+            let counts = [
+                s.drawn,
+                s.impostors,
+                s.fading,
+                s.level_changes,
+                s.triangles,
+                s.joints,
+                seen(0..4096),
+                seen(4096..trees),
+            ];
+            (
+                f.palettes.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+                f.instances.clone(),
+                counts,
+            )
         })
     };
-    let (a, ia) = run(1);
-    let (b, ib) = run(2);
-    assert_eq!(ia, ib);
-    assert!(a == b, "palettes differ between 1 and 2 threads");
+    for trees in [5, 9000] {
+        let (a, ia, ca) = run(1, trees);
+        let (b, ib, cb) = run(2, trees);
+        assert!(ia == ib, "{trees} trees: instances differ between 1 and 2 threads");
+        assert!(a == b, "{trees} trees: palettes differ between 1 and 2 threads");
+        assert_eq!(ca, cb, "{trees} trees");
+        if trees > 5 {
+            assert!(ca[6] > 0 && ca[7] > 0, "trees seen in the first run and after: {ca:?}");
+            assert!(ca[1] > 0 && ca[1] < ca[0], "near and far trees: {ca:?}");
+        }
+    }
 }
 
 #[test]
