@@ -1101,17 +1101,7 @@ simd_kernel! {
         // Leaves reconfigure: their drag is divided by 1 + |u| / U_r.
         let inv_ur = 1.0 / sp.params.leaf_reconfiguration_speed;
         // |u| u per lane for the held (rigid) joints' wood, and reconfigured for their leaves.
-        let mut q = [[[0.0f32; W]; 3]; 2];
-        if st.held.is_some() {
-            for l in 0..W {
-                let speed = (u[0][l] * u[0][l] + u[1][l] * u[1][l] + u[2][l] * u[2][l]).sqrt();
-                let leaves = speed / (1.0 + speed * inv_ur);
-                for c in 0..3 {
-                    q[0][c][l] = speed * u[c][l];
-                    q[1][c][l] = leaves * u[c][l];
-                }
-            }
-        }
+        let q = if st.held.is_some() { held_wind::<W>(u, inv_ur) } else { [[[0.0; W]; 3]; 2] };
         // Narrow groups (4 or 8 lanes) compute each joint's own drag in a loop of its own,
         // and its palette in a sweep of its own after the springs, so that the sweep of
         // loads along the skeleton is short and no joint's independent work waits on the
@@ -1141,37 +1131,9 @@ simd_kernel! {
                 own_drag::<W, true>(sp, aero, inv_ur, u, i, &st.rate[i], &st.weight[i], li);
             }
             if let Some(held) = st.held {
-                for (part, q) in held[i].iter().zip(&q) {
-                    let [d, cx, cy, cz] = *part;
-                    for l in 0..W {
-                        li[0][l] += d * q[0][l];
-                        li[1][l] += d * q[1][l];
-                        li[2][l] += d * q[2][l];
-                        li[3][l] += cy * q[2][l] - cz * q[1][l];
-                        li[4][l] += cz * q[0][l] - cx * q[2][l];
-                        li[5][l] += cx * q[1][l] - cy * q[0][l];
-                    }
-                }
+                add_held::<W>(li, &held[i], &q);
             }
-            let p = sp.parent[i];
-            if p != sylva_tree::NO_PARENT {
-                let p = p as usize;
-                let (o, op) = (sp.origin[i], sp.origin[p]);
-                let r = [o[0] - op[0], o[1] - op[1], o[2] - op[2]];
-                let (lp, li) = {
-                    let (a, b) = st.loads.split_at_mut(i);
-                    (&mut a[p], &b[0])
-                };
-                for l in 0..W {
-                    let fi = [li[0][l], li[1][l], li[2][l]];
-                    lp[0][l] += fi[0];
-                    lp[1][l] += fi[1];
-                    lp[2][l] += fi[2];
-                    lp[3][l] += li[3][l] + (r[1] * fi[2] - r[2] * fi[1]);
-                    lp[4][l] += li[4][l] + (r[2] * fi[0] - r[0] * fi[2]);
-                    lp[5][l] += li[5][l] + (r[0] * fi[1] - r[1] * fi[0]);
-                }
-            }
+            pass_to_parent::<W>(sp, st.loads, i);
         }
         // (2) Springs of the active joints and blend weights, root outwards, and with them:
         for i in 0..n {
@@ -1280,6 +1242,64 @@ fn palette_of<const W: usize>(
         palette_lanes::<W>(phi, sp.origin[i], parent, &mut rest[0], small_angle);
     } else {
         palette_lanes::<W>(phi, sp.origin[i], parent, &mut rest[0], any_angle);
+    }
+}
+
+/// |u| u per lane for held (rigid) joints' wood, and reconfigured for their leaves.
+#[inline(always)]
+fn held_wind<const W: usize>(u: &[Lanes; 3], inv_ur: f32) -> [[[f32; W]; 3]; 2] {
+    let mut q = [[[0.0f32; W]; 3]; 2];
+    for l in 0..W {
+        let speed = (u[0][l] * u[0][l] + u[1][l] * u[1][l] + u[2][l] * u[2][l]).sqrt();
+        let leaves = speed / (1.0 + speed * inv_ur);
+        for c in 0..3 {
+            q[0][c][l] = speed * u[c][l];
+            q[1][c][l] = leaves * u[c][l];
+        }
+    }
+    q
+}
+
+/// Add the lumped drag of the joints held beyond a joint (`lump`, in the wind `q` of
+/// [`held_wind`]) to its loads `li`.
+#[inline(always)]
+fn add_held<const W: usize>(li: &mut [[f32; W]; 6], lump: &Lump, q: &[[[f32; W]; 3]; 2]) {
+    for (part, q) in lump.iter().zip(q) {
+        let [d, cx, cy, cz] = *part;
+        for l in 0..W {
+            li[0][l] += d * q[0][l];
+            li[1][l] += d * q[1][l];
+            li[2][l] += d * q[2][l];
+            li[3][l] += cy * q[2][l] - cz * q[1][l];
+            li[4][l] += cz * q[0][l] - cx * q[2][l];
+            li[5][l] += cx * q[1][l] - cy * q[0][l];
+        }
+    }
+}
+
+/// Pass joint `i`'s loads (force on its subtree, moment about it) on to its parent's,
+/// the moment taken about the parent's origin.
+#[inline(always)]
+fn pass_to_parent<const W: usize>(sp: &SwaySpecies, loads: &mut [[[f32; W]; 6]], i: usize) {
+    let p = sp.parent[i];
+    if p == sylva_tree::NO_PARENT {
+        return;
+    }
+    let p = p as usize;
+    let (o, op) = (sp.origin[i], sp.origin[p]);
+    let r = [o[0] - op[0], o[1] - op[1], o[2] - op[2]];
+    let (lp, li) = {
+        let (a, b) = loads.split_at_mut(i);
+        (&mut a[p], &b[0])
+    };
+    for l in 0..W {
+        let fi = [li[0][l], li[1][l], li[2][l]];
+        lp[0][l] += fi[0];
+        lp[1][l] += fi[1];
+        lp[2][l] += fi[2];
+        lp[3][l] += li[3][l] + (r[1] * fi[2] - r[2] * fi[1]);
+        lp[4][l] += li[4][l] + (r[2] * fi[0] - r[0] * fi[2]);
+        lp[5][l] += li[5][l] + (r[0] * fi[1] - r[1] * fi[0]);
     }
 }
 

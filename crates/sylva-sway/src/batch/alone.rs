@@ -17,8 +17,8 @@ use sylva_core::simd_kernel;
 use sylva_core::v3::{cross, dot};
 
 use super::{
-    Group, LANES, LEVER_SERIES, Lanes, MAX_BEND, any_angle, compose, lever_bend, local_palette,
-    small_angle,
+    Group, LANES, LEVER_SERIES, Lanes, MAX_BEND, add_held, any_angle, compose, held_wind,
+    lever_bend, local_palette, pass_to_parent, small_angle,
 };
 use crate::species::{SwaySpecies, Transition};
 
@@ -39,6 +39,7 @@ simd_kernel! {
         debug_assert_eq!(W, 1);
         let n = st.active.min(st.theta.len());
         let inv_ur = 1.0 / sp.params.leaf_reconfiguration_speed;
+        let wind = u;
         let u = [u[0][0], u[1][0], u[2][0]];
         let speed = (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt();
         let (on, bud) = (st.on[0] as usize, bud[0]);
@@ -68,11 +69,7 @@ simd_kernel! {
         // (1b) Tips inwards: a joint's loads are its subtree's (added by its children, all
         // after it), then its own, then the lumped drag of the joints held beyond it; they
         // pass to its parent.
-        let leaves = speed / (1.0 + speed * inv_ur);
-        let q = [
-            [speed * u[0], speed * u[1], speed * u[2]],
-            [leaves * u[0], leaves * u[1], leaves * u[2]],
-        ];
+        let q = held_wind::<W>(wind, inv_ur);
         for i in (0..n).rev() {
             let own = &st.lanes[i];
             let li = &mut st.loads[i];
@@ -80,33 +77,9 @@ simd_kernel! {
                 li[c][0] += own[c][0];
             }
             if let Some(held) = st.held {
-                for (part, q) in held[i].iter().zip(&q) {
-                    let [d, cx, cy, cz] = *part;
-                    li[0][0] += d * q[0];
-                    li[1][0] += d * q[1];
-                    li[2][0] += d * q[2];
-                    li[3][0] += cy * q[2] - cz * q[1];
-                    li[4][0] += cz * q[0] - cx * q[2];
-                    li[5][0] += cx * q[1] - cy * q[0];
-                }
+                add_held::<W>(li, &held[i], &q);
             }
-            let p = sp.parent[i];
-            if p != sylva_tree::NO_PARENT {
-                let p = p as usize;
-                let (o, op) = (sp.origin[i], sp.origin[p]);
-                let r = [o[0] - op[0], o[1] - op[1], o[2] - op[2]];
-                let (lp, li) = {
-                    let (a, b) = st.loads.split_at_mut(i);
-                    (&mut a[p], &b[0])
-                };
-                let fi = [li[0][0], li[1][0], li[2][0]];
-                lp[0][0] += fi[0];
-                lp[1][0] += fi[1];
-                lp[2][0] += fi[2];
-                lp[3][0] += li[3][0] + (r[1] * fi[2] - r[2] * fi[1]);
-                lp[4][0] += li[4][0] + (r[2] * fi[0] - r[0] * fi[2]);
-                lp[5][0] += li[5][0] + (r[0] * fi[1] - r[1] * fi[0]);
-            }
+            pass_to_parent::<W>(sp, st.loads, i);
         }
         // (2) Springs and blend weights, then each joint's rotation about its rest position
         // (T(o) R_i T(−o)) into its palette slot; the loads cleared for the next step. In
