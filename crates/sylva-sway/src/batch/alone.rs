@@ -14,11 +14,11 @@
 //! [`step_group`]: super::step_group
 
 use sylva_core::simd_kernel;
-use sylva_core::v3::{cross, dot};
+use sylva_core::v3::dot;
 
 use super::{
     Group, LANES, LEVER_SERIES, Lanes, MAX_BEND, add_held, any_angle, compose, held_wind,
-    lever_bend, local_palette, pass_to_parent, small_angle,
+    lever_bend, local_palette, own_drag, pass_to_parent, small_angle,
 };
 use crate::species::{SwaySpecies, Transition};
 
@@ -39,37 +39,17 @@ simd_kernel! {
         debug_assert_eq!(W, 1);
         let n = st.active.min(st.theta.len());
         let inv_ur = 1.0 / sp.params.leaf_reconfiguration_speed;
-        let wind = u;
-        let u = [u[0][0], u[1][0], u[2][0]];
-        let speed = (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt();
         let (on, bud) = (st.on[0] as usize, bud[0]);
         // (1a) Each joint's own drag and its moment about the joint, kept in the joint's
         // palette slot (free until pass 2 writes it).
         for i in 0..n {
-            let [ax, ay] = sp.axes[i];
-            let arm = sp.arm[i];
-            let (drag, leaf) = (sp.drag[i], sp.leaf_drag[i]);
-            let ra = st.rate[i];
-            let implicit = st.weight[i][0] / (1.0 + aero[i] * speed);
-            let (r0, r1) = (implicit * ra[0][0], implicit * ra[1][0]);
-            let om = [r0 * ax[0] + r1 * ay[0], r0 * ax[1] + r1 * ay[1], r0 * ax[2] + r1 * ay[2]];
-            let v = cross(om, arm);
-            let rel = [u[0] - v[0], u[1] - v[1], u[2] - v[2]];
-            let s = (rel[0] * rel[0] + rel[1] * rel[1] + rel[2] * rel[2]).sqrt();
-            let k = s * (drag + leaf / (1.0 + s * inv_ur));
-            let f = [k * rel[0], k * rel[1], k * rel[2]];
-            let own = &mut st.lanes[i];
-            own[0][0] = f[0];
-            own[1][0] = f[1];
-            own[2][0] = f[2];
-            own[3][0] = arm[1] * f[2] - arm[2] * f[1];
-            own[4][0] = arm[2] * f[0] - arm[0] * f[2];
-            own[5][0] = arm[0] * f[1] - arm[1] * f[0];
+            let own = (&mut st.lanes[i][..6]).try_into().expect("six rows");
+            own_drag::<W, false>(sp, aero, inv_ur, u, i, &st.rate[i], &st.weight[i], own);
         }
         // (1b) Tips inwards: a joint's loads are its subtree's (added by its children, all
         // after it), then its own, then the lumped drag of the joints held beyond it; they
         // pass to its parent.
-        let q = held_wind::<W>(wind, inv_ur);
+        let q = held_wind::<W>(u, inv_ur);
         for i in (0..n).rev() {
             let own = &st.lanes[i];
             let li = &mut st.loads[i];
