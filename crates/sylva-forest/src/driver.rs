@@ -656,13 +656,14 @@ impl Forest {
         // Each species may hold its trunks and a share of the rest of the cap in proportion
         // to its crowns (all of them where the whole forest fits): the animation LOD keeps a
         // lane group at a coarser prefix rather than go over it (`FrameStats::state_capped`).
-        // Where the forest fits, a fifth more: the rows of palettes of simulations stepped
-        // alone (`SwayBatch::set_alone_limit`), at most two lanes' of a group of 16 and one
-        // of 8 or 4, 48 bytes a joint against the group's 68 per joint and lane (≤ 18 %).
+        // Where the forest fits, a quarter more: the rows of simulations stepped alone
+        // (`SwayBatch::set_alone_limit`; a row holds a lane's palettes and state, 68 bytes a
+        // joint as the group does per joint and lane), at most two lanes' of a group of 16
+        // or one of 8 or 4 (≤ 25 %).
         let spare = (all_full - all_floor).max(1) as f64;
         let allowance = |si: usize| {
             let share = (full[si] - floor[si]) as f64 / spare;
-            let most = (full[si] - floor[si]) as f64 + full[si] as f64 / 5.0;
+            let most = (full[si] - floor[si]) as f64 + full[si] as f64 / 4.0;
             floor[si] + ((limit - all_floor) as f64 * share).min(most) as usize
         };
         for (si, (original, order)) in models.into_iter().zip(orders).enumerate() {
@@ -1139,7 +1140,7 @@ impl Forest {
                     s.batch.settle(k);
                 }
             }
-            // What the cap leaves to the rows of palettes of simulations stepped alone.
+            // What the cap leaves to the rows of simulations stepped alone.
             s.batch.set_alone_limit(s.state_cap.saturating_sub(held));
             for (i, g) in s.groups.iter_mut().enumerate() {
                 let lane = s.lane_of[i] as usize;

@@ -49,7 +49,9 @@
 //! follows the largest angle among its lanes). A single lane (a batch of one, or a lane
 //! stepped alone) has nothing to vectorise across and takes a kernel of its own with the
 //! same operations, ordered so that the joints' independent work is not chained along the
-//! skeleton (`batch/alone.rs`; about 30 % less time a joint). Groups are independent and each is computed
+//! skeleton (`batch/alone.rs`; about 30 % less time a joint). A lane stepped alone keeps its
+//! state and palettes in a row of its own for as long as it stays alone, rather than
+//! strided across its group's lanes. Groups are independent and each is computed
 //! by the same sequence of operations whatever thread runs it, so results are bit-identical
 //! for any thread count.
 //!
@@ -169,12 +171,86 @@ struct Block {
     joints: usize,
     /// Steps in a row this block has held memory for more joints than it stores.
     idle: u32,
-    /// Lanes the last step stepped alone (a bit each): their palettes are in `side`, not
+    /// Lanes the last step stepped alone (a bit each): their palettes are in `rows`, not
     /// in `pal`.
     alone: u32,
-    /// Per lane stepped alone: its palettes, 12 per joint in a row, for the joints it
-    /// simulates (empty for the others).
-    side: Vec<Vec<f32>>,
+    /// Per lane stepped alone: its row (empty for the others).
+    rows: Vec<Row>,
+}
+
+/// The state of a lane stepped alone, one value per joint in a row rather than strided
+/// across its group's lanes: its palettes (12 per joint) for the joints it simulates, and
+/// its angles, rates and blend weights for the first `joints` joints, which stand for the
+/// group's values of that lane. The state stays in the row while the lane goes alone from
+/// step to step (copying it in and out of the group each step, through memory strided by
+/// the group's width, cost a third of a near tree's step) and goes back to the group when
+/// the lane rejoins it or its lanes are exchanged.
+#[derive(Debug, Clone, Default)]
+struct Row {
+    pal: Vec<f32>,
+    theta: Vec<f32>,
+    rate: Vec<f32>,
+    weight: Vec<f32>,
+    /// Joints whose state the row holds (the group's values of the lane for them are not
+    /// current).
+    joints: usize,
+}
+
+impl Row {
+    /// Values held (capacity), all four vectors.
+    fn capacity(&self) -> usize {
+        self.pal.capacity() + self.theta.capacity() + self.rate.capacity() + self.weight.capacity()
+    }
+
+    /// Hold the state of joints `..joints` of lane `l` of a group of `width` lanes (angles
+    /// `theta`, rates `rate`, weights `weight`): joints the row held beyond go back to the
+    /// group (those the group still stores), joints it lacks come from it. Grown exactly,
+    /// so that the bytes held are the bytes counted.
+    fn hold(&mut self, joints: usize, group: [&mut Vec<f32>; 3], width: usize, l: usize) {
+        let [theta, rate, weight] = group;
+        let had = self.joints;
+        if had > joints {
+            let stored = (weight.len() / width).min(had);
+            for j in joints..stored {
+                for k in 0..2 {
+                    theta[(2 * j + k) * width + l] = self.theta[2 * j + k];
+                    rate[(2 * j + k) * width + l] = self.rate[2 * j + k];
+                }
+                weight[j * width + l] = self.weight[j];
+            }
+        }
+        self.theta.truncate(2 * joints.min(had));
+        self.rate.truncate(2 * joints.min(had));
+        self.weight.truncate(joints.min(had));
+        if joints > had {
+            for v in [&mut self.theta, &mut self.rate] {
+                v.reserve_exact(2 * (joints - had));
+            }
+            self.weight.reserve_exact(joints - had);
+            for j in had..joints {
+                for k in 0..2 {
+                    self.theta.push(theta[(2 * j + k) * width + l]);
+                    self.rate.push(rate[(2 * j + k) * width + l]);
+                }
+                self.weight.push(weight[j * width + l]);
+            }
+        }
+        self.joints = joints;
+    }
+}
+
+impl Block {
+    /// Lane `l`'s row, if it holds the state of joint `j`.
+    fn row_holding(&self, l: usize, j: usize) -> Option<&Row> {
+        self.rows.get(l).filter(|r| j < r.joints)
+    }
+
+    /// Give lane `l`'s state back to the group from its row (of a group of `width` lanes).
+    fn put_back(&mut self, l: usize, width: usize) {
+        if let Some(row) = self.rows.get_mut(l) {
+            row.hold(0, [&mut self.theta, &mut self.rate, &mut self.weight], width, l);
+        }
+    }
 }
 
 /// Steps a lane group keeps the memory of joints it no longer stores before giving it
@@ -238,7 +314,7 @@ impl Block {
             + self.rate.capacity()
             + self.weight.capacity()
             + self.pal.capacity()
-            + self.side.iter().map(Vec::capacity).sum::<usize>())
+            + self.rows.iter().map(Row::capacity).sum::<usize>())
     }
 }
 
@@ -270,7 +346,7 @@ pub struct SwayBatch {
     /// Per instance: the joints the last step computed for it (its palettes beyond are not
     /// current; it shows them at their anchors).
     stepped: Vec<u32>,
-    /// Bytes the rows of palettes of lanes stepped alone may hold in all
+    /// Bytes the rows of lanes stepped alone (their palettes and state) may hold in all
     /// ([`SwayBatch::set_alone_limit`]).
     alone_limit: usize,
     /// Per group, the step's split of its lanes (decided in group order before the step).
@@ -556,8 +632,9 @@ impl SwayBatch {
         }
     }
 
-    /// Let the rows of palettes of lanes stepped alone hold at most `bytes` in all (they
-    /// count in [`stored_bytes`](SwayBatch::stored_bytes)): a caller keeping the state
+    /// Let the rows of lanes stepped alone (each its palettes and state, [`STATE_BYTES`] a
+    /// joint) hold at most `bytes` in all (they count in
+    /// [`stored_bytes`](SwayBatch::stored_bytes)): a caller keeping the state
     /// under a memory cap gives them what the cap leaves. Groups are served in order; one
     /// whose lanes would go past it steps them together. No limit unless set.
     pub fn set_alone_limit(&mut self, bytes: usize) {
@@ -585,7 +662,10 @@ impl SwayBatch {
                 block.store(p, w);
             }
             for j in f..p {
-                block.weight[j * w + l] = 0.0;
+                match block.rows.get_mut(l).filter(|r| j < r.joints) {
+                    Some(row) => row.weight[j] = 0.0,
+                    None => block.weight[j * w + l] = 0.0,
+                }
             }
         }
         self.fresh[i] = p as u32;
@@ -611,6 +691,9 @@ impl SwayBatch {
             }
         }
         let (la, lb) = (a % LANES, b % LANES);
+        // Their state in the group's lanes, rows given back (the next step takes them again).
+        self.blocks[ga].put_back(la, w);
+        self.blocks[gb].put_back(lb, w);
         let at = |j: usize, k: usize, l: usize| (2 * j + k) * w + l;
         if ga == gb {
             let x = &mut self.blocks[ga];
@@ -679,14 +762,21 @@ impl SwayBatch {
     /// Bending angles (rad) of joint `j` of instance `i`; 0 for a joint not stored (at rest).
     pub fn angles(&self, i: usize, j: usize) -> [f32; 2] {
         let Some((g, b, l)) = self.slot(i, j) else { return [0.0; 2] };
-        let (t, w) = (&self.blocks[g].theta, self.width);
+        let block = &self.blocks[g];
+        if let Some(row) = block.row_holding(l, j) {
+            return [row.theta[2 * j], row.theta[2 * j + 1]];
+        }
+        let (t, w) = (&block.theta, self.width);
         [t[2 * b + l], t[2 * b + w + l]]
     }
 
     /// Displayed fraction of joint `j`'s rotation in instance `i` (animation-LOD blend); 0
     /// for a joint not stored.
     pub fn weight(&self, i: usize, j: usize) -> f32 {
-        self.slot(i, j).map_or(0.0, |(g, b, l)| self.blocks[g].weight[b + l])
+        self.slot(i, j).map_or(0.0, |(g, b, l)| {
+            let block = &self.blocks[g];
+            block.row_holding(l, j).map_or(block.weight[b + l], |row| row.weight[j])
+        })
     }
 
     /// Set the state of joint `j` of instance `i` (for probes and tests: a release test
@@ -701,6 +791,11 @@ impl SwayBatch {
             self.blocks[g].store(j + 1, w);
         }
         let (block, b, l) = (&mut self.blocks[g], j * w, i % LANES);
+        if let Some(row) = block.rows.get_mut(l).filter(|r| j < r.joints) {
+            row.theta[2 * j..2 * j + 2].copy_from_slice(&angles);
+            row.rate[2 * j..2 * j + 2].copy_from_slice(&rates);
+            return;
+        }
         for a in 0..2 {
             block.theta[2 * b + a * w + l] = angles[a];
             block.rate[2 * b + a * w + l] = rates[a];
@@ -740,7 +835,7 @@ impl SwayBatch {
     pub fn lane_palettes(&self, i: usize) -> Option<&[f32]> {
         let b = self.blocks.get(i / LANES)?;
         let l = i % LANES;
-        (b.alone >> l & 1 == 1).then(|| b.side[l].as_slice())
+        (b.alone >> l & 1 == 1).then(|| b.rows[l].pal.as_slice())
     }
 
     /// Where instance `i`'s palettes lie in its group's
@@ -819,10 +914,10 @@ impl SwayBatch {
             }
             let (mut head, mut solo) = plan_lanes(&need[..used], w);
             // Bytes of the rows the lanes alone will hold (a row is kept, not shrunk).
-            let side = &self.blocks[g].side;
+            let rows = &self.blocks[g].rows;
             let bytes: usize = (0..used)
                 .filter(|&l| solo >> l & 1 == 1)
-                .map(|l| 4 * (12 * need[l]).max(side.get(l).map_or(0, Vec::capacity)))
+                .map(|l| (STATE_BYTES * need[l]).max(4 * rows.get(l).map_or(0, Row::capacity)))
                 .sum();
             if bytes > left {
                 (head, solo) = (need[..used].iter().copied().max().unwrap_or(0), 0);
@@ -848,7 +943,7 @@ impl SwayBatch {
             .zip(lanes_of)
             .enumerate()
             .for_each(|(g, ((block, active), (live, stepped)))| {
-                let Block { theta, rate, weight, pal, alone, side, .. } = block;
+                let Block { theta, rate, weight, pal, alone, rows, .. } = block;
                 let mut u = [ZERO; 3];
                 let mut bud = [0u32; LANES];
                 let used = W.min(ni - g * LANES);
@@ -863,49 +958,46 @@ impl SwayBatch {
                 let k = (keep[g] as usize).min(p);
                 let Plan { on, need, head, solo } = plans[g];
                 let (need, head) = (need.map(|x| x as usize), head as usize);
-                // Palettes of lanes stepped alone are kept in a row of their own (the step
-                // computes every palette it steps afresh, so a lane that rejoins its group
-                // needs nothing copied back).
-                if solo != 0 && side.len() < W {
-                    side.resize(W, Vec::new());
+                // A lane stepped alone keeps its state and palettes in its row (see [`Row`]),
+                // taking from the group the joints it lacks and giving back those beyond what
+                // it now simulates; a lane that rejoins its group gives its state back and
+                // the row up (the step computes every palette it steps afresh, so none is
+                // copied back).
+                if solo != 0 && rows.len() < W {
+                    rows.resize_with(W, Row::default);
                 }
-                for (l, v) in side.iter_mut().enumerate() {
-                    if solo >> l & 1 == 0 && v.capacity() > 0 {
-                        *v = Vec::new();
+                for (l, row) in rows.iter_mut().enumerate() {
+                    let r = if solo >> l & 1 == 1 { need[l] } else { 0 };
+                    row.hold(r, [&mut *theta, &mut *rate, &mut *weight], W, l);
+                    if r == 0 {
+                        if row.capacity() > 0 {
+                            *row = Row::default();
+                        }
+                        continue;
                     }
+                    // Grown exactly (the bytes counted are the bytes held); its values are
+                    // all written by the step.
+                    if row.pal.capacity() < 12 * r {
+                        row.pal = vec![0.0; 12 * r];
+                    }
+                    row.pal.resize(12 * r, 0.0);
                 }
                 *alone = solo;
-                SCRATCH.with_borrow_mut(|(loads, copies)| {
-                    // Lanes stepped alone, each as a group of one (the kernel at width 1, the
-                    // same operations as a batch of that instance alone): a copy of its
-                    // angles, rates and weights in a row, stepped, and written back after
-                    // the group's step; its palettes computed into its own row.
-                    copies.clear();
+                SCRATCH.with_borrow_mut(|loads| {
+                    // Lanes stepped alone, each as a group of one on its row (the kernel at
+                    // width 1, the same operations as a batch of that instance alone).
                     for l in (0..used).filter(|&l| solo >> l & 1 == 1) {
                         let r = need[l];
-                        let at = copies.len();
-                        copies.resize(at + 5 * r, 0.0);
-                        let (th, rest) = copies[at..].split_at_mut(2 * r);
-                        let (ra, wt) = rest.split_at_mut(2 * r);
-                        lane_copy(theta, th, W, l, true);
-                        lane_copy(rate, ra, W, l, true);
-                        lane_copy(weight, wt, W, l, true);
-                        // Grown exactly (the bytes counted are the bytes held); its values are
-                        // all written by the step.
-                        let pl = &mut side[l];
-                        if pl.capacity() < 12 * r {
-                            *pl = vec![0.0; 12 * r];
-                        }
-                        pl.resize(12 * r, 0.0);
                         if loads.len() < 6 * r {
                             loads.resize(6 * r, 0.0);
                         }
+                        let row = &mut rows[l];
                         let mut one = Group::<1> {
-                            theta: th.as_chunks_mut::<1>().0.as_chunks_mut::<2>().0,
-                            rate: ra.as_chunks_mut::<1>().0.as_chunks_mut::<2>().0,
-                            weight: wt.as_chunks_mut::<1>().0,
+                            theta: row.theta.as_chunks_mut::<1>().0.as_chunks_mut::<2>().0,
+                            rate: row.rate.as_chunks_mut::<1>().0.as_chunks_mut::<2>().0,
+                            weight: row.weight.as_chunks_mut::<1>().0,
                             loads: loads[..6 * r].as_chunks_mut::<1>().0.as_chunks_mut::<6>().0,
-                            lanes: pl.as_chunks_mut::<1>().0.as_chunks_mut::<12>().0,
+                            lanes: row.pal.as_chunks_mut::<1>().0.as_chunks_mut::<12>().0,
                             active: r,
                             on: [on[l]; LANES],
                             held: held(r),
@@ -919,7 +1011,7 @@ impl SwayBatch {
                         step_one::<1>(sp, tr, aero, blend, &b1, &u1, &mut one);
                     }
                     // The rest of the group, every lane to `head` (the lanes stepped alone
-                    // too, overwritten below).
+                    // too, on values their rows stand for: nothing reads them).
                     if head > 0 {
                         if loads.len() < 6 * head * W {
                             loads.resize(6 * head * W, 0.0);
@@ -944,23 +1036,18 @@ impl SwayBatch {
                             step_group::<W>(sp, tr, aero, blend, &bud, &u, &mut st);
                         }
                     }
-                    let mut at = 0;
-                    for l in (0..used).filter(|&l| solo >> l & 1 == 1) {
-                        let r = need[l];
-                        let (th, rest) = copies[at..].split_at_mut(2 * r);
-                        let (ra, rest) = rest.split_at_mut(2 * r);
-                        lane_copy(theta, th, W, l, false);
-                        lane_copy(rate, ra, W, l, false);
-                        lane_copy(weight, &mut rest[..r], W, l, false);
-                        at += 5 * r;
-                    }
                 });
                 // What each lane now has live: its switched-on prefix, and the joints beyond
                 // it still fading out (the last one not yet at rest).
                 for l in 0..used {
                     stepped[l] = if solo >> l & 1 == 1 { need[l] } else { head } as u32;
                     let (kl, was) = (on[l] as usize, live[l] as usize);
-                    let fading = (kl..was.min(need[l])).rev().find(|&j| weight[j * W + l] != 0.0);
+                    let row = rows.get(l).filter(|r| r.joints > 0);
+                    let shown = |j: usize| match row {
+                        Some(r) if j < r.joints => r.weight[j],
+                        _ => weight[j * W + l],
+                    };
+                    let fading = (kl..was.min(need[l])).rev().find(|&j| shown(j) != 0.0);
                     // Rounded up to a registered prefix, as every prefix a step takes is.
                     live[l] = fading.map_or(kl, |j| round_up(lumped, n, j + 1)).max(kl) as u32;
                 }
@@ -969,21 +1056,6 @@ impl SwayBatch {
                     *active = k as u32;
                 }
             });
-    }
-}
-
-/// Copy one lane of a lane-interleaved array (values per joint, `width` lanes inner) to or
-/// from `row` (the same values per joint, one lane), as long as `row`: `to_row` true reads
-/// the lanes.
-#[inline]
-fn lane_copy(lanes: &mut [f32], row: &mut [f32], width: usize, lane: usize, to_row: bool) {
-    for (v, x) in row.iter_mut().enumerate() {
-        let y = &mut lanes[v * width + lane];
-        if to_row {
-            *x = *y;
-        } else {
-            *y = *x;
-        }
     }
 }
 
@@ -1005,10 +1077,12 @@ fn width_cost(width: usize) -> f32 {
     }
 }
 
-/// A lane stepped alone costs one lane's step and the copies of its angles, rates and
+/// A lane stepped alone cost one lane's step and the copies of its angles, rates and
 /// weights in and out, strided across its group's lanes: in scene D's forest a black
-/// tupelo's whole skeleton steps in about 1.8 ms alone in its group of eight, against
-/// 1.1–1.3 ms in a batch of its own (docs/benchmarks.md).
+/// tupelo's whole skeleton stepped in about 1.8 ms alone in its group of eight, against
+/// 1.1–1.3 ms in a batch of its own (docs/benchmarks.md). A lane alone now keeps its state
+/// in its row from step to step (see `Row`), so it pays for the copies only when it goes
+/// alone or rejoins.
 ///
 /// These costs predate the single-lane kernel (`alone`), which made a lane alone about 30 %
 /// cheaper (a tupelo now steps in 0.77, 3.4, 3.9 and 4.3 ms at 1, 4, 8 and 16 lanes, and
@@ -1042,13 +1116,10 @@ fn plan_lanes(need: &[usize], width: usize) -> (usize, u32) {
     (head, order[..best_m].iter().fold(0, |b, &l| b | 1 << l))
 }
 
-type Scratch = (Vec<f32>, Vec<f32>);
-
 thread_local! {
-    /// Per thread: the load accumulators of the group it steps (`6 · joints · W` values,
-    /// zero between groups), and the states of the lanes it steps alone.
-    static SCRATCH: std::cell::RefCell<Scratch> =
-        const { std::cell::RefCell::new((Vec::new(), Vec::new())) };
+    /// Per thread: the load accumulators of the group or lane it steps (`6 · joints · W`
+    /// values, zero between steps).
+    static SCRATCH: std::cell::RefCell<Vec<f32>> = const { std::cell::RefCell::new(Vec::new()) };
 }
 
 /// Step a group of one lane (`W` = 1): its joints' independent work apart from the sweeps

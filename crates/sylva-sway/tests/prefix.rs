@@ -258,10 +258,11 @@ fn a_near_tree_among_far_ones_steps_its_crown_alone() {
     let w = group.weight(7, top);
     assert!(w > 0.0 && w <= dt / 0.5 + 1e-6, "blending in: {w}");
     assert_eq!(group.joint_updates(), 2 * all + (LANES - 2) * trunk, "two lanes alone");
-    // The rows of palettes of lanes alone stay within the limit a caller sets (under a
-    // memory cap): a byte short of the two rows, the group steps its lanes together and
-    // gives the rows back; with room for them, the two lanes go alone again.
-    let rows = 2 * 12 * all * 4;
+    // The rows of lanes alone (each joint's palette and state, as a lane of the group holds)
+    // stay within the limit a caller sets (under a memory cap): a byte short of the two
+    // rows, the group steps its lanes together and gives the rows back; with room for them,
+    // the two lanes go alone again.
+    let rows = 2 * all * STATE_BYTES;
     let with_rows = group.stored_bytes();
     group.set_alone_limit(rows - 1);
     group.step(dt, &wind);
@@ -272,4 +273,81 @@ fn a_near_tree_among_far_ones_steps_its_crown_alone() {
     group.step(dt, &wind);
     assert_eq!(group.joint_updates(), 2 * all + (LANES - 2) * trunk, "alone again");
     assert_eq!(group.stored_bytes(), with_rows);
+}
+
+/// A lane stepped alone keeps its state in a row of its own from step to step. Whatever
+/// happens to it there — read, set, moved to another lane, rejoining its group — it must
+/// stay the state of that tree: the near tree matches a batch of it alone bit for bit
+/// throughout, and its angles and weights read the same as the batch's.
+#[test]
+fn a_lane_alone_keeps_its_state_through_reads_moves_and_rejoining() {
+    let (model, order) = aspen();
+    let sp = SwaySpecies::new(&model.tree.skeleton, SwayParams::default()).expect("species");
+    let all = sp.len();
+    let mut wind: Vec<[f32; 3]> =
+        (0..LANES).map(|i| [4.0 + 0.3 * i as f32, 0.5 - 0.05 * i as f32, 0.2]).collect();
+    let mut group = SwayBatch::new(sp.clone(), LANES);
+    let mut alone = SwayBatch::new(sp, 1);
+    for b in [&mut group, &mut alone] {
+        b.set_prefixes(&[order.prefix.as_slice(), &[order.trunk]].concat());
+    }
+    let mut near = 3;
+    for i in (0..LANES).filter(|&i| i != near) {
+        group.set_lane_active(i, order.trunk);
+    }
+    let dt = 1.0 / 30.0;
+    let top = all - 1;
+    let state = |group: &SwayBatch, alone: &SwayBatch, near: usize, what: &str| {
+        for j in [0, all / 3, all / 2, top] {
+            assert_eq!(group.angles(near, j), alone.angles(0, j), "{what}: angles {j}");
+            assert_eq!(group.weight(near, j), alone.weight(0, j), "{what}: weight {j}");
+        }
+    };
+    let same = |group: &SwayBatch, alone: &SwayBatch, near: usize, what: &str| {
+        state(group, alone, near, what);
+        for j in [0, all / 3, all / 2, top] {
+            assert_eq!(group.palette(near, j), alone.palette(0, j), "{what}: palette {j}");
+        }
+    };
+    let step = |group: &mut SwayBatch, alone: &mut SwayBatch, near: usize, wind: &[[f32; 3]]| {
+        group.step(dt, wind);
+        alone.step(dt, &wind[near..=near]);
+    };
+    // Long enough for the far crowns to fade and the near tree to go alone for a while.
+    for _ in 0..60 {
+        step(&mut group, &mut alone, near, &wind);
+    }
+    assert_eq!(group.joint_updates(), all + (LANES - 1) * group.prefix_for(order.trunk));
+    assert!(group.lane_palettes(near).is_some(), "stepped alone");
+    same(&group, &alone, near, "alone");
+    // A joint set while the lane is alone.
+    for b in [(&mut group, near), (&mut alone, 0)] {
+        b.0.set_state(b.1, top, [0.3, -0.2], [1.0, 0.5]);
+    }
+    assert_eq!(group.angles(near, top), [0.3, -0.2]);
+    for _ in 0..5 {
+        step(&mut group, &mut alone, near, &wind);
+    }
+    same(&group, &alone, near, "set");
+    // Moved to another lane (with its wind), as the forest gathers trees by prefix.
+    group.swap_instances(near, 9);
+    wind.swap(near, 9);
+    near = 9;
+    // Its state moved with it (its palettes are recomputed by the next step).
+    state(&group, &alone, near, "moved, before a step");
+    for _ in 0..5 {
+        step(&mut group, &mut alone, near, &wind);
+    }
+    assert!(group.lane_palettes(near).is_some(), "alone in its new lane");
+    same(&group, &alone, near, "moved");
+    // Every lane wants the whole tree again: the near tree rejoins its group.
+    for i in 0..LANES {
+        group.set_lane_active(i, all);
+    }
+    for _ in 0..5 {
+        step(&mut group, &mut alone, near, &wind);
+    }
+    assert!(group.lane_palettes(near).is_none(), "back in the group");
+    assert_eq!(group.joint_updates(), LANES * all);
+    same(&group, &alone, near, "rejoined");
 }
