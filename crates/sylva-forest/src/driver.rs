@@ -213,28 +213,201 @@ pub fn lod_coordinate(frac: f32, h0: f32) -> f32 {
     (1.0 + (h0 / frac.max(1e-9)).ln() / 3f32.ln()).max(0.0)
 }
 
-/// A buffer written from its start over what it held: a frame's palettes over the last
-/// frame's, so that only growth is zero-filled (cleared and refilled each frame, zeroing
-/// scene A's 15 MB of palettes cost about 0.4 ms of its 4 ms of frame building). Whoever
-/// takes a run writes all of it; the caller truncates the buffer to `len` at the end.
-struct Overwrite<'a> {
-    buf: &'a mut Vec<f32>,
-    len: usize,
+/// The first `n` values of `buf`, for the caller to write every one of: a frame's palettes
+/// written over the last frame's, so that only growth is zero-filled (cleared and refilled
+/// each frame, zeroing scene A's 15 MB of palettes cost about 0.4 ms of its 4 ms of frame
+/// building). The caller truncates the buffer to `n` after.
+fn overwrite(buf: &mut Vec<f32>, n: usize) -> &mut [f32] {
+    if buf.len() < n {
+        buf.resize(n, 0.0);
+    }
+    &mut buf[..n]
 }
 
-impl Overwrite<'_> {
-    /// The next `n` values, for the caller to write every one of.
-    fn take(&mut self, n: usize) -> &mut [f32] {
-        let at = self.len;
-        self.len += n;
-        if self.buf.len() < self.len {
-            self.buf.resize(self.len, 0.0);
-        }
-        &mut self.buf[at..self.len]
-    }
+/// How a lane group's palettes are laid out in a frame's buffer.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Layout {
+    /// Before the first step: every joint at rest, lanes side by side.
+    Rest,
+    /// As the batch holds them, lanes side by side (each joint's `used` lanes in a row).
+    Lanes,
+    /// Each simulation's own prefix in a row: where the lanes' prefixes differ or a lane
+    /// was stepped alone.
+    Rows,
+}
 
-    fn put(&mut self, values: &[f32]) {
-        self.take(values.len()).copy_from_slice(values);
+/// One lane group's palettes in a frame: where they go and how.
+#[derive(Debug, Clone, Copy)]
+struct PaletteCopy {
+    species: u32,
+    group: u32,
+    /// First value in the frame's buffer, and values.
+    start: usize,
+    len: usize,
+    /// Joints of the group's finest prefix, and simulations copied (its used lanes).
+    joints: u32,
+    used: u32,
+    kind: Layout,
+}
+
+/// Where lane group `k` of species `s` (index `si`) puts its palettes, from `start` in the
+/// frame's buffer, given what each simulation's drawn trees read (`need`); `None` where
+/// none is drawn.
+fn lay_out(
+    s: &SpeciesRuntime,
+    si: usize,
+    k: usize,
+    need: &[u32],
+    start: usize,
+) -> Option<PaletteCopy> {
+    let n = s.batch.species().len();
+    // The batch pads its last lane group (to 16, or a narrow batch to its 4 or 8 lanes):
+    // only the simulated lanes are copied.
+    let used = (s.groups.len() - k * LANES).min(s.batch.width());
+    let need = &need[(s.lane_base + k) * LANES..][..used];
+    // The group's finest prefix: what the lane layout would send for each lane.
+    let joints = (need.iter().copied().max().unwrap_or(0) as usize).min(n);
+    if joints == 0 {
+        return None;
+    }
+    let first = k * LANES;
+    let simulated_in = |l: usize| s.batch.simulated(first + l);
+    let simulated = (0..used).map(simulated_in).min().unwrap_or(0);
+    let uniform = (0..used)
+        .all(|l| simulated_in(l) == simulated && s.batch.lane_palettes(first + l).is_none());
+    let own: usize = need.iter().map(|&m| (m as usize).min(n)).sum();
+    let (kind, len) = if s.batch.stored(k) == 0 {
+        (Layout::Rest, joints * 12 * used)
+    } else if own < joints * used || !uniform {
+        (Layout::Rows, 12 * own)
+    } else {
+        (Layout::Lanes, joints * 12 * used)
+    };
+    Some(PaletteCopy {
+        species: si as u32,
+        group: k as u32,
+        start,
+        len,
+        joints: joints as u32,
+        used: used as u32,
+        kind,
+    })
+}
+
+/// Values a thread copies at least, rather than split the copies further.
+const COPY_GRAIN: usize = 1 << 16;
+
+/// Write the palettes of `copies` (in buffer order, from `copies[0].start`) into `buf`:
+/// split near the middle value, the halves in parallel, down to [`COPY_GRAIN`] values; each
+/// lane group by one thread.
+fn copy_palettes(
+    species: &[SpeciesRuntime],
+    need: &[u32],
+    copies: &[PaletteCopy],
+    buf: &mut [f32],
+) {
+    if copies.len() > 1 && buf.len() > COPY_GRAIN {
+        let half = copies[0].start + buf.len() / 2;
+        let mid = copies.partition_point(|c| c.start < half).clamp(1, copies.len() - 1);
+        let (a, b) = buf.split_at_mut(copies[mid].start - copies[0].start);
+        rayon::join(
+            || copy_palettes(species, need, &copies[..mid], a),
+            || copy_palettes(species, need, &copies[mid..], b),
+        );
+        return;
+    }
+    let mut rest = buf;
+    for c in copies {
+        let (dst, after) = rest.split_at_mut(c.len);
+        rest = after;
+        copy_group(&species[c.species as usize], need, c, dst);
+    }
+}
+
+/// Write one lane group's palettes (`c`) into `dst`, all `c.len` values of it.
+fn copy_group(s: &SpeciesRuntime, need: &[u32], c: &PaletteCopy, dst: &mut [f32]) {
+    let (k, joints, used) = (c.group as usize, c.joints as usize, c.used as usize);
+    let n = s.batch.species().len();
+    // Per joint, its 12 elements × `width` lanes.
+    let width = s.batch.width();
+    let joint = 12 * width;
+    // The group stores (at least) the joints it simulates; those it does not are read at
+    // their anchors below.
+    let block = s.batch.group_palettes(k);
+    let need = &need[(s.lane_base + k) * LANES..][..used];
+    if c.kind == Layout::Rest {
+        // Before the first step the batch stores nothing: every joint at rest.
+        for joint in dst.chunks_exact_mut(12 * used) {
+            for (lanes, x) in joint.chunks_exact_mut(used).zip(IDENTITY) {
+                lanes.fill(x);
+            }
+        }
+        return;
+    }
+    // Joints drawn beyond what a lane simulates (the animation LOD by size) rest on their
+    // parents: each shows its nearest simulated ancestor's palette.
+    let first = k * LANES;
+    let simulated_in = |l: usize| s.batch.simulated(first + l);
+    if c.kind == Layout::Rows {
+        // A gather (a transpose of lanes and elements), in tiles of joints small enough to
+        // stay in cache while each lane's run is written out in order.
+        let mut starts = [0usize; LANES];
+        let mut at = 0;
+        for (l, &m) in need.iter().enumerate() {
+            starts[l] = at;
+            at += 12 * (m as usize).min(n);
+        }
+        // Each lane's own anchors where its simulated prefix is its own; lanes stepped
+        // alone keep their palettes in a row of their own.
+        let mut lane_src = [None; LANES];
+        for (l, a) in lane_src.iter_mut().enumerate().take(used) {
+            let sim = simulated_in(l);
+            *a = if joints > sim { s.batch.anchors(sim) } else { None };
+        }
+        const TILE: usize = 32;
+        for first_joint in (0..joints).step_by(TILE) {
+            for (l, &m) in need.iter().enumerate() {
+                let end = (m as usize).min(n).min(first_joint + TILE);
+                if end <= first_joint {
+                    continue;
+                }
+                let out = dst[starts[l] + 12 * first_joint..].chunks_exact_mut(12);
+                let src = |j: usize| lane_src[l].map_or(j, |a| a[j] as usize);
+                if let Some(row) = s.batch.lane_palettes(first + l) {
+                    for (j, v) in (first_joint..end).zip(out) {
+                        v.copy_from_slice(&row[12 * src(j)..][..12]);
+                    }
+                    continue;
+                }
+                for (j, v) in (first_joint..end).zip(out) {
+                    let lanes = &block[src(j) * joint..][..joint];
+                    for (e, x) in v.iter_mut().enumerate() {
+                        *x = lanes[e * width + l];
+                    }
+                }
+            }
+        }
+        return;
+    }
+    let simulated = (0..used).map(simulated_in).min().unwrap_or(0);
+    let anchors = if joints > simulated { s.batch.anchors(simulated) } else { None };
+    let src = |j: usize| anchors.map_or(j, |a| a[j] as usize);
+    let copied = joints.min(simulated);
+    let (head, tail) = dst.split_at_mut(copied * 12 * used);
+    if used == width {
+        head.copy_from_slice(&block[..copied * joint]);
+    } else {
+        for (to, lanes) in head.chunks_exact_mut(used).zip(block[..copied * joint].chunks(width)) {
+            to.copy_from_slice(&lanes[..used]);
+        }
+    }
+    let mut to = tail.chunks_exact_mut(used);
+    for j in copied..joints {
+        for lanes in block[src(j) * joint..][..joint].chunks(width) {
+            if let Some(v) = to.next() {
+                v.copy_from_slice(&lanes[..used]);
+            }
+        }
     }
 }
 
@@ -356,6 +529,8 @@ pub struct FrameData {
     want: Vec<u32>,
     /// The pass over the trees, a run of them at a time.
     runs: Vec<TreeRun>,
+    /// Per lane group drawn: where its palettes go.
+    copies: Vec<PaletteCopy>,
     /// `need` and `want` as the runs raise them.
     need_max: Maxima,
     want_max: Maxima,
@@ -1342,115 +1517,36 @@ impl Forest {
         }
         // Palettes of the simulations that are drawn: the prefix of joints their finest
         // drawn level uses (a contiguous run: the batch lays palettes out joint-major).
-        // Written over the last frame's palettes: only growth is zero-filled.
-        let mut pal = Overwrite { buf: &mut out.palettes, len: 0 };
+        // First where each lane group's go and how they are laid out, then the copies, lane
+        // groups in parallel over disjoint parts of the buffer. Written over the last
+        // frame's palettes: only growth is zero-filled.
         out.slots.clear();
         out.slots.resize(self.lane_groups * LANES, PaletteSlot::default());
-        for s in &self.species {
-            let n = s.batch.species().len();
-            // Per joint, its 12 elements × `width` lanes.
-            let width = s.batch.width();
-            let joint = 12 * width;
+        out.copies.clear();
+        let mut len = 0;
+        for (si, s) in self.species.iter().enumerate() {
             for k in 0..s.batch.groups() {
-                // The group stores (at least) the joints it simulates; those it does not
-                // are read at their anchors below.
-                let block = s.batch.group_palettes(k);
-                let lane = s.lane_base + k;
-                // The batch pads its last lane group (to 16, or a narrow batch to its 4 or 8
-                // lanes): copy only the simulated lanes.
-                let used = (s.groups.len() - k * LANES).min(width);
-                let sims = lane * LANES..lane * LANES + used;
-                let need = &out.need[sims.clone()];
-                // The group's finest prefix: what the lane layout would send for each lane.
-                let joints = (need.iter().copied().max().unwrap_or(0) as usize).min(n);
-                if joints == 0 {
-                    continue;
-                }
-                let slots = &mut out.slots[sims];
-                if s.batch.stored(k) == 0 {
-                    // Before the first step the batch stores nothing: every joint at rest.
-                    let base = pal.len as u32;
-                    for (l, slot) in slots.iter_mut().enumerate() {
-                        *slot = PaletteSlot { base: base + l as u32, stride: used as u32 };
-                    }
-                    for joint in pal.take(joints * 12 * used).chunks_exact_mut(12 * used) {
-                        for (lanes, x) in joint.chunks_exact_mut(used).zip(IDENTITY) {
-                            lanes.fill(x);
+                let Some(copy) = lay_out(s, si, k, &out.need, len) else { continue };
+                let sims = s.lane_base * LANES + k * LANES..;
+                let slots = &mut out.slots[sims][..copy.used as usize];
+                match copy.kind {
+                    Layout::Rows => {
+                        // Each simulation's own prefix, in a row.
+                        let mut at = len;
+                        let need = &out.need[s.lane_base * LANES + k * LANES..][..slots.len()];
+                        for (&m, slot) in need.iter().zip(slots.iter_mut()) {
+                            *slot = PaletteSlot { base: at as u32, stride: 1 };
+                            at += 12 * (m as usize).min(s.batch.species().len());
                         }
                     }
-                    continue;
-                }
-                // Joints drawn beyond what a lane simulates (the animation LOD by size) rest
-                // on their parents: each shows its nearest simulated ancestor's palette.
-                let first = k * LANES;
-                let simulated_in = |l: usize| s.batch.simulated(first + l);
-                let simulated = (0..used).map(simulated_in).min().unwrap_or(0);
-                // Lanes stepped alone keep their palettes in a row of their own.
-                let alone = |l: usize| s.batch.lane_palettes(first + l);
-                let uniform = (0..used).all(|l| simulated_in(l) == simulated && alone(l).is_none());
-                let anchors = if joints > simulated { s.batch.anchors(simulated) } else { None };
-                let src = |j: usize| anchors.map_or(j, |a| a[j] as usize);
-                let own: usize = need.iter().map(|&m| (m as usize).min(n)).sum();
-                if own < joints * used || !uniform {
-                    // Prefixes differ: each simulation's own, in a row. A gather (a
-                    // transpose of lanes and elements), in tiles of joints small enough to
-                    // stay in cache while each lane's run is written out in order.
-                    let (start, mut at) = (pal.len, pal.len);
-                    for (&m, slot) in need.iter().zip(slots.iter_mut()) {
-                        *slot = PaletteSlot { base: at as u32, stride: 1 };
-                        at += 12 * (m as usize).min(n);
-                    }
-                    // Every value of the runs is written below.
-                    let runs = pal.take(at - start);
-                    // Each lane's own anchors where its simulated prefix is its own.
-                    let mut lane_src = [None; LANES];
-                    for (l, a) in lane_src.iter_mut().enumerate().take(used) {
-                        let sim = simulated_in(l);
-                        *a = if joints > sim { s.batch.anchors(sim) } else { None };
-                    }
-                    const TILE: usize = 32;
-                    for first in (0..joints).step_by(TILE) {
-                        for (l, (&m, slot)) in need.iter().zip(slots.iter()).enumerate() {
-                            let end = (m as usize).min(n).min(first + TILE);
-                            if end <= first {
-                                continue;
-                            }
-                            let run = slot.base as usize - start + 12 * first;
-                            let dst = runs[run..].chunks_exact_mut(12);
-                            let src = |j: usize| lane_src[l].map_or(j, |a| a[j] as usize);
-                            if let Some(row) = alone(l) {
-                                for (j, v) in (first..end).zip(dst) {
-                                    v.copy_from_slice(&row[12 * src(j)..][..12]);
-                                }
-                                continue;
-                            }
-                            for (j, v) in (first..end).zip(dst) {
-                                let lanes = &block[src(j) * joint..][..joint];
-                                for (e, x) in v.iter_mut().enumerate() {
-                                    *x = lanes[e * width + l];
-                                }
-                            }
+                    Layout::Rest | Layout::Lanes => {
+                        for (l, slot) in slots.iter_mut().enumerate() {
+                            *slot = PaletteSlot { base: (len + l) as u32, stride: copy.used };
                         }
                     }
-                    continue;
                 }
-                let base = pal.len as u32;
-                for (l, slot) in slots.iter_mut().enumerate() {
-                    *slot = PaletteSlot { base: base + l as u32, stride: used as u32 };
-                }
-                let copied = joints.min(simulated);
-                if used == width {
-                    pal.put(&block[..copied * joint]);
-                } else {
-                    for lanes in block[..copied * joint].chunks(width) {
-                        pal.put(&lanes[..used]);
-                    }
-                }
-                for j in copied..joints {
-                    for lanes in block[src(j) * joint..][..joint].chunks(width) {
-                        pal.put(&lanes[..used]);
-                    }
-                }
+                len += copy.len;
+                out.copies.push(copy);
             }
             stats.simulated += s.groups.len();
             stats.coarse_wind += s.coarse_wind;
@@ -1459,7 +1555,8 @@ impl Forest {
             stats.state_bytes += s.batch.stored_bytes();
             stats.state_capped += s.capped;
         }
-        let len = pal.len;
+        let buf = overwrite(&mut out.palettes, len);
+        copy_palettes(&self.species, &out.need, &out.copies, buf);
         out.palettes.truncate(len);
         for (a, &v) in self.want.iter().zip(&out.want) {
             a.store(v, Ordering::Relaxed);

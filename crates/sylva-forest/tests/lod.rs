@@ -218,6 +218,22 @@ fn frames_are_deterministic_for_any_thread_count() {
                         draws.iter().map(|i| index[&i.position.map(f32::to_bits)]).collect();
                     assert!(order.is_sorted(), "impostors out of tree order");
                 }
+                // Every draw reads its own simulation's palettes through its slot, wherever
+                // the copy put its lane group's: the frame's palettes are long enough to be
+                // copied in parts, in parallel.
+                assert!(f.palettes.len() > 1 << 17, "{} palette values", f.palettes.len());
+                for b in &f.buckets {
+                    let drawn = forest.species[b.species as usize].joints_drawn(b.lod);
+                    let joints: Vec<usize> = (0..drawn).collect();
+                    let draws = &f.instances[b.first as usize..][..b.count as usize];
+                    for inst in draws.iter().step_by(29) {
+                        let t = index[&inst.position.map(f32::to_bits)];
+                        for (j, want) in forest.tree_palettes(t, &joints).iter().enumerate() {
+                            let got = inst.palette.read(&f.palettes, j);
+                            assert_eq!(got.as_ref(), Some(want), "tree {t} joint {j}");
+                        }
+                    }
+                }
             }
             let s = &f.stats;
             // Trees seen among the first run's and among the others.
