@@ -287,8 +287,7 @@ fn scene_wind_is_a_preset_a_steady_speed_or_a_file() {
     let speed = |w: [f32; 3]| (w[0] * w[0] + w[1] * w[1]).sqrt();
     assert!(speed(strong) > 2.0 * speed(base), "{strong:?} vs {base:?}");
     // A wind file: a steady-looking field written by the wind crate, read back by the scene.
-    let dir = std::env::temp_dir().join(format!("sylva-scene-wind-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
+    let dir = sylva_testkit::TempDir::new("sylva-scene-wind");
     let file = dir.join("w.swf");
     let grid = sylva_wind::Grid::regular(8, 8, 4.0, &[10.0, 20.0], 64, 0.1);
     let sp = sylva_wind::SynthParams { seed: 3, method: sylva_wind::Method::Separable };

@@ -7,9 +7,12 @@
 //!   process-wide, so every test of a binary that measures them holds [`exclusive`].
 //! - [`runner`]: a proptest runner with a fixed seed, so property tests draw the same cases
 //!   on every run and machine, and shrink a failure to a minimal case.
+//! - [`TempDir`] and [`TempPath`]: a folder of one test's own (or a path in one) under the
+//!   system's temporary folder, removed when the test is done with it.
 #![warn(missing_docs)]
 
 use std::alloc::{GlobalAlloc, Layout, System};
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Mutex, MutexGuard};
 
@@ -84,4 +87,73 @@ pub fn runner(default_cases: u32, seed: u64) -> TestRunner {
         failure_persistence: None,
         ..Config::default()
     })
+}
+
+/// A folder of its own under the system's temporary folder (`NAME-PROCESS-N`), so tests
+/// running side by side never share a file; removed with everything in it when dropped,
+/// unless the thread is panicking: a failing test leaves its files to look at.
+#[derive(Debug)]
+pub struct TempDir(PathBuf);
+
+impl TempDir {
+    /// Create a new folder whose name starts with `name`.
+    pub fn new(name: &str) -> TempDir {
+        static NEXT: AtomicUsize = AtomicUsize::new(0);
+        let n = NEXT.fetch_add(1, Ordering::Relaxed);
+        let dir = std::env::temp_dir().join(format!("{name}-{}-{n}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("temporary folder");
+        TempDir(dir)
+    }
+
+    /// The folder.
+    pub fn path(&self) -> &Path {
+        &self.0
+    }
+
+    /// A path in the folder.
+    pub fn join(&self, name: impl AsRef<Path>) -> PathBuf {
+        self.0.join(name)
+    }
+}
+
+impl AsRef<Path> for TempDir {
+    fn as_ref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        if !std::thread::panicking() {
+            let _ = std::fs::remove_dir_all(&self.0);
+        }
+    }
+}
+
+/// A path in a [`TempDir`] of its own: usable as the path, the folder removed with it.
+#[derive(Debug)]
+pub struct TempPath {
+    path: PathBuf,
+    _dir: TempDir,
+}
+
+impl TempPath {
+    /// `name` (a file, or a folder the test makes) in a new folder starting with `prefix`.
+    pub fn new(prefix: &str, name: impl AsRef<Path>) -> TempPath {
+        let dir = TempDir::new(prefix);
+        TempPath { path: dir.join(name), _dir: dir }
+    }
+}
+
+impl std::ops::Deref for TempPath {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        &self.path
+    }
+}
+
+impl AsRef<Path> for TempPath {
+    fn as_ref(&self) -> &Path {
+        &self.path
+    }
 }

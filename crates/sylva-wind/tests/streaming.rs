@@ -20,8 +20,7 @@ fn a_field_four_times_the_memory_budget_streams_within_it() {
     let output = grid.points() * 3 * grid.frames * 4;
     assert!(output > 4 * budget);
     assert!(streaming_memory_estimate(&grid) < budget as f64);
-    let dir = std::env::temp_dir().join(format!("sylva-stream-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
+    let dir = sylva_testkit::TempDir::new("sylva-stream");
     let store = dir.join("big.zarr");
     let sp = SynthParams { seed: 4, method: Method::Separable };
     let (written, peak) =

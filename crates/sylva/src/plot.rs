@@ -365,8 +365,7 @@ mod tests {
 
     #[test]
     fn a_plot_draws_its_series_in_their_colour() {
-        let dir = std::env::temp_dir().join(format!("sylva-plot-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).expect("temp dir");
+        let dir = sylva_testkit::TempDir::new("sylva-plot");
         let p = dir.join("p.png");
         let red = [220, 0, 0];
         let panel = Panel {
@@ -396,8 +395,7 @@ mod tests {
     #[test]
     fn a_plot_with_no_finite_point_is_an_empty_frame() {
         // Table 3 with every configuration timed on the CPU only has no FPS to plot.
-        let dir = std::env::temp_dir().join(format!("sylva-plot-empty-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).expect("temp dir");
+        let dir = sylva_testkit::TempDir::new("sylva-plot-empty");
         let p = dir.join("p.png");
         for log in [false, true] {
             let panel = Panel {

@@ -3,6 +3,8 @@
 
 use std::process::Command;
 
+use sylva_testkit::TempPath;
+
 fn sylva(args: &[&str]) -> (bool, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_sylva")).args(args).output().expect("run sylva");
     let text =
@@ -10,10 +12,9 @@ fn sylva(args: &[&str]) -> (bool, String) {
     (out.status.success(), text)
 }
 
-fn temp(name: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("sylva-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir.join(name)
+/// `name` in a temporary folder of its own, removed when the test is done with it.
+fn temp(name: &str) -> TempPath {
+    TempPath::new("sylva-cli", name)
 }
 
 #[test]

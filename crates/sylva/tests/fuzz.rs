@@ -66,10 +66,9 @@ fn fuzz(name: &str, seed: u64, seed_input: &[u8], target: &dyn Fn(&[u8])) {
     assert!(panics.is_empty(), "{name}: {} of {n} mutants panicked: {panics:?}", panics.len());
 }
 
-fn temp(name: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("sylva-fuzz-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir.join(name)
+/// `name` in a temporary folder of its own, removed when the test is done with it.
+fn temp(name: &str) -> sylva_testkit::TempPath {
+    sylva_testkit::TempPath::new("sylva-fuzz", name)
 }
 
 fn small_field() -> sylva_wind::WindField {

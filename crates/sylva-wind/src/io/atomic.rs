@@ -103,12 +103,6 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> io::Result<()> {
 mod tests {
     use super::*;
 
-    fn dir() -> PathBuf {
-        let d = std::env::temp_dir().join(format!("sylva-atomic-{}", std::process::id()));
-        std::fs::create_dir_all(&d).expect("temp dir");
-        d
-    }
-
     fn partials(d: &Path) -> usize {
         std::fs::read_dir(d)
             .expect("list")
@@ -122,8 +116,8 @@ mod tests {
 
     #[test]
     fn an_interrupted_write_keeps_the_previous_file_and_leaves_nothing() {
-        let d = dir().join("interrupted");
-        std::fs::create_dir_all(&d).expect("dir");
+        let dir = sylva_testkit::TempDir::new("sylva-atomic");
+        let d = dir.path();
         let path = d.join("field.swf");
         write_atomic(&path, b"the previous, complete file").expect("first write");
         {
@@ -132,13 +126,13 @@ mod tests {
             // The writer fails here: dropped without commit.
         }
         assert_eq!(std::fs::read(&path).expect("read"), b"the previous, complete file");
-        assert_eq!(partials(&d), 0, "the partial file is removed");
+        assert_eq!(partials(d), 0, "the partial file is removed");
     }
 
     #[test]
     fn a_committed_write_replaces_the_file_whole() {
-        let d = dir().join("committed");
-        std::fs::create_dir_all(&d).expect("dir");
+        let dir = sylva_testkit::TempDir::new("sylva-atomic");
+        let d = dir.path();
         let path = d.join("tree.glb");
         write_atomic(&path, b"old").expect("first");
         let mut f = AtomicFile::create(&path).expect("create");
@@ -147,6 +141,6 @@ mod tests {
         assert_eq!(std::fs::read(&path).expect("read"), b"old");
         f.commit().expect("commit");
         assert_eq!(std::fs::read(&path).expect("read"), b"new and longer");
-        assert_eq!(partials(&d), 0);
+        assert_eq!(partials(d), 0);
     }
 }

@@ -321,8 +321,7 @@ mod tests {
     #[test]
     fn bts_holds_the_plane_within_its_quantisation() {
         let f = small();
-        let dir = std::env::temp_dir().join(format!("sylva-bts-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).expect("temp dir");
+        let dir = sylva_testkit::TempDir::new("sylva-bts");
         let p = dir.join("f.bts");
         write_bts(&f, 2, &p).expect("write");
         let bytes = std::fs::read(&p).expect("read");
@@ -403,8 +402,7 @@ mod tests {
     #[test]
     fn damaged_headers_are_refused_naming_the_byte() {
         let f = small();
-        let dir = std::env::temp_dir().join(format!("sylva-bts2-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).expect("temp dir");
+        let dir = sylva_testkit::TempDir::new("sylva-bts2");
         let p = dir.join("f.bts");
         write_bts(&f, 0, &p).expect("write");
         let good = std::fs::read(&p).expect("read");

@@ -247,8 +247,7 @@ mod tests {
     }
 
     fn bytes_of(f: &WindField) -> Vec<u8> {
-        let dir = std::env::temp_dir().join(format!("sylva-swf-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).expect("temp dir");
+        let dir = sylva_testkit::TempDir::new("sylva-swf");
         let p = dir.join("f.swf");
         write_swf(f, &p).expect("write");
         std::fs::read(&p).expect("read back")

@@ -212,8 +212,7 @@ mod tests {
     #[test]
     fn npy_round_trip_is_exact_and_truncation_is_refused() {
         let f = small();
-        let dir = std::env::temp_dir().join(format!("sylva-npy-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).expect("temp dir");
+        let dir = sylva_testkit::TempDir::new("sylva-npy");
         let p = dir.join("f.npy");
         write_npy(&f, &p).expect("write");
         let bytes = std::fs::read(&p).expect("read");

@@ -288,8 +288,7 @@ mod tests {
 
     #[test]
     fn a_streamed_store_reads_back_as_the_field_made_in_memory() {
-        let dir = std::env::temp_dir().join(format!("sylva-zarr-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).expect("temp dir");
+        let dir = sylva_testkit::TempDir::new("sylva-zarr");
         let store = dir.join("w.zarr");
         // 70 columns: two full chunks of 32 and a padded one.
         let grid = Grid::regular(70, 5, 3.0, &[15.0, 25.0], 64, 0.1);
@@ -319,8 +318,7 @@ mod tests {
     /// memory), consistent in every key: refused with an error, never an allocation abort.
     #[test]
     fn a_store_claiming_an_enormous_field_is_refused_not_aborted() {
-        let dir = std::env::temp_dir().join(format!("sylva-zarr-big-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).expect("temp dir");
+        let dir = sylva_testkit::TempDir::new("sylva-zarr-big");
         let store = dir.join("w.zarr");
         let grid = Grid::regular(40, 4, 3.0, &[20.0], 16, 0.1);
         let sp = SynthParams { seed: 1, method: Method::Separable };

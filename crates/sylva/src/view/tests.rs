@@ -381,8 +381,7 @@ fn read_png(path: &std::path::Path) -> Option<Vec<u8>> {
 
 #[test]
 fn a_recorded_camera_path_is_written_read_back_and_replayed() {
-    let dir = std::env::temp_dir().join(format!("sylva-view-path-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
+    let dir = sylva_testkit::TempDir::new("sylva-view-path");
     let mut v = viewer(3);
     v.path_file = dir.join("path.toml");
     let mut c = Controls::default();
