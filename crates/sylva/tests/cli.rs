@@ -452,6 +452,9 @@ fn table3_with_all_lods_only_runs_that_configuration_and_its_image_error() {
     // Uploads: the largest frame's at least the mean.
     let up = |name| rows[0][col(name)].parse::<f64>().expect(name);
     assert!(up("uploaded_max_mb") >= up("uploaded_mb") && up("uploaded_mb") > 0.0, "{csv}");
+    // The slowest frame's simulation + frame building: with one timed frame, that frame's.
+    let (sim, frame, slowest) = (up("sim_ms"), up("frame_ms"), up("cpu_max_ms"));
+    assert!(sim > 0.0 && (slowest - (sim + frame)).abs() < 0.002, "{csv}");
     // The animation state held: some, and far less than a GB for five trees.
     assert!(up("state_mb") > 0.0 && up("state_mb") < 1000.0, "{csv}");
     // The others did not run, and say so.
