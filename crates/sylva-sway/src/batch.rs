@@ -270,19 +270,16 @@ impl Block {
     /// before it restarts).
     fn store(&mut self, joints: usize, width: usize) {
         if joints > self.reserved(width) {
-            // Exactly what is needed, so that the bytes held are the bytes counted, and
-            // zeroed by the allocator: a large block comes as fresh pages with no fill.
-            let grow = |v: &mut Vec<f32>, len: usize| {
-                let mut new = vec![0.0f32; len];
-                new[..v.len()].copy_from_slice(v);
-                *v = new;
+            // Exactly what is needed, so that the bytes held are the bytes counted; grown in
+            // place where the allocator can (a large block is remapped, not copied).
+            let grow = |v: &mut Vec<f32>, len: usize, value: f32| {
+                v.reserve_exact(len - v.len());
+                v.resize(len, value);
             };
-            let have = self.weight.len();
-            grow(&mut self.theta, 2 * joints * width);
-            grow(&mut self.rate, 2 * joints * width);
-            grow(&mut self.pal, 12 * joints * width);
-            grow(&mut self.weight, joints * width);
-            self.weight[have..].fill(1.0);
+            grow(&mut self.theta, 2 * joints * width, 0.0);
+            grow(&mut self.rate, 2 * joints * width, 0.0);
+            grow(&mut self.pal, 12 * joints * width, 0.0);
+            grow(&mut self.weight, joints * width, 1.0);
         }
         self.joints = joints;
     }
