@@ -303,6 +303,7 @@ const COPY_GRAIN: usize = 1 << 16;
 fn copy_palettes(
     species: &[SpeciesRuntime],
     need: &[u32],
+    slots: &[PaletteSlot],
     copies: &[PaletteCopy],
     buf: &mut [f32],
 ) {
@@ -311,8 +312,8 @@ fn copy_palettes(
         let mid = copies.partition_point(|c| c.start < half).clamp(1, copies.len() - 1);
         let (a, b) = buf.split_at_mut(copies[mid].start - copies[0].start);
         rayon::join(
-            || copy_palettes(species, need, &copies[..mid], a),
-            || copy_palettes(species, need, &copies[mid..], b),
+            || copy_palettes(species, need, slots, &copies[..mid], a),
+            || copy_palettes(species, need, slots, &copies[mid..], b),
         );
         return;
     }
@@ -320,12 +321,19 @@ fn copy_palettes(
     for c in copies {
         let (dst, after) = rest.split_at_mut(c.len);
         rest = after;
-        copy_group(&species[c.species as usize], need, c, dst);
+        copy_group(&species[c.species as usize], need, slots, c, dst);
     }
 }
 
-/// Write one lane group's palettes (`c`) into `dst`, all `c.len` values of it.
-fn copy_group(s: &SpeciesRuntime, need: &[u32], c: &PaletteCopy, dst: &mut [f32]) {
+/// Write one lane group's palettes (`c`) into `dst`, all `c.len` values of it, where the
+/// simulations' `slots` (set when it was laid out) say.
+fn copy_group(
+    s: &SpeciesRuntime,
+    need: &[u32],
+    slots: &[PaletteSlot],
+    c: &PaletteCopy,
+    dst: &mut [f32],
+) {
     let (k, joints, used) = (c.group as usize, c.joints as usize, c.used as usize);
     let n = s.batch.species().len();
     // Per joint, its 12 elements × `width` lanes.
@@ -351,12 +359,9 @@ fn copy_group(s: &SpeciesRuntime, need: &[u32], c: &PaletteCopy, dst: &mut [f32]
     if c.kind == Layout::Rows {
         // A gather (a transpose of lanes and elements), in tiles of joints small enough to
         // stay in cache while each lane's run is written out in order.
-        let mut starts = [0usize; LANES];
-        let mut at = 0;
-        for (l, &m) in need.iter().enumerate() {
-            starts[l] = at;
-            at += 12 * (m as usize).min(n);
-        }
+        // Each simulation's run, from its slot.
+        let slots = &slots[(s.lane_base + k) * LANES..][..used];
+        let start = |l: usize| slots[l].base as usize - c.start;
         // Each lane's own anchors where its simulated prefix is its own; lanes stepped
         // alone keep their palettes in a row of their own.
         let mut lane_src = [None; LANES];
@@ -371,7 +376,7 @@ fn copy_group(s: &SpeciesRuntime, need: &[u32], c: &PaletteCopy, dst: &mut [f32]
                 if end <= first_joint {
                     continue;
                 }
-                let out = dst[starts[l] + 12 * first_joint..].chunks_exact_mut(12);
+                let out = dst[start(l) + 12 * first_joint..].chunks_exact_mut(12);
                 let src = |j: usize| lane_src[l].map_or(j, |a| a[j] as usize);
                 if let Some(row) = s.batch.lane_palettes(first + l) {
                     for (j, v) in (first_joint..end).zip(out) {
@@ -1556,7 +1561,7 @@ impl Forest {
             stats.state_capped += s.capped;
         }
         let buf = overwrite(&mut out.palettes, len);
-        copy_palettes(&self.species, &out.need, &out.copies, buf);
+        copy_palettes(&self.species, &out.need, &out.slots, &out.copies, buf);
         out.palettes.truncate(len);
         for (a, &v) in self.want.iter().zip(&out.want) {
             a.store(v, Ordering::Relaxed);
