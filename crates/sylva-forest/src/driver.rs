@@ -276,7 +276,7 @@ fn lay_out(
     let uniform = (0..used)
         .all(|l| simulated_in(l) == simulated && s.batch.lane_palettes(first + l).is_none());
     let own: usize = need.iter().map(|&m| (m as usize).min(n)).sum();
-    let (kind, len) = if s.batch.stored(k) == 0 {
+    let (kind, len) = if !s.batch.has_stepped() {
         (Layout::Rest, joints * 12 * used)
     } else if own < joints * used || !uniform {
         (Layout::Rows, 12 * own)
@@ -1289,9 +1289,11 @@ impl Forest {
                 let mut w = if animation { (w as usize).min(all) } else { all };
                 let reserved = s.batch.reserved(k);
                 if s.batch.prefix_for(w) > reserved {
-                    // Growing past the species' share of the memory cap: the group keeps the
-                    // finest registered prefix it already holds memory for, the trunk at
-                    // least.
+                    // Counted as if every lane of the group stored the prefix (a lane the step
+                    // sends alone holds its own in a row, for less): within the cap whatever
+                    // the step decides. Growing past the species' share of the memory cap:
+                    // the group keeps the finest registered prefix it already holds memory
+                    // for, the trunk at least.
                     let more = (s.batch.prefix_for(w) - reserved) * per_joint;
                     if held + more > s.state_cap {
                         w = s

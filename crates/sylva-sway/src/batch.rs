@@ -55,13 +55,15 @@
 //! by the same sequence of operations whatever thread runs it, so results are bit-identical
 //! for any thread count.
 //!
-//! Storage follows the animation LOD: each group stores the state of the joints it simulates
-//! (its prefix, with those still fading out) and no others, allocated when its prefix grows
-//! and given back [`TRIM_STEPS`] steps after it shrinks. Joints not stored are at rest; a
-//! joint switched back on restarts at its equilibrium, so nothing that was dropped is ever
-//! read. A forest of far trees that simulate their trunks holds the trunks' state, not the
-//! crowns' ([`SwayBatch::stored_bytes`]). Once prefixes have stayed put for [`TRIM_STEPS`]
-//! steps, a step allocates nothing.
+//! Storage follows the animation LOD: each group stores, for every lane, the state of the
+//! joints it steps its lanes together to (their prefix, with those still fading out) and no
+//! others; a lane stepped alone holds its own, however many, in its row. Memory is
+//! allocated when a prefix grows and given back [`TRIM_STEPS`] steps after it shrinks.
+//! Joints not stored are at rest; a joint switched back on restarts at its equilibrium, so
+//! nothing that was dropped is ever read. A forest of far trees that simulate their trunks
+//! holds the trunks' state, not the crowns' ([`SwayBatch::stored_bytes`]), and a group of
+//! far trunks with one near crown holds the trunks for every lane and the crown once. Once
+//! prefixes have stayed put for [`TRIM_STEPS`] steps, a step allocates nothing.
 
 use std::f32::consts::PI;
 
@@ -151,8 +153,9 @@ struct Plan {
     solo: u32,
 }
 
-/// One group's stored state: its first `joints` joints (a prefix: those it simulates, and
-/// none beyond), `width` lanes inner. Joints not stored are at rest.
+/// One group's stored state: its first `joints` joints for every lane (a prefix: those it
+/// steps its lanes together to, and none beyond), `width` lanes inner. A lane's joints are
+/// in its row where the row holds them, else here where stored, else at rest.
 ///
 /// The memory behind it may hold more joints than are stored: a group whose prefix shrinks
 /// keeps its memory for [`TRIM_STEPS`] steps before giving it back, so a prefix that comes
@@ -181,10 +184,11 @@ struct Block {
 /// The state of a lane stepped alone, one value per joint in a row rather than strided
 /// across its group's lanes: its palettes (12 per joint) for the joints it simulates, and
 /// its angles, rates and blend weights for the first `joints` joints, which stand for the
-/// group's values of that lane. The state stays in the row while the lane goes alone from
-/// step to step (copying it in and out of the group each step, through memory strided by
-/// the group's width, cost a third of a near tree's step) and goes back to the group when
-/// the lane rejoins it or its lanes are exchanged.
+/// group's values of that lane (the group need not store them: it stores what it steps all
+/// its lanes to). The state stays in the row while the lane goes alone from step to step
+/// (copying it in and out of the group each step, through memory strided by the group's
+/// width, cost a third of a near tree's step), moves with the lane when lanes are
+/// exchanged, and goes back to the group when the lane rejoins it.
 #[derive(Debug, Clone, Default)]
 struct Row {
     pal: Vec<f32>,
@@ -203,21 +207,27 @@ impl Row {
     }
 
     /// Hold the state of joints `..joints` of lane `l` of a group of `width` lanes (angles
-    /// `theta`, rates `rate`, weights `weight`): joints the row held beyond go back to the
-    /// group (those the group still stores), joints it lacks come from it. Grown exactly,
-    /// so that the bytes held are the bytes counted.
-    fn hold(&mut self, joints: usize, group: [&mut Vec<f32>; 3], width: usize, l: usize) {
+    /// `theta`, rates `rate`, weights `weight`) that stores its first `stored` joints for
+    /// every lane: joints the row held beyond go back to the group (those it stores; the
+    /// others are at rest, as the lane shows them there), joints it lacks come from it (at
+    /// rest where it does not store them: rows are held only once the batch has stepped, so
+    /// with blend weight 0). Grown exactly, so that the bytes held are the bytes counted.
+    fn hold(
+        &mut self,
+        joints: usize,
+        group: [&mut Vec<f32>; 3],
+        width: usize,
+        l: usize,
+        stored: usize,
+    ) {
         let [theta, rate, weight] = group;
         let had = self.joints;
-        if had > joints {
-            let stored = (weight.len() / width).min(had);
-            for j in joints..stored {
-                for k in 0..2 {
-                    theta[(2 * j + k) * width + l] = self.theta[2 * j + k];
-                    rate[(2 * j + k) * width + l] = self.rate[2 * j + k];
-                }
-                weight[j * width + l] = self.weight[j];
+        for j in joints..stored.min(had) {
+            for k in 0..2 {
+                theta[(2 * j + k) * width + l] = self.theta[2 * j + k];
+                rate[(2 * j + k) * width + l] = self.rate[2 * j + k];
             }
+            weight[j * width + l] = self.weight[j];
         }
         self.theta.truncate(2 * joints.min(had));
         self.rate.truncate(2 * joints.min(had));
@@ -227,13 +237,16 @@ impl Row {
                 v.reserve_exact(2 * (joints - had));
             }
             self.weight.reserve_exact(joints - had);
-            for j in had..joints {
+            for j in had..joints.min(stored) {
                 for k in 0..2 {
                     self.theta.push(theta[(2 * j + k) * width + l]);
                     self.rate.push(rate[(2 * j + k) * width + l]);
                 }
                 self.weight.push(weight[j * width + l]);
             }
+            self.theta.resize(2 * joints, 0.0);
+            self.rate.resize(2 * joints, 0.0);
+            self.weight.resize(joints, 0.0);
         }
         self.joints = joints;
     }
@@ -243,13 +256,6 @@ impl Block {
     /// Lane `l`'s row, if it holds the state of joint `j`.
     fn row_holding(&self, l: usize, j: usize) -> Option<&Row> {
         self.rows.get(l).filter(|r| j < r.joints)
-    }
-
-    /// Give lane `l`'s state back to the group from its row (of a group of `width` lanes).
-    fn put_back(&mut self, l: usize, width: usize) {
-        if let Some(row) = self.rows.get_mut(l) {
-            row.hold(0, [&mut self.theta, &mut self.rate, &mut self.weight], width, l);
-        }
     }
 }
 
@@ -263,12 +269,23 @@ impl Block {
         self.weight.len() / width
     }
 
-    /// Store `joints` joints. Joints beyond the memory held are new, at rest (angles and
-    /// rates 0, blend weight 1 as a batch starts; their palettes are computed by the step
-    /// that simulates them, and read through [`SwayBatch::palette`] only once simulated);
-    /// joints within it keep what they held (nothing reads a joint that was not simulated
-    /// before it restarts).
-    fn store(&mut self, joints: usize, width: usize) {
+    /// Store `joints` joints for every lane. Joints it did not store before start at rest
+    /// in every lane: angles and rates 0, blend weight `rest` (1 before a batch's first
+    /// step, when every joint is shown at rest; 0 after, so that a joint that comes back
+    /// blends in). Their palettes are computed by the step that simulates them, and read
+    /// only once simulated. Fewer joints than stored: those beyond are no longer stored
+    /// (their memory is kept, see [`Block::trim`]).
+    fn store(&mut self, joints: usize, width: usize, rest: f32) {
+        let had = self.joints;
+        if joints > had {
+            // Joints the memory still holds from before: reset to rest.
+            let kept = joints.min(self.reserved(width));
+            if kept > had {
+                self.theta[2 * had * width..2 * kept * width].fill(0.0);
+                self.rate[2 * had * width..2 * kept * width].fill(0.0);
+                self.weight[had * width..kept * width].fill(rest);
+            }
+        }
         if joints > self.reserved(width) {
             // Exactly what is needed, so that the bytes held are the bytes counted; grown in
             // place where the allocator can (a large block is remapped, not copied).
@@ -279,7 +296,7 @@ impl Block {
             grow(&mut self.theta, 2 * joints * width, 0.0);
             grow(&mut self.rate, 2 * joints * width, 0.0);
             grow(&mut self.pal, 12 * joints * width, 0.0);
-            grow(&mut self.weight, joints * width, 1.0);
+            grow(&mut self.weight, joints * width, rest);
         }
         self.joints = joints;
     }
@@ -647,21 +664,32 @@ impl SwayBatch {
         self.stepped.get(i).map_or(0, |&s| (s as usize).min(a))
     }
 
+    /// Blend weight of a joint that starts at rest: 1 before the first step (every joint is
+    /// shown, at rest), 0 after (it blends in).
+    fn rest_weight(&self) -> f32 {
+        if self.dt.is_nan() { 1.0 } else { 0.0 }
+    }
+
     /// Bring instance `i`'s record of its current joints in line with its group's prefix:
-    /// joints newly simulated for it restart at equilibrium (blend weight 0).
+    /// joints newly simulated for it restart at equilibrium (blend weight 0). Once the batch
+    /// has stepped, joints its group does not store for every lane stay unstored here (they
+    /// are at rest with weight 0 already): the step stores what the lanes it steps together
+    /// need.
     fn refresh(&mut self, i: usize) {
         let w = self.width;
         let (g, l) = (i / LANES, i % LANES);
         let (f, p) = (self.fresh[i] as usize, self.active[g] as usize);
         if f < p {
+            let rest = self.rest_weight();
             let block = &mut self.blocks[g];
-            if block.joints < p {
-                block.store(p, w);
+            if block.joints < p && rest != 0.0 {
+                block.store(p, w, rest);
             }
             for j in f..p {
                 match block.rows.get_mut(l).filter(|r| j < r.joints) {
                     Some(row) => row.weight[j] = 0.0,
-                    None => block.weight[j * w + l] = 0.0,
+                    None if j < block.joints => block.weight[j * w + l] = 0.0,
+                    None => break,
                 }
             }
         }
@@ -675,43 +703,61 @@ impl SwayBatch {
     /// its own, so a caller can gather instances that need the same joints into one group
     /// (a group steps the longest prefix any of its lanes needs). Joints beyond what either
     /// was simulating are stale and not moved; palettes are recomputed by the next step.
-    /// Out-of-range indices are ignored.
+    /// A lane stepped alone takes its row along. Out-of-range indices are ignored.
     pub fn swap_instances(&mut self, a: usize, b: usize) {
         if a == b || a >= self.instances || b >= self.instances {
             return;
         }
-        let (m, w) = (self.fresh[a].max(self.fresh[b]) as usize, self.width);
         let (ga, gb) = (a / LANES, b / LANES);
+        let (la, lb) = (a % LANES, b % LANES);
+        // Each lane's state is its row where the row holds the joint, else its group's
+        // value where the group stores it, else at rest. The rows are exchanged; the groups
+        // exchange what either stores, the other storing that much too (a joint one does
+        // not store is at rest in that lane, and goes to the other as rest).
+        let m = self.fresh[a].max(self.fresh[b]) as usize;
+        let (w, rest) = (self.width, self.rest_weight());
+        let ext = self.blocks[ga].joints.max(self.blocks[gb].joints).min(m);
         for g in [ga, gb] {
-            if self.blocks[g].joints < m {
-                self.blocks[g].store(m, w);
+            if self.blocks[g].joints < ext {
+                self.blocks[g].store(ext, w, rest);
             }
         }
-        let (la, lb) = (a % LANES, b % LANES);
-        // Their state in the group's lanes, rows given back (the next step takes them again).
-        self.blocks[ga].put_back(la, w);
-        self.blocks[gb].put_back(lb, w);
         let at = |j: usize, k: usize, l: usize| (2 * j + k) * w + l;
+        let bit = |x: u32, l: usize| x >> l & 1;
         if ga == gb {
             let x = &mut self.blocks[ga];
-            for j in 0..m {
+            for j in 0..ext {
                 for k in 0..2 {
                     x.theta.swap(at(j, k, la), at(j, k, lb));
                     x.rate.swap(at(j, k, la), at(j, k, lb));
                 }
                 x.weight.swap(j * w + la, j * w + lb);
             }
+            if !x.rows.is_empty() {
+                x.rows.swap(la, lb);
+            }
+            let (ba, bb) = (bit(x.alone, la), bit(x.alone, lb));
+            x.alone = x.alone & !(1 << la | 1 << lb) | bb << la | ba << lb;
         } else {
             let (lo, hi) = self.blocks.split_at_mut(ga.max(gb));
             let (first, second) = (&mut lo[ga.min(gb)], &mut hi[0]);
             let (x, y) = if ga < gb { (first, second) } else { (second, first) };
-            for j in 0..m {
+            for j in 0..ext {
                 for k in 0..2 {
                     std::mem::swap(&mut x.theta[at(j, k, la)], &mut y.theta[at(j, k, lb)]);
                     std::mem::swap(&mut x.rate[at(j, k, la)], &mut y.rate[at(j, k, lb)]);
                 }
                 std::mem::swap(&mut x.weight[j * w + la], &mut y.weight[j * w + lb]);
             }
+            if !x.rows.is_empty() || !y.rows.is_empty() {
+                for u in [&mut *x, &mut *y] {
+                    u.rows.resize_with(w, Row::default);
+                }
+                std::mem::swap(&mut x.rows[la], &mut y.rows[lb]);
+            }
+            let (ba, bb) = (bit(x.alone, la), bit(y.alone, lb));
+            x.alone = x.alone & !(1 << la) | bb << la;
+            y.alone = y.alone & !(1 << lb) | ba << lb;
         }
         self.fresh.swap(a, b);
         self.live.swap(a, b);
@@ -744,10 +790,17 @@ impl SwayBatch {
         (j < self.blocks.get(g)?.joints).then_some((g, j * w, i % LANES))
     }
 
-    /// Joints group `group` stores: those it simulates (with those fading out), at least.
-    /// The others are at rest.
+    /// Joints group `group` stores for every one of its lanes: those its lanes stepped
+    /// together simulate (with those fading out), at least — a lane stepped alone holds its
+    /// own in a row, however many ([`SwayBatch::lane_palettes`]). The others are at rest.
     pub fn stored(&self, group: usize) -> usize {
         self.blocks.get(group).map_or(0, |b| b.joints)
+    }
+
+    /// Whether the batch has stepped (before its first step every joint is at rest and
+    /// shows the identity palette).
+    pub fn has_stepped(&self) -> bool {
+        !self.dt.is_nan()
     }
 
     /// Joints group `group` holds memory for: those it stores, and for up to
@@ -758,11 +811,11 @@ impl SwayBatch {
 
     /// Bending angles (rad) of joint `j` of instance `i`; 0 for a joint not stored (at rest).
     pub fn angles(&self, i: usize, j: usize) -> [f32; 2] {
-        let Some((g, b, l)) = self.slot(i, j) else { return [0.0; 2] };
-        let block = &self.blocks[g];
-        if let Some(row) = block.row_holding(l, j) {
+        let Some(block) = self.blocks.get(i / LANES) else { return [0.0; 2] };
+        if let Some(row) = block.row_holding(i % LANES, j) {
             return [row.theta[2 * j], row.theta[2 * j + 1]];
         }
+        let Some((_, b, l)) = self.slot(i, j) else { return [0.0; 2] };
         let (t, w) = (&block.theta, self.width);
         [t[2 * b + l], t[2 * b + w + l]]
     }
@@ -770,29 +823,31 @@ impl SwayBatch {
     /// Displayed fraction of joint `j`'s rotation in instance `i` (animation-LOD blend); 0
     /// for a joint not stored.
     pub fn weight(&self, i: usize, j: usize) -> f32 {
-        self.slot(i, j).map_or(0.0, |(g, b, l)| {
-            let block = &self.blocks[g];
-            block.row_holding(l, j).map_or(block.weight[b + l], |row| row.weight[j])
-        })
+        let Some(block) = self.blocks.get(i / LANES) else { return 0.0 };
+        if let Some(row) = block.row_holding(i % LANES, j) {
+            return row.weight[j];
+        }
+        self.slot(i, j).map_or(0.0, |(_, b, l)| block.weight[b + l])
     }
 
     /// Set the state of joint `j` of instance `i` (for probes and tests: a release test
-    /// starts from a bent joint at rest). Stores the joint (and those before it) if its
-    /// group did not.
+    /// starts from a bent joint at rest). Stores the joint (and those before it) if neither
+    /// its group nor its row did.
     pub fn set_state(&mut self, i: usize, j: usize, angles: [f32; 2], rates: [f32; 2]) {
-        let (g, w) = (i / LANES, self.width);
+        let (g, w, l) = (i / LANES, self.width, i % LANES);
         if i >= self.instances || j >= self.species.len() {
             return;
         }
-        if self.blocks[g].joints <= j {
-            self.blocks[g].store(j + 1, w);
-        }
-        let (block, b, l) = (&mut self.blocks[g], j * w, i % LANES);
-        if let Some(row) = block.rows.get_mut(l).filter(|r| j < r.joints) {
+        if let Some(row) = self.blocks[g].rows.get_mut(l).filter(|r| j < r.joints) {
             row.theta[2 * j..2 * j + 2].copy_from_slice(&angles);
             row.rate[2 * j..2 * j + 2].copy_from_slice(&rates);
             return;
         }
+        let rest = self.rest_weight();
+        if self.blocks[g].joints <= j {
+            self.blocks[g].store(j + 1, w, rest);
+        }
+        let (block, b) = (&mut self.blocks[g], j * w);
         for a in 0..2 {
             block.theta[2 * b + a * w + l] = angles[a];
             block.rate[2 * b + a * w + l] = rates[a];
@@ -863,14 +918,8 @@ impl SwayBatch {
         for i in 0..self.instances {
             self.refresh(i);
         }
-        // Each group stores what it simulates: joints it now needs are stored (at rest where
-        // new), joints it dropped are no longer stored and their memory is given back after
-        // TRIM_STEPS steps (nothing reads them: a joint switched back on restarts).
-        let w = self.width;
-        for (block, &p) in self.blocks.iter_mut().zip(&self.active) {
-            block.store(p as usize, w);
-            block.trim(w);
-        }
+        // Joints a group stores anew start at rest, shown as such before the first step.
+        let rest = self.rest_weight();
         let sp = &self.species;
         if dt != self.dt {
             self.transitions.clear();
@@ -883,10 +932,10 @@ impl SwayBatch {
         let blend = dt / sp.params.blend_time;
         self.plan();
         match self.width {
-            1 => self.step_lanes::<1>(blend, wind),
-            4 => self.step_lanes::<4>(blend, wind),
-            8 => self.step_lanes::<8>(blend, wind),
-            _ => self.step_lanes::<LANES>(blend, wind),
+            1 => self.step_lanes::<1>(blend, rest, wind),
+            4 => self.step_lanes::<4>(blend, rest, wind),
+            8 => self.step_lanes::<8>(blend, rest, wind),
+            _ => self.step_lanes::<LANES>(blend, rest, wind),
         }
         self.updates = self.stepped.iter().map(|&s| s as usize).sum();
     }
@@ -926,7 +975,7 @@ impl SwayBatch {
     }
 
     /// The step's groups, `W` (= [`SwayBatch::width`]) lanes each.
-    fn step_lanes<const W: usize>(&mut self, blend: f32, wind: &[[f32; 3]]) {
+    fn step_lanes<const W: usize>(&mut self, blend: f32, rest: f32, wind: &[[f32; 3]]) {
         let sp = &self.species;
         let (tr, aero, budget, ni) =
             (&self.transitions, &self.aero_dt, &self.budget, self.instances);
@@ -940,6 +989,21 @@ impl SwayBatch {
             .zip(lanes_of)
             .enumerate()
             .for_each(|(g, ((block, active), (live, stepped)))| {
+                let p = *active as usize;
+                let Plan { on, need, head, solo } = plans[g];
+                let (need, head) = (need.map(|x| x as usize), head as usize);
+                // The group stores, for every lane, the joints it steps them all to: what its
+                // lanes stepped together need (a lane alone holds its own in its row; joints
+                // beyond a lane's need are at rest in it). Joints it now needs are stored (at
+                // rest where new) before the rows give back what they held; joints it no
+                // longer needs are dropped after the rows have taken theirs, and their memory
+                // is given back after TRIM_STEPS steps (nothing reads them: a joint switched
+                // back on restarts).
+                let stores = head;
+                if stores > block.joints {
+                    block.store(stores, W, rest);
+                }
+                let stored = block.joints;
                 let Block { theta, rate, weight, pal, alone, rows, .. } = block;
                 let mut u = [ZERO; 3];
                 let mut bud = [0u32; LANES];
@@ -951,10 +1015,7 @@ impl SwayBatch {
                     }
                     bud[l] = budget[g * LANES + l];
                 }
-                let p = *active as usize;
                 let k = (keep[g] as usize).min(p);
-                let Plan { on, need, head, solo } = plans[g];
-                let (need, head) = (need.map(|x| x as usize), head as usize);
                 // A lane stepped alone keeps its state and palettes in its row (see [`Row`]),
                 // taking from the group the joints it lacks and giving back those beyond what
                 // it now simulates; a lane that rejoins its group gives its state back and
@@ -965,7 +1026,7 @@ impl SwayBatch {
                 }
                 for (l, row) in rows.iter_mut().enumerate() {
                     let r = if solo >> l & 1 == 1 { need[l] } else { 0 };
-                    row.hold(r, [&mut *theta, &mut *rate, &mut *weight], W, l);
+                    row.hold(r, [&mut *theta, &mut *rate, &mut *weight], W, l, stored);
                     if r == 0 {
                         if row.capacity() > 0 {
                             *row = Row::default();
@@ -1052,6 +1113,8 @@ impl SwayBatch {
                 if k < p && live.iter().all(|&x| x as usize <= k) {
                     *active = k as u32;
                 }
+                block.store(stores, W, rest);
+                block.trim(W);
             });
     }
 }

@@ -351,3 +351,85 @@ fn a_lane_alone_keeps_its_state_through_reads_moves_and_rejoining() {
     assert_eq!(group.joint_updates(), LANES * all);
     same(&group, &alone, near, "rejoined");
 }
+
+/// A group stores, for every one of its lanes, only the joints it steps them all to: a
+/// group of far trunks holding one near tree, stepped alone, holds the trunks for every lane
+/// and the near tree's whole skeleton once, in its row — not the whole skeleton sixteen
+/// times. The near tree moved to another group (whose lanes hold only trunks) takes its
+/// row along without that group storing its crown for every lane, and it stays bit for bit
+/// a batch of it alone, through the move and back into a group that steps it with the rest.
+#[test]
+fn a_group_stores_for_every_lane_only_what_it_steps_them_all_to() {
+    let (model, order) = aspen();
+    let sp = SwaySpecies::new(&model.tree.skeleton, SwayParams::default()).expect("species");
+    let all = sp.len();
+    let n = 2 * LANES;
+    let mut wind: Vec<[f32; 3]> =
+        (0..n).map(|i| [4.0 + 0.2 * i as f32, 0.5 - 0.03 * i as f32, 0.2]).collect();
+    let mut forest = SwayBatch::new(sp.clone(), n);
+    let mut alone = SwayBatch::new(sp, 1);
+    for b in [&mut forest, &mut alone] {
+        b.set_prefixes(&[order.prefix.as_slice(), &[order.trunk]].concat());
+    }
+    let trunk = forest.prefix_for(order.trunk);
+    assert!(trunk < all / 10, "the trunk is a small part of the tree");
+    let mut near = 3;
+    for i in (0..n).filter(|&i| i != near) {
+        forest.set_lane_active(i, order.trunk);
+    }
+    let dt = 1.0 / 30.0;
+    let same = |forest: &SwayBatch, alone: &SwayBatch, near: usize, what: &str| {
+        for j in [0, trunk, all / 3, all - 1] {
+            assert_eq!(forest.angles(near, j), alone.angles(0, j), "{what}: angles {j}");
+            assert_eq!(forest.weight(near, j), alone.weight(0, j), "{what}: weight {j}");
+            assert_eq!(forest.palette(near, j), alone.palette(0, j), "{what}: palette {j}");
+        }
+    };
+    let step = |forest: &mut SwayBatch, alone: &mut SwayBatch, near: usize, wind: &[[f32; 3]]| {
+        forest.step(dt, wind);
+        alone.step(dt, &wind[near..=near]);
+    };
+    // The far crowns fade out, the near tree goes alone, and the memory of the crowns is
+    // given back once it has gone unused for TRIM_STEPS steps.
+    for _ in 0..60 + TRIM_STEPS as usize {
+        step(&mut forest, &mut alone, near, &wind);
+    }
+    assert!(forest.lane_palettes(near).is_some(), "stepped alone");
+    let held = |joints: usize| joints * STATE_BYTES;
+    for g in 0..2 {
+        assert_eq!(forest.stored(g), trunk, "group {g} stores the trunks for every lane");
+        assert_eq!(forest.reserved(g), trunk, "group {g}'s crowns given back");
+    }
+    // Both groups' trunks for sixteen lanes, and the near tree once; before, the near
+    // tree's group held its whole skeleton for every lane (16 × all).
+    let bytes = held(2 * LANES * trunk + all);
+    assert_eq!(forest.stored_bytes(), bytes);
+    same(&forest, &alone, near, "alone");
+    // To a lane of the other group: its row goes along, and neither group grows.
+    forest.swap_instances(near, LANES + 4);
+    wind.swap(near, LANES + 4);
+    near = LANES + 4;
+    for j in [0, trunk, all - 1] {
+        assert_eq!(forest.angles(near, j), alone.angles(0, j), "moved: angles {j}");
+        assert_eq!(forest.weight(near, j), alone.weight(0, j), "moved: weight {j}");
+    }
+    assert_eq!((forest.stored(0), forest.stored(1)), (trunk, trunk));
+    for _ in 0..5 {
+        step(&mut forest, &mut alone, near, &wind);
+    }
+    assert!(forest.lane_palettes(near).is_some(), "alone in its new group");
+    assert_eq!(forest.stored_bytes(), bytes, "the row moved, nothing grew");
+    same(&forest, &alone, near, "moved");
+    // Its new group's lanes all want the whole tree: it rejoins them, and that group now
+    // stores every joint for every lane.
+    for i in LANES..n {
+        forest.set_lane_active(i, all);
+    }
+    for _ in 0..5 {
+        step(&mut forest, &mut alone, near, &wind);
+    }
+    assert!(forest.lane_palettes(near).is_none(), "back in the group");
+    assert_eq!((forest.stored(0), forest.stored(1)), (trunk, all));
+    assert_eq!(forest.joint_updates(), LANES * trunk + LANES * all);
+    same(&forest, &alone, near, "rejoined");
+}
