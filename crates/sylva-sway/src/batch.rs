@@ -257,6 +257,68 @@ impl Block {
     fn row_holding(&self, l: usize, j: usize) -> Option<&Row> {
         self.rows.get(l).filter(|r| j < r.joints)
     }
+
+    /// Take lane `l`'s state (of a group of `width` lanes) for its first `m` joints at
+    /// least, as a row: its row, extended with what the group stores for it beyond, and
+    /// whether the row's palettes are current (the lane was stepped alone). The lane's
+    /// values in the group are left for [`Block::put_lane`] to overwrite.
+    fn take_lane(&mut self, l: usize, m: usize, width: usize) -> (Row, bool) {
+        let mut row = self.rows.get_mut(l).map(std::mem::take).unwrap_or_default();
+        let alone = self.alone >> l & 1 == 1;
+        self.alone &= !(1 << l);
+        let (had, end) = (row.joints, row.joints.max(self.joints.min(m)));
+        if end > had {
+            for v in [&mut row.theta, &mut row.rate] {
+                v.reserve_exact(2 * (end - had));
+            }
+            row.weight.reserve_exact(end - had);
+            for j in had..end {
+                for k in 0..2 {
+                    row.theta.push(self.theta[(2 * j + k) * width + l]);
+                    row.rate.push(self.rate[(2 * j + k) * width + l]);
+                }
+                row.weight.push(self.weight[j * width + l]);
+            }
+            row.joints = end;
+        }
+        (row, alone)
+    }
+
+    /// Give lane `l` the state `taken` by [`Block::take_lane`]: into the group's lane where
+    /// the group stores all of it and its palettes are not current, else as the lane's row;
+    /// either way at rest (blend weight `rest`) beyond it.
+    fn put_lane(&mut self, l: usize, taken: (Row, bool), width: usize, rest: f32) {
+        let (row, alone) = taken;
+        let (joints, stored) = (row.joints, self.joints);
+        let in_group = !alone && joints <= stored;
+        if in_group {
+            for j in 0..joints {
+                for k in 0..2 {
+                    self.theta[(2 * j + k) * width + l] = row.theta[2 * j + k];
+                    self.rate[(2 * j + k) * width + l] = row.rate[2 * j + k];
+                }
+                self.weight[j * width + l] = row.weight[j];
+            }
+        }
+        for j in joints..stored {
+            for k in 0..2 {
+                self.theta[(2 * j + k) * width + l] = 0.0;
+                self.rate[(2 * j + k) * width + l] = 0.0;
+            }
+            self.weight[j * width + l] = rest;
+        }
+        if in_group {
+            if let Some(r) = self.rows.get_mut(l) {
+                *r = Row::default();
+            }
+        } else {
+            if self.rows.len() < width {
+                self.rows.resize_with(width, Row::default);
+            }
+            self.rows[l] = row;
+            self.alone |= (alone as u32) << l;
+        }
+    }
 }
 
 /// Steps a lane group keeps the memory of joints it no longer stores before giving it
@@ -703,62 +765,21 @@ impl SwayBatch {
     /// its own, so a caller can gather instances that need the same joints into one group
     /// (a group steps the longest prefix any of its lanes needs). Joints beyond what either
     /// was simulating are stale and not moved; palettes are recomputed by the next step.
-    /// A lane stepped alone takes its row along. Out-of-range indices are ignored.
+    /// Neither group grows: a lane whose state reaches beyond what its new group stores
+    /// takes it along in a row (as a lane stepped alone does), and the next step either
+    /// steps it alone there or stores it in the group. Out-of-range indices are ignored.
     pub fn swap_instances(&mut self, a: usize, b: usize) {
         if a == b || a >= self.instances || b >= self.instances {
             return;
         }
         let (ga, gb) = (a / LANES, b / LANES);
         let (la, lb) = (a % LANES, b % LANES);
-        // Each lane's state is its row where the row holds the joint, else its group's
-        // value where the group stores it, else at rest. The rows are exchanged; the groups
-        // exchange what either stores, the other storing that much too (a joint one does
-        // not store is at rest in that lane, and goes to the other as rest).
         let m = self.fresh[a].max(self.fresh[b]) as usize;
         let (w, rest) = (self.width, self.rest_weight());
-        let ext = self.blocks[ga].joints.max(self.blocks[gb].joints).min(m);
-        for g in [ga, gb] {
-            if self.blocks[g].joints < ext {
-                self.blocks[g].store(ext, w, rest);
-            }
-        }
-        let at = |j: usize, k: usize, l: usize| (2 * j + k) * w + l;
-        let bit = |x: u32, l: usize| x >> l & 1;
-        if ga == gb {
-            let x = &mut self.blocks[ga];
-            for j in 0..ext {
-                for k in 0..2 {
-                    x.theta.swap(at(j, k, la), at(j, k, lb));
-                    x.rate.swap(at(j, k, la), at(j, k, lb));
-                }
-                x.weight.swap(j * w + la, j * w + lb);
-            }
-            if !x.rows.is_empty() {
-                x.rows.swap(la, lb);
-            }
-            let (ba, bb) = (bit(x.alone, la), bit(x.alone, lb));
-            x.alone = x.alone & !(1 << la | 1 << lb) | bb << la | ba << lb;
-        } else {
-            let (lo, hi) = self.blocks.split_at_mut(ga.max(gb));
-            let (first, second) = (&mut lo[ga.min(gb)], &mut hi[0]);
-            let (x, y) = if ga < gb { (first, second) } else { (second, first) };
-            for j in 0..ext {
-                for k in 0..2 {
-                    std::mem::swap(&mut x.theta[at(j, k, la)], &mut y.theta[at(j, k, lb)]);
-                    std::mem::swap(&mut x.rate[at(j, k, la)], &mut y.rate[at(j, k, lb)]);
-                }
-                std::mem::swap(&mut x.weight[j * w + la], &mut y.weight[j * w + lb]);
-            }
-            if !x.rows.is_empty() || !y.rows.is_empty() {
-                for u in [&mut *x, &mut *y] {
-                    u.rows.resize_with(w, Row::default);
-                }
-                std::mem::swap(&mut x.rows[la], &mut y.rows[lb]);
-            }
-            let (ba, bb) = (bit(x.alone, la), bit(y.alone, lb));
-            x.alone = x.alone & !(1 << la) | bb << la;
-            y.alone = y.alone & !(1 << lb) | ba << lb;
-        }
+        let from_a = self.blocks[ga].take_lane(la, m, w);
+        let from_b = self.blocks[gb].take_lane(lb, m, w);
+        self.blocks[gb].put_lane(lb, from_a, w, rest);
+        self.blocks[ga].put_lane(la, from_b, w, rest);
         self.fresh.swap(a, b);
         self.live.swap(a, b);
         self.want.swap(a, b);

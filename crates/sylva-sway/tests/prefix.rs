@@ -432,4 +432,20 @@ fn a_group_stores_for_every_lane_only_what_it_steps_them_all_to() {
     assert_eq!((forest.stored(0), forest.stored(1)), (trunk, all));
     assert_eq!(forest.joint_updates(), LANES * trunk + LANES * all);
     same(&forest, &alone, near, "rejoined");
+    // Back to the first group, whose lanes hold trunks: stepped with its group until now, it
+    // goes there in a row rather than that group storing its crown for every lane, and the
+    // next step steps it alone.
+    forest.swap_instances(near, 2);
+    wind.swap(near, 2);
+    near = 2;
+    for j in [0, trunk, all - 1] {
+        assert_eq!(forest.angles(near, j), alone.angles(0, j), "moved back: angles {j}");
+        assert_eq!(forest.weight(near, j), alone.weight(0, j), "moved back: weight {j}");
+    }
+    assert_eq!((forest.stored(0), forest.stored(1)), (trunk, all), "neither group grew");
+    for _ in 0..5 {
+        step(&mut forest, &mut alone, near, &wind);
+    }
+    assert!(forest.lane_palettes(near).is_some(), "alone in the first group");
+    same(&forest, &alone, near, "moved back");
 }
