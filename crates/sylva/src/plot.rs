@@ -239,24 +239,26 @@ fn draw_panel(cv: &mut Canvas, ox: usize, p: &Panel) {
         cv.line(a, b, black);
     }
     cv.text((ox + l) as i64, 8, &p.title, black);
-    for (k, s) in p.series.iter().enumerate() {
-        cv.text(
-            x1 as i64 - 8 * s.label.len() as i64 - 4,
-            y0 as i64 + 6 + 14 * k as i64,
-            &s.label,
-            s.color,
-        );
-        let visible: Vec<(f64, f64)> = s
-            .points
-            .iter()
-            .filter(|(x, y)| {
-                x.is_finite() && y.is_finite() && (!p.log_x || *x > 0.0) && (!p.log_y || *y > 0.0)
-            })
-            .map(|&(x, y)| map(x, y))
-            .map(|(x, y)| (x, y.clamp(y0, y1)))
-            .collect();
+    let lines: Vec<Vec<(f64, f64)>> = p
+        .series
+        .iter()
+        .map(|s| {
+            s.points
+                .iter()
+                .filter(|(x, y)| {
+                    x.is_finite()
+                        && y.is_finite()
+                        && (!p.log_x || *x > 0.0)
+                        && (!p.log_y || *y > 0.0)
+                })
+                .map(|&(x, y)| map(x, y))
+                .map(|(x, y)| (x, y.clamp(y0, y1)))
+                .collect()
+        })
+        .collect();
+    for (s, visible) in p.series.iter().zip(&lines) {
         if s.markers {
-            for &(x, y) in &visible {
+            for &(x, y) in visible {
                 for d in -2..=2 {
                     cv.set(x as i64 + d, y as i64, s.color);
                     cv.set(x as i64, y as i64 + d, s.color);
@@ -267,6 +269,50 @@ fn draw_panel(cv: &mut Canvas, ox: usize, p: &Panel) {
                 cv.line(w[0], w[1], s.color);
             }
         }
+    }
+    // The legend, over the lines on a white box, in the corner the series cross least
+    // (top right where none does).
+    let labels = p.series.iter().map(|s| s.label.chars().count()).max().unwrap_or(0);
+    if labels == 0 {
+        return;
+    }
+    let (lw, lh) = (8.0 * labels as f64 + 6.0, 14.0 * p.series.len() as f64 + 4.0);
+    let corners = [
+        (x1 - lw - 2.0, y0 + 2.0),
+        (x0 + 2.0, y0 + 2.0),
+        (x1 - lw - 2.0, y1 - lh - 2.0),
+        (x0 + 2.0, y1 - lh - 2.0),
+    ];
+    let crossing = |(cx, cy): (f64, f64)| {
+        let inside = |(x, y): (f64, f64)| x >= cx && x <= cx + lw && y >= cy && y <= cy + lh;
+        lines
+            .iter()
+            .flat_map(|v| {
+                let steps = v.windows(2).flat_map(|w| {
+                    let n = (w[1].0 - w[0].0).abs().max((w[1].1 - w[0].1).abs()).ceil().max(1.0);
+                    (0..n as usize).map(move |i| {
+                        let t = i as f64 / n;
+                        (w[0].0 + (w[1].0 - w[0].0) * t, w[0].1 + (w[1].1 - w[0].1) * t)
+                    })
+                });
+                steps.chain(v.last().copied())
+            })
+            .filter(|&q| inside(q))
+            .count()
+    };
+    let (cx, cy) = corners.into_iter().min_by_key(|&c| crossing(c)).unwrap_or(corners[0]);
+    for y in cy as i64..=(cy + lh) as i64 {
+        for x in cx as i64..=(cx + lw) as i64 {
+            cv.set(x, y, [255, 255, 255]);
+        }
+    }
+    for (k, s) in p.series.iter().enumerate() {
+        cv.text(
+            (cx + lw) as i64 - 8 * s.label.chars().count() as i64 - 2,
+            cy as i64 + 4 + 14 * k as i64,
+            &s.label,
+            s.color,
+        );
     }
 }
 
@@ -390,6 +436,53 @@ mod tests {
         r.next_frame(&mut buf).expect("frame");
         let reds = buf.chunks(3).filter(|c| c == &red).count();
         assert!(reds > 200, "only {reds} red pixels");
+    }
+
+    /// The legend goes in the corner of the panel the series cross least, so no line runs
+    /// through it: top right for a falling line, top left for a rising one.
+    #[test]
+    fn the_legend_sits_where_the_lines_are_not() {
+        let dir = sylva_testkit::TempDir::new("sylva-plot-legend");
+        let p = dir.join("p.png");
+        let red = [220, 0, 0];
+        // Red pixels in the legend's box at the top left and at the top right of the panel
+        // (one six-letter label: 54 × 18 pixels inside the axes).
+        let red_in = |rising: bool| {
+            let panel = Panel {
+                title: "T".into(),
+                x_label: "X".into(),
+                y_label: "Y".into(),
+                log_x: true,
+                log_y: true,
+                y_range: None,
+                series: vec![Series {
+                    label: "RISING".into(),
+                    color: red,
+                    points: (1..=100)
+                        .map(|i| (i as f64, if rising { i as f64 } else { 1.0 / i as f64 }))
+                        .collect(),
+                    markers: false,
+                }],
+            };
+            write_png(&p, &[panel]).expect("write");
+            let dec =
+                png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&p).expect("open")));
+            let mut r = dec.read_info().expect("png");
+            let mut buf = vec![0; r.output_buffer_size()];
+            r.next_frame(&mut buf).expect("frame");
+            let (l, right, t, _) = MARGIN;
+            let count = |x_from: usize| {
+                (t + 2..t + 20)
+                    .flat_map(|y| (x_from..x_from + 54).map(move |x| 3 * (y * W + x)))
+                    .filter(|&i| buf[i..i + 3] == red)
+                    .count()
+            };
+            (count(l + 2), count(W - right - 56))
+        };
+        let (left, right) = red_in(true);
+        assert!(left > 20 && right < left, "rising: legend at the top left ({left} / {right})");
+        let (left, right) = red_in(false);
+        assert!(right > 20 && left < right, "falling: legend at the top right ({left} / {right})");
     }
 
     #[test]
