@@ -409,11 +409,11 @@ pub fn write_stats_plots(stats: &FieldStats, dir: &Path) -> anyhow::Result<Vec<P
 mod tests {
     use super::*;
 
-    #[test]
-    fn a_plot_draws_its_series_in_their_colour() {
-        let dir = sylva_testkit::TempDir::new("sylva-plot");
-        let p = dir.join("p.png");
-        let red = [220, 0, 0];
+    const RED: [u8; 3] = [220, 0, 0];
+
+    /// A panel (log axes) of one red line labelled `label` through `points`, written to
+    /// `p` and read back: its RGB bytes, row by row.
+    fn red_line(p: &Path, label: &str, points: Vec<(f64, f64)>) -> Vec<u8> {
         let panel = Panel {
             title: "TEST".into(),
             x_label: "X".into(),
@@ -421,20 +421,25 @@ mod tests {
             log_x: true,
             log_y: true,
             y_range: None,
-            series: vec![Series {
-                label: "MODEL".into(),
-                color: red,
-                points: (1..100).map(|i| (i as f64, 1.0 / i as f64)).collect(),
-                markers: false,
-            }],
+            series: vec![Series { label: label.into(), color: RED, points, markers: false }],
         };
-        write_png(&p, &[panel]).expect("write");
-        let dec =
-            png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&p).expect("open")));
+        write_png(p, &[panel]).expect("write");
+        let dec = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(p).expect("open")));
         let mut r = dec.read_info().expect("png");
         let mut buf = vec![0; r.output_buffer_size()];
         r.next_frame(&mut buf).expect("frame");
-        let reds = buf.chunks(3).filter(|c| c == &red).count();
+        buf
+    }
+
+    #[test]
+    fn a_plot_draws_its_series_in_their_colour() {
+        let dir = sylva_testkit::TempDir::new("sylva-plot");
+        let buf = red_line(
+            &dir.join("p.png"),
+            "MODEL",
+            (1..100).map(|i| (i as f64, 1.0 / i as f64)).collect(),
+        );
+        let reds = buf.chunks(3).filter(|c| c == &RED).count();
         assert!(reds > 200, "only {reds} red pixels");
     }
 
@@ -443,38 +448,18 @@ mod tests {
     #[test]
     fn the_legend_sits_where_the_lines_are_not() {
         let dir = sylva_testkit::TempDir::new("sylva-plot-legend");
-        let p = dir.join("p.png");
-        let red = [220, 0, 0];
         // Red pixels in the legend's box at the top left and at the top right of the panel
         // (one six-letter label: 54 × 18 pixels inside the axes).
         let red_in = |rising: bool| {
-            let panel = Panel {
-                title: "T".into(),
-                x_label: "X".into(),
-                y_label: "Y".into(),
-                log_x: true,
-                log_y: true,
-                y_range: None,
-                series: vec![Series {
-                    label: "RISING".into(),
-                    color: red,
-                    points: (1..=100)
-                        .map(|i| (i as f64, if rising { i as f64 } else { 1.0 / i as f64 }))
-                        .collect(),
-                    markers: false,
-                }],
-            };
-            write_png(&p, &[panel]).expect("write");
-            let dec =
-                png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&p).expect("open")));
-            let mut r = dec.read_info().expect("png");
-            let mut buf = vec![0; r.output_buffer_size()];
-            r.next_frame(&mut buf).expect("frame");
+            let points = (1..=100)
+                .map(|i| (i as f64, if rising { i as f64 } else { 1.0 / i as f64 }))
+                .collect();
+            let buf = red_line(&dir.join("p.png"), "RISING", points);
             let (l, right, t, _) = MARGIN;
             let count = |x_from: usize| {
                 (t + 2..t + 20)
                     .flat_map(|y| (x_from..x_from + 54).map(move |x| 3 * (y * W + x)))
-                    .filter(|&i| buf[i..i + 3] == red)
+                    .filter(|&i| buf[i..i + 3] == RED)
                     .count()
             };
             (count(l + 2), count(W - right - 56))
