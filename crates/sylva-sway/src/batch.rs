@@ -46,7 +46,8 @@
 //! share of a scene's budget) does not pay for fifteen empty lanes. Each lane gets the
 //! same operations at any width, so an instance moves bit for bit as it would in a full
 //! group (the one choice made per group, series or full formula for the joint rotations,
-//! follows the largest angle among its lanes). A single lane (a batch of one, or a lane
+//! follows the largest angle among the lanes it steps together; lanes stepped alone, whose
+//! values in the group nothing reads, take no part). A single lane (a batch of one, or a lane
 //! stepped alone) has nothing to vectorise across and takes a kernel of its own with the
 //! same operations, ordered so that the joints' independent work is not chained along the
 //! skeleton (`batch/alone.rs`; about 30 % less time a joint). A lane stepped alone keeps its
@@ -1080,6 +1081,7 @@ impl SwayBatch {
                             active: r,
                             on: [on[l]; LANES],
                             held: held(r),
+                            ignored: [false; LANES],
                         };
                         let mut u1 = [ZERO; 3];
                         for c in 0..3 {
@@ -1108,6 +1110,7 @@ impl SwayBatch {
                             active: head,
                             on,
                             held: held(head),
+                            ignored: std::array::from_fn(|l| l >= used || solo >> l & 1 == 1),
                         };
                         if W == 1 {
                             step_one::<W>(sp, tr, aero, blend, &bud, &u, &mut st);
@@ -1236,6 +1239,10 @@ struct Group<'a, const W: usize> {
     on: [u32; LANES],
     /// Lumped static drag of the held joints, per simulated joint (none: all simulated).
     held: Option<&'a [Lump]>,
+    /// Per lane: whether nothing reads what the step computes in it (a lane stepped alone
+    /// on its row, or one past the batch's instances), so that it takes no part in the one
+    /// choice made for the whole group (the rotation formula, see `palette_of`).
+    ignored: [bool; LANES],
 }
 
 simd_kernel! {
@@ -1361,29 +1368,34 @@ simd_kernel! {
             if split {
                 st.lanes[i][..3].copy_from_slice(&phi);
             } else {
-                palette_of::<W>(sp, st.lanes, i, &phi);
+                palette_of::<W>(sp, st.lanes, i, &phi, &st.ignored);
             }
         }
         if split {
             for i in 0..n {
                 let phi = std::array::from_fn(|c| st.lanes[i][c]);
-                palette_of::<W>(sp, st.lanes, i, &phi);
+                palette_of::<W>(sp, st.lanes, i, &phi, &st.ignored);
             }
         }
     }
 }
 
-/// Joint `i`'s palettes from its rotation vectors `phi`, its parent's being done.
+/// Joint `i`'s palettes from its rotation vectors `phi`, its parent's being done. One
+/// formula for the whole group: the series where every lane's angle is small, else the full
+/// one — lanes `ignored` (whose values nothing reads) take no part in the choice, so a lane
+/// stepped with its group moves the same whatever the group's other lanes left behind.
 #[inline(always)]
 fn palette_of<const W: usize>(
     sp: &SwaySpecies,
     lanes: &mut [[[f32; W]; 12]],
     i: usize,
     phi: &[[f32; W]; 3],
+    ignored: &[bool; LANES],
 ) {
     let mut small = true;
     for l in 0..W {
-        small &= phi[0][l] * phi[0][l] + phi[1][l] * phi[1][l] + phi[2][l] * phi[2][l] < 0.25;
+        let a2 = phi[0][l] * phi[0][l] + phi[1][l] * phi[1][l] + phi[2][l] * phi[2][l];
+        small &= ignored[l] | (a2 < 0.25);
     }
     let p = sp.parent[i];
     let (before, rest) = lanes.split_at_mut(i);
@@ -1643,6 +1655,38 @@ mod tests {
             assert!(got > last, "the bend grows with the load (e {e})");
             last = got;
         }
+    }
+
+    /// The group's one choice of rotation formula is made by the lanes whose values are
+    /// read: a lane nothing reads (stepped alone on its row), however far it is bent, leaves
+    /// the others' palettes exactly as they are with it at rest; taking part, it would
+    /// switch the whole group to the full formula.
+    #[test]
+    fn lanes_nothing_reads_take_no_part_in_the_group_formula() {
+        use crate::SwayParams;
+        let model = sylva_tree::Species::preset("quaking_aspen").expect("preset").model(5, 6);
+        let sp =
+            crate::SwaySpecies::new(&model.expect("model").tree.skeleton, SwayParams::default())
+                .expect("species");
+        // Joint 0 (the root, no parent) bent by a small angle in lanes 0–2; lane 3 far bent.
+        let palettes = |bent: f32, ignored: bool| {
+            let mut lanes = vec![[[0.0f32; 4]; 12]; 1];
+            let mut phi = [[0.0f32; 4]; 3];
+            for l in 0..3 {
+                phi[0][l] = 0.013 * (l + 1) as f32;
+                phi[1][l] = -0.007 * (l + 1) as f32;
+            }
+            phi[0][3] = bent;
+            let mut skip = [false; LANES];
+            skip[3] = ignored;
+            palette_of::<4>(&sp, &mut lanes, 0, &phi, &skip);
+            (0..3)
+                .map(|l| (0..12).map(|e| lanes[0][e][l].to_bits()).collect())
+                .collect::<Vec<Vec<u32>>>()
+        };
+        let at_rest = palettes(0.0, false);
+        assert_eq!(palettes(1.1, true), at_rest, "ignored: as if at rest");
+        assert_ne!(palettes(1.1, false), at_rest, "taking part, it switches the formula");
     }
 
     #[test]
