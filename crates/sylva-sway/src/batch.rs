@@ -211,15 +211,15 @@ impl Row {
     /// `theta`, rates `rate`, weights `weight`) that stores its first `stored` joints for
     /// every lane: joints the row held beyond go back to the group (those it stores; the
     /// others are at rest, as the lane shows them there), joints it lacks come from it (at
-    /// rest where it does not store them: rows are held only once the batch has stepped, so
-    /// with blend weight 0). Grown exactly, so that the bytes held are the bytes counted.
+    /// rest, with blend weight `rest`, where it does not store them). Grown exactly, so
+    /// that the bytes held are the bytes counted.
     fn hold(
         &mut self,
         joints: usize,
         group: [&mut Vec<f32>; 3],
         width: usize,
         l: usize,
-        stored: usize,
+        (stored, rest): (usize, f32),
     ) {
         let [theta, rate, weight] = group;
         let had = self.joints;
@@ -247,7 +247,7 @@ impl Row {
             }
             self.theta.resize(2 * joints, 0.0);
             self.rate.resize(2 * joints, 0.0);
-            self.weight.resize(joints, 0.0);
+            self.weight.resize(joints, rest);
         }
         self.joints = joints;
     }
@@ -1048,7 +1048,7 @@ impl SwayBatch {
                 }
                 for (l, row) in rows.iter_mut().enumerate() {
                     let r = if solo >> l & 1 == 1 { need[l] } else { 0 };
-                    row.hold(r, [&mut *theta, &mut *rate, &mut *weight], W, l, stored);
+                    row.hold(r, [&mut *theta, &mut *rate, &mut *weight], W, l, (stored, rest));
                     if r == 0 {
                         if row.capacity() > 0 {
                             *row = Row::default();

@@ -449,3 +449,33 @@ fn a_group_stores_for_every_lane_only_what_it_steps_them_all_to() {
     assert!(forest.lane_palettes(near).is_some(), "alone in the first group");
     same(&forest, &alone, near, "moved back");
 }
+
+/// Two instances in a lane group of 16 are stepped alone, each on its row, from the very
+/// first step (alone, each costs 1.7 a joint; together, 4.4). They start as every instance
+/// does — at rest, fully shown — and move bit for bit as a batch of each alone, though
+/// their group stores nothing for its lanes.
+#[test]
+fn lanes_alone_from_the_first_step_start_as_a_batch_does() {
+    let (model, _) = aspen();
+    let sp = SwaySpecies::new(&model.tree.skeleton, SwayParams::default()).expect("species");
+    let all = sp.len();
+    let wind: Vec<[f32; 3]> = (0..LANES + 2).map(|i| [5.0 + 0.4 * i as f32, 0.3, 0.1]).collect();
+    let mut batch = SwayBatch::new(sp.clone(), LANES + 2);
+    let mut alone = [SwayBatch::new(sp.clone(), 1), SwayBatch::new(sp, 1)];
+    for step in 0..20 {
+        batch.step(1.0 / 30.0, &wind);
+        for (k, b) in alone.iter_mut().enumerate() {
+            b.step(1.0 / 30.0, &wind[LANES + k..=LANES + k]);
+        }
+        assert!(batch.lane_palettes(LANES).is_some(), "step {step}: stepped alone");
+        assert_eq!(batch.stored(1), 0, "step {step}: its group stores nothing");
+        for (k, b) in alone.iter().enumerate() {
+            for j in [0, all / 2, all - 1] {
+                let what = format!("step {step}, instance {}, joint {j}", LANES + k);
+                assert_eq!(batch.weight(LANES + k, j), b.weight(0, j), "{what}: weight");
+                assert_eq!(batch.angles(LANES + k, j), b.angles(0, j), "{what}: angles");
+                assert_eq!(batch.palette(LANES + k, j), b.palette(0, j), "{what}: palette");
+            }
+        }
+    }
+}
