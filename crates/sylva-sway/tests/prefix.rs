@@ -26,6 +26,26 @@ fn trunk_bend(batch: &mut SwayBatch, top: usize, tip: [f32; 3]) -> f32 {
     sum / (steps - steps * 2 / 3) as f32
 }
 
+/// Instance `i` of `batch` has, at `joints`, the state of instance 0 of `alone` (a batch
+/// of it alone) bit for bit: angles and blend weights, and palettes unless `state_only`
+/// (they are recomputed by the next step after a move).
+fn matches_alone(
+    batch: &SwayBatch,
+    i: usize,
+    alone: &SwayBatch,
+    joints: &[usize],
+    state_only: bool,
+    what: &str,
+) {
+    for &j in joints {
+        assert_eq!(batch.angles(i, j), alone.angles(0, j), "{what}: angles {j}");
+        assert_eq!(batch.weight(i, j), alone.weight(0, j), "{what}: weight {j}");
+        if !state_only {
+            assert_eq!(batch.palette(i, j), alone.palette(0, j), "{what}: palette {j}");
+        }
+    }
+}
+
 #[test]
 fn held_joints_cost_nothing_and_hold_no_memory() {
     let (model, order) = aspen();
@@ -297,17 +317,12 @@ fn a_lane_alone_keeps_its_state_through_reads_moves_and_rejoining() {
     }
     let dt = 1.0 / 30.0;
     let top = all - 1;
+    let joints = [0, all / 3, all / 2, top];
     let state = |group: &SwayBatch, alone: &SwayBatch, near: usize, what: &str| {
-        for j in [0, all / 3, all / 2, top] {
-            assert_eq!(group.angles(near, j), alone.angles(0, j), "{what}: angles {j}");
-            assert_eq!(group.weight(near, j), alone.weight(0, j), "{what}: weight {j}");
-        }
+        matches_alone(group, near, alone, &joints, true, what);
     };
     let same = |group: &SwayBatch, alone: &SwayBatch, near: usize, what: &str| {
-        state(group, alone, near, what);
-        for j in [0, all / 3, all / 2, top] {
-            assert_eq!(group.palette(near, j), alone.palette(0, j), "{what}: palette {j}");
-        }
+        matches_alone(group, near, alone, &joints, false, what);
     };
     let step = |group: &mut SwayBatch, alone: &mut SwayBatch, near: usize, wind: &[[f32; 3]]| {
         group.step(dt, wind);
@@ -378,12 +393,9 @@ fn a_group_stores_for_every_lane_only_what_it_steps_them_all_to() {
         forest.set_lane_active(i, order.trunk);
     }
     let dt = 1.0 / 30.0;
+    let joints = [0, trunk, all / 3, all - 1];
     let same = |forest: &SwayBatch, alone: &SwayBatch, near: usize, what: &str| {
-        for j in [0, trunk, all / 3, all - 1] {
-            assert_eq!(forest.angles(near, j), alone.angles(0, j), "{what}: angles {j}");
-            assert_eq!(forest.weight(near, j), alone.weight(0, j), "{what}: weight {j}");
-            assert_eq!(forest.palette(near, j), alone.palette(0, j), "{what}: palette {j}");
-        }
+        matches_alone(forest, near, alone, &joints, false, what);
     };
     let step = |forest: &mut SwayBatch, alone: &mut SwayBatch, near: usize, wind: &[[f32; 3]]| {
         forest.step(dt, wind);
@@ -409,10 +421,7 @@ fn a_group_stores_for_every_lane_only_what_it_steps_them_all_to() {
     forest.swap_instances(near, LANES + 4);
     wind.swap(near, LANES + 4);
     near = LANES + 4;
-    for j in [0, trunk, all - 1] {
-        assert_eq!(forest.angles(near, j), alone.angles(0, j), "moved: angles {j}");
-        assert_eq!(forest.weight(near, j), alone.weight(0, j), "moved: weight {j}");
-    }
+    matches_alone(&forest, near, &alone, &joints, true, "moved");
     assert_eq!((forest.stored(0), forest.stored(1)), (trunk, trunk));
     for _ in 0..5 {
         step(&mut forest, &mut alone, near, &wind);
@@ -438,10 +447,7 @@ fn a_group_stores_for_every_lane_only_what_it_steps_them_all_to() {
     forest.swap_instances(near, 2);
     wind.swap(near, 2);
     near = 2;
-    for j in [0, trunk, all - 1] {
-        assert_eq!(forest.angles(near, j), alone.angles(0, j), "moved back: angles {j}");
-        assert_eq!(forest.weight(near, j), alone.weight(0, j), "moved back: weight {j}");
-    }
+    matches_alone(&forest, near, &alone, &joints, true, "moved back");
     assert_eq!((forest.stored(0), forest.stored(1)), (trunk, all), "neither group grew");
     for _ in 0..5 {
         step(&mut forest, &mut alone, near, &wind);
@@ -470,12 +476,8 @@ fn lanes_alone_from_the_first_step_start_as_a_batch_does() {
         assert!(batch.lane_palettes(LANES).is_some(), "step {step}: stepped alone");
         assert_eq!(batch.stored(1), 0, "step {step}: its group stores nothing");
         for (k, b) in alone.iter().enumerate() {
-            for j in [0, all / 2, all - 1] {
-                let what = format!("step {step}, instance {}, joint {j}", LANES + k);
-                assert_eq!(batch.weight(LANES + k, j), b.weight(0, j), "{what}: weight");
-                assert_eq!(batch.angles(LANES + k, j), b.angles(0, j), "{what}: angles");
-                assert_eq!(batch.palette(LANES + k, j), b.palette(0, j), "{what}: palette");
-            }
+            let what = format!("step {step}, instance {}", LANES + k);
+            matches_alone(&batch, LANES + k, b, &[0, all / 2, all - 1], false, &what);
         }
     }
 }
