@@ -214,12 +214,12 @@ pub fn lod_coordinate(frac: f32, h0: f32) -> f32 {
 }
 
 /// The first `n` values of `buf`, for the caller to write every one of: a frame's palettes
-/// written over the last frame's, so that only growth is zero-filled (cleared and refilled
-/// each frame, zeroing scene A's 15 MB of palettes cost about 0.4 ms of its 4 ms of frame
-/// building). The caller truncates the buffer to `n` after.
-fn overwrite(buf: &mut Vec<f32>, n: usize) -> &mut [f32] {
+/// and instances written over the last frame's, so that only growth is filled (cleared and
+/// refilled each frame, zeroing scene A's 15 MB of palettes cost about 0.4 ms of its 4 ms
+/// of frame building). The caller truncates the buffer to `n` after.
+fn overwrite<T: Copy + Default>(buf: &mut Vec<T>, n: usize) -> &mut [T] {
     if buf.len() < n {
-        buf.resize(n, 0.0);
+        buf.resize(n, T::default());
     }
     &mut buf[..n]
 }
@@ -428,7 +428,9 @@ pub fn blend_levels(x: f32, last: u32, band: f32) -> (u32, u32, f32) {
     if x >= last as f32 {
         return (last, last, 0.0);
     }
-    let level = x.floor().max(0.0) as u32;
+    // The float-to-integer cast truncates and saturates (negative and NaN give 0): the
+    // floor of x, clamped to 0, without a call to `floorf` where the target lacks SSE4.1.
+    let level = x as u32;
     let t = x - level as f32;
     let band = band.clamp(0.0, 1.0);
     if band > 0.0 && t > 1.0 - band {
@@ -543,6 +545,9 @@ pub struct FrameData {
 
 /// Trees a frame's pass takes at a time (the runs go in parallel).
 const TREE_RUN: usize = 4096;
+
+/// Instances a frame writes at a time (the runs go in parallel).
+const INSTANCE_RUN: usize = 2048;
 
 /// What a run of trees adds to a frame: its draws' keys in tree order, and its counts.
 #[derive(Debug, Clone, Default)]
@@ -1382,6 +1387,8 @@ impl Forest {
             out.runs.resize_with(runs, TreeRun::default);
         }
         let (need_max, want_max) = (&out.need_max, &out.want_max);
+        // The animation LOD's coordinate less the geometry LOD's: the same for every tree.
+        let ahead = (ANIMATION_FRACTION / lod.fraction).ln() / 3f32.ln();
         out.runs[..runs]
             .par_iter_mut()
             .zip(out.lod_state.par_chunks_mut(TREE_RUN))
@@ -1413,7 +1420,8 @@ impl Forest {
                         let x = lod_coordinate(frac, lod.fraction);
                         let x = hysteresis(*state, x, lod.hysteresis);
                         let before = *state;
-                        if !before.is_nan() && before.floor() != x.floor() {
+                        // Levels as `blend_levels` takes them (both are ≥ 0).
+                        if !before.is_nan() && before as u32 != x as u32 {
                             run.stats.level_changes += 1;
                         }
                         *state = x;
@@ -1433,7 +1441,7 @@ impl Forest {
                         let by_size = if x.is_nan() {
                             lod_coordinate(frac, ANIMATION_FRACTION)
                         } else {
-                            x + (ANIMATION_FRACTION / lod.fraction).ln() / 3f32.ln()
+                            x + ahead
                         } - SIM_MARGIN;
                         let level = sim.max(by_size.max(0.0) as u32) as usize;
                         sp.order.prefix[level.min(sp.order.prefix.len() - 1)]
@@ -1498,14 +1506,30 @@ impl Forest {
             *slot += 1;
         }
         std::mem::swap(&mut out.keys, &mut out.sorted);
-        // Within each bucket drawn as meshes, the trees nearest the camera first (the
-        // impostors, two triangles each, are left in tree order).
+        // The draws: a run of equal keys is one species at one level, one bucket (impostors
+        // are bucketed as level `chain`, one past the last mesh). Within each bucket drawn
+        // as meshes, the trees nearest the camera first (the impostors, two triangles each,
+        // are left in tree order).
+        out.buckets.clear();
         let mut run = 0;
         while run < out.keys.len() {
             let key = out.keys[run].0;
             let end = run + out.keys[run..].iter().take_while(|k| k.0 == key).count();
             let (species, level) = split(key);
-            if !impostor(species, level) {
+            let sp = &self.species[species as usize];
+            let far = impostor(species, level);
+            let bucket_lod = if far { sp.model.lods.len() as u32 } else { level };
+            let count = (end - run) as u32;
+            match out.buckets.last_mut() {
+                Some(b) if b.species == species && b.lod == bucket_lod => b.count += count,
+                _ => {
+                    stats.draw_calls += if far { 1 } else { 2 };
+                    out.buckets.push(Bucket { species, lod: bucket_lod, first: run as u32, count })
+                }
+            }
+            stats.triangles +=
+                (end - run) * if far { 2 } else { sp.model.lods[level as usize].triangles() };
+            if !far {
                 // (squared distance, tree) pairs in the scratch left by the counting sort:
                 // no allocation once it has grown. Squared distances are non-negative, so
                 // their bits order as they do; the pairs are distinct, the order total.
@@ -1571,68 +1595,62 @@ impl Forest {
         for (a, &v) in self.shown.iter().zip(&out.need) {
             a.store(v, Ordering::Relaxed);
         }
-        out.instances.clear();
-        out.buckets.clear();
-        for &(key, tagged) in &out.keys {
-            let (i, old) = (tagged & !(1 << 31), tagged >> 31 == 1);
-            let (p, now) = self.trees[i as usize];
-            // Share of the dither range this draw's group keeps: after a regroup the old
-            // group's draws keep [0, 1 − v) and the new one's [1 − v, 1).
-            let (g, lo, hi) = match self.switches[i as usize].fading(self.time, self.regroup_fade) {
-                Some((v, from)) if old => (from, 0.0, 1.0 - v),
-                Some((v, _)) => (now, 1.0 - v, 1.0),
-                None => (now, 0.0, 1.0),
-            };
-            let sp = &self.species[p.species as usize];
-            let group = &sp.groups[g as usize];
-            let (species, level) = split(key);
-            let chain = sp.model.lods.len() as u32;
-            let far = impostor(species, level);
-            // Impostors are bucketed as level `chain` (one past the last mesh).
-            let bucket_lod = if far { chain } else { level };
-            match out.buckets.last_mut() {
-                Some(b) if b.species == species && b.lod == bucket_lod => b.count += 1,
-                _ => {
-                    stats.draw_calls += if far { 1 } else { 2 };
-                    out.buckets.push(Bucket {
-                        species,
-                        lod: bucket_lod,
-                        first: out.instances.len() as u32,
-                        count: 1,
-                    })
+        // One instance per draw, in runs in parallel.
+        let (keys, states, slots) = (&out.keys, &out.lod_state, &out.slots);
+        let instances = overwrite(&mut out.instances, keys.len());
+        instances.par_chunks_mut(INSTANCE_RUN).zip(keys.par_chunks(INSTANCE_RUN)).for_each(
+            |(instances, keys)| {
+                for (instance, &(key, tagged)) in instances.iter_mut().zip(keys) {
+                    let (i, old) = (tagged & !(1 << 31), tagged >> 31 == 1);
+                    let (p, now) = self.trees[i as usize];
+                    // Share of the dither range this draw's group keeps: after a regroup the
+                    // old group's draws keep [0, 1 − v) and the new one's [1 − v, 1).
+                    let fading = self.switches[i as usize].fading(self.time, self.regroup_fade);
+                    let (g, lo, hi) = match fading {
+                        Some((v, from)) if old => (from, 0.0, 1.0 - v),
+                        Some((v, _)) => (now, 1.0 - v, 1.0),
+                        None => (now, 0.0, 1.0),
+                    };
+                    let sp = &self.species[p.species as usize];
+                    let group = &sp.groups[g as usize];
+                    let (species, level) = split(key);
+                    let chain = sp.model.lods.len() as u32;
+                    let far = impostor(species, level);
+                    // Within the group's share, two levels split it as [lo, lo + (1 − w)(hi −
+                    // lo)) and the rest; a range reaching 1 is written open to 2.
+                    let w = if lod.geometry {
+                        let x = states[i as usize];
+                        let (a, b, w) = blend_levels(x, lod.far_level.min(chain), lod.band);
+                        match (a == b, level == a) {
+                            (true, _) => None,
+                            (false, true) => Some((true, w)),
+                            (false, false) => Some((false, w)),
+                        }
+                    } else {
+                        None
+                    };
+                    let (lo, hi) = match w {
+                        None => (lo, hi),
+                        Some((true, w)) => (lo, lo + (1.0 - w) * (hi - lo)),
+                        Some((false, w)) => (lo + (1.0 - w) * (hi - lo), hi),
+                    };
+                    let fade = [lo, if hi >= 1.0 { 2.0 } else { hi }];
+                    *instance = Instance {
+                        position: p.position,
+                        yaw: group.yaw,
+                        scale: p.scale,
+                        palette: slots[sp.lane_base * LANES + sp.lane_of[g as usize] as usize],
+                        leaf_phase: group.leaf.phase,
+                        leaf_amplitude: group.leaf.amplitude,
+                        fade,
+                        tag: if far { 15 } else { level.min(14) }
+                            | (species.min(15) << 4)
+                            | (g << 8),
+                    };
                 }
-            }
-            stats.triangles += if far { 2 } else { sp.model.lods[level as usize].triangles() };
-            // Within the group's share, two levels split it as [lo, lo + (1 − w)(hi − lo))
-            // and the rest; a range reaching 1 is written open to 2.
-            let w = if lod.geometry {
-                let (a, b, w) =
-                    blend_levels(out.lod_state[i as usize], lod.far_level.min(chain), lod.band);
-                match (a == b, level == a) {
-                    (true, _) => None,
-                    (false, true) => Some((true, w)),
-                    (false, false) => Some((false, w)),
-                }
-            } else {
-                None
-            };
-            let (lo, hi) = match w {
-                None => (lo, hi),
-                Some((true, w)) => (lo, lo + (1.0 - w) * (hi - lo)),
-                Some((false, w)) => (lo + (1.0 - w) * (hi - lo), hi),
-            };
-            let fade = [lo, if hi >= 1.0 { 2.0 } else { hi }];
-            out.instances.push(Instance {
-                position: p.position,
-                yaw: group.yaw,
-                scale: p.scale,
-                palette: out.slots[sp.lane_base * LANES + sp.lane_of[g as usize] as usize],
-                leaf_phase: group.leaf.phase,
-                leaf_amplitude: group.leaf.amplitude,
-                fade,
-                tag: if far { 15 } else { level.min(14) } | (species.min(15) << 4) | (g << 8),
-            });
-        }
+            },
+        );
+        out.instances.truncate(out.keys.len());
         stats.uploaded_bytes =
             4 * out.palettes.len() + std::mem::size_of::<Instance>() * out.instances.len();
         stats.sim_ms = self.last_sim_ms;
