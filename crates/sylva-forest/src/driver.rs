@@ -723,8 +723,12 @@ impl Switch {
 
     /// Weight of the new group at time `t` and the old group, while fading over `fade` s.
     fn fading(&self, t: f64, fade: f32) -> Option<(f32, u32)> {
-        let w = if fade > 0.0 { ((t - self.at) / fade as f64) as f32 } else { 1.0 };
-        (self.from != u32::MAX && w < 1.0).then_some((w.max(0.0), self.from))
+        // Past the fade (or none), without the division: the quotient of a ≥ b > 0 is ≥ 1.
+        if self.from == u32::MAX || !(fade > 0.0 && t - self.at < fade as f64) {
+            return None;
+        }
+        let w = ((t - self.at) / fade as f64) as f32;
+        (w < 1.0).then_some((w.max(0.0), self.from))
     }
 }
 
