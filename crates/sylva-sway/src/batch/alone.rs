@@ -9,7 +9,9 @@
 //! Kept apart from the rest, those independent parts run as plain loops over the joints,
 //! which the processor overlaps (the spring pass in chunks of 16 joints gathered into lane
 //! arrays, which the compiler vectorises), where the fused sweep made each joint wait for
-//! the one before it.
+//! the one before it. On a large skeleton (a near crown of thousands of joints) those two
+//! passes run in runs of joints on several threads: each joint's arithmetic is the same
+//! wherever it runs, so the result is the same bits for any number of threads.
 //!
 //! [`step_group`]: super::step_group
 
@@ -24,6 +26,70 @@ use crate::species::{SwaySpecies, Transition};
 
 /// Joints per chunk of the spring pass.
 const CHUNK: usize = 16;
+
+/// A skeleton of at least twice this many joints has its independent passes split into
+/// runs of joints, stepped in parallel (runs of 1 024 were no faster on scene D).
+const RUN: usize = 2048;
+
+/// A run of joints, from joint `first`: their state and what the passes write.
+struct Part<'s, const W: usize> {
+    first: usize,
+    theta: &'s mut [[[f32; W]; 2]],
+    rate: &'s mut [[[f32; W]; 2]],
+    weight: &'s mut [[f32; W]],
+    loads: &'s mut [[[f32; W]; 6]],
+    lanes: &'s mut [[[f32; W]; 12]],
+}
+
+impl<'s, const W: usize> Part<'s, W> {
+    /// The first `n` joints of `st`.
+    fn of(st: &'s mut Group<'_, W>, n: usize) -> Self {
+        Part {
+            first: 0,
+            theta: &mut st.theta[..n],
+            rate: &mut st.rate[..n],
+            weight: &mut st.weight[..n],
+            loads: &mut st.loads[..n],
+            lanes: &mut st.lanes[..n],
+        }
+    }
+
+    fn len(&self) -> usize {
+        self.theta.len()
+    }
+
+    /// The first `m` joints, and the rest.
+    fn split(self, m: usize) -> (Self, Self) {
+        let (theta, theta_b) = self.theta.split_at_mut(m);
+        let (rate, rate_b) = self.rate.split_at_mut(m);
+        let (weight, weight_b) = self.weight.split_at_mut(m);
+        let (loads, loads_b) = self.loads.split_at_mut(m);
+        let (lanes, lanes_b) = self.lanes.split_at_mut(m);
+        let first = self.first;
+        (
+            Part { first, theta, rate, weight, loads, lanes },
+            Part {
+                first: first + m,
+                theta: theta_b,
+                rate: rate_b,
+                weight: weight_b,
+                loads: loads_b,
+                lanes: lanes_b,
+            },
+        )
+    }
+}
+
+/// `f` on `part`, halved into parallel halves while they hold two runs.
+fn in_runs<const W: usize>(part: Part<'_, W>, f: &(impl Fn(Part<'_, W>) + Sync)) {
+    let n = part.len();
+    if n >= 2 * RUN {
+        let (a, b) = part.split(n / 2);
+        rayon::join(|| in_runs(a, f), || in_runs(b, f));
+    } else {
+        f(part);
+    }
+}
 
 simd_kernel! {
     /// Step lane 0 of `st` (`W` is 1: the lane layout of a group of one).
@@ -42,10 +108,7 @@ simd_kernel! {
         let (on, bud) = (st.on[0] as usize, bud[0]);
         // (1a) Each joint's own drag and its moment about the joint, kept in the joint's
         // palette slot (free until pass 2 writes it).
-        for i in 0..n {
-            let own = (&mut st.lanes[i][..6]).try_into().expect("six rows");
-            own_drag::<W, false>(sp, aero, inv_ur, u, i, &st.rate[i], &st.weight[i], own);
-        }
+        in_runs(Part::of(st, n), &|part| drags::<W>(sp, aero, inv_ur, u, part));
         // (1b) Tips inwards: a joint's loads are its subtree's (added by its children, all
         // after it), then its own, then the lumped drag of the joints held beyond it; they
         // pass to its parent.
@@ -62,10 +125,58 @@ simd_kernel! {
             pass_to_parent::<W>(sp, st.loads, i);
         }
         // (2) Springs and blend weights, then each joint's rotation about its rest position
-        // (T(o) R_i T(−o)) into its palette slot; the loads cleared for the next step. In
-        // chunks of joints gathered into lane arrays, so the loops vectorise across joints
-        // (a chunk's lanes past the last joint compute on zeros and are not written back).
-        let (tr, axes, rank, origin) = (&tr[..n], &sp.axes[..n], &sp.rank[..n], &sp.origin[..n]);
+        // (T(o) R_i T(−o)) into its palette slot; the loads cleared for the next step.
+        in_runs(Part::of(st, n), &|part| springs::<W>(sp, tr, blend, on, bud, part));
+        // (3) Palettes, root outwards: M_i = M_parent · (T(o) R_i T(−o)).
+        for i in 0..n {
+            let p = sp.parent[i];
+            if p != sylva_tree::NO_PARENT {
+                let (before, rest) = st.lanes.split_at_mut(i);
+                let parent = std::array::from_fn(|e| before[p as usize][e][0]);
+                let local = std::array::from_fn(|e| rest[0][e][0]);
+                let m = compose(&parent, &local);
+                for (e, x) in m.into_iter().enumerate() {
+                    rest[0][e][0] = x;
+                }
+            }
+        }
+    }
+}
+
+simd_kernel! {
+    /// Pass (1a) of [`step`] on a run of joints.
+    fn drags<const W: usize>(
+        sp: &SwaySpecies,
+        aero: &[f32],
+        inv_ur: f32,
+        u: &[Lanes; 3],
+        part: Part<'_, W>,
+    ) {
+        for (j, lanes) in part.lanes.iter_mut().enumerate() {
+            let own = (&mut lanes[..6]).try_into().expect("six rows");
+            let i = part.first + j;
+            own_drag::<W, false>(sp, aero, inv_ur, u, i, &part.rate[j], &part.weight[j], own);
+        }
+    }
+}
+
+simd_kernel! {
+    /// Pass (2) of [`step`] on a run of joints (of lane 0 of `W` = 1), in chunks of joints
+    /// gathered into lane arrays, so the loops vectorise across joints (a chunk's lanes past
+    /// the last joint compute on zeros and are not written back). Joints from `on` and
+    /// those ranked from `bud` on are switched off.
+    fn springs<const W: usize>(
+        sp: &SwaySpecies,
+        tr: &[Transition],
+        blend: f32,
+        on: usize,
+        bud: u32,
+        part: Part<'_, W>,
+    ) {
+        let n = part.len();
+        let run = part.first..part.first + n;
+        let (tr, axes) = (&tr[run.clone()], &sp.axes[run.clone()]);
+        let (rank, origin) = (&sp.rank[run.clone()], &sp.origin[run]);
         for first in (0..n).step_by(CHUNK) {
             let m = CHUNK.min(n - first);
             let joints = first..first + m;
@@ -77,15 +188,15 @@ simd_kernel! {
             let mut axis = [[[0.0f32; CHUNK]; 3]; 2];
             let mut active = [false; CHUNK];
             for (j, i) in joints.clone().enumerate() {
-                let (t, li, [ax, ay]) = (&tr[i], &st.loads[i], axes[i]);
+                let (t, li, [ax, ay]) = (&tr[i], &part.loads[i], axes[i]);
                 let mom = [li[3][0], li[4][0], li[5][0]];
                 eqs[0][j] = dot(mom, ax) * t.inv_k;
                 eqs[1][j] = dot(mom, ay) * t.inv_k;
                 for c in 0..2 {
-                    th[c][j] = st.theta[i][c][0];
-                    ra[c][j] = st.rate[i][c][0];
+                    th[c][j] = part.theta[i][c][0];
+                    ra[c][j] = part.rate[i][c][0];
                 }
-                w[j] = st.weight[i][0];
+                w[j] = part.weight[i][0];
                 a[0][j] = t.a11;
                 a[1][j] = t.a12;
                 a[2][j] = t.a21;
@@ -94,8 +205,8 @@ simd_kernel! {
                     axis[0][c][j] = ax[c];
                     axis[1][c][j] = ay[c];
                 }
-                active[j] = i < on && rank[i] < bud;
-                st.loads[i] = [[0.0; W]; 6];
+                active[j] = part.first + i < on && rank[i] < bud;
+                part.loads[i] = [[0.0; W]; 6];
             }
             for j in 0..CHUNK {
                 let e2 = eqs[0][j] * eqs[0][j] + eqs[1][j] * eqs[1][j];
@@ -138,27 +249,14 @@ simd_kernel! {
             }
             for (j, i) in joints.enumerate() {
                 for c in 0..2 {
-                    st.theta[i][c][0] = th[c][j];
-                    st.rate[i][c][0] = ra[c][j];
+                    part.theta[i][c][0] = th[c][j];
+                    part.rate[i][c][0] = ra[c][j];
                 }
-                st.weight[i][0] = w[j];
+                part.weight[i][0] = w[j];
                 let ph = [phi[0][j], phi[1][j], phi[2][j]];
                 let local = local_palette(ph, origin[i], sc[0][j], sc[1][j]);
                 for (e, x) in local.into_iter().enumerate() {
-                    st.lanes[i][e][0] = x;
-                }
-            }
-        }
-        // (3) Palettes, root outwards: M_i = M_parent · (T(o) R_i T(−o)).
-        for i in 0..n {
-            let p = sp.parent[i];
-            if p != sylva_tree::NO_PARENT {
-                let (before, rest) = st.lanes.split_at_mut(i);
-                let parent = std::array::from_fn(|e| before[p as usize][e][0]);
-                let local = std::array::from_fn(|e| rest[0][e][0]);
-                let m = compose(&parent, &local);
-                for (e, x) in m.into_iter().enumerate() {
-                    rest[0][e][0] = x;
+                    part.lanes[i][e][0] = x;
                 }
             }
         }
