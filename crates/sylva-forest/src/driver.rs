@@ -520,7 +520,7 @@ pub struct FrameData {
     pub wind: [f32; 3],
     /// Figures.
     pub stats: FrameStats,
-    /// (bucket key, tree index) of each draw.
+    /// (bucket key, tagged tree: see `TREE_BITS`) of each draw.
     keys: Vec<(u32, u32)>,
     /// Counting-sort scratch.
     counts: Vec<u32>,
@@ -545,6 +545,25 @@ pub struct FrameData {
 
 /// Trees a frame's pass takes at a time (the runs go in parallel).
 const TREE_RUN: usize = 4096;
+
+/// A draw's tree, tagged: the tree's index in the low bits (a scene holds at most a million
+/// trees), whether the tree is cross-fading between two instance groups, and whether the
+/// draw is its old group's.
+const TREE_BITS: u32 = (1 << 30) - 1;
+const REGROUPING: u32 = 1 << 30;
+const OLD_GROUP: u32 = 1 << 31;
+
+/// What a bucket key says of its draws: species, level, the species' runtime and last
+/// level, whether drawn as an impostor.
+#[derive(Clone, Copy)]
+struct KeyOf<'a> {
+    key: u32,
+    species: u32,
+    level: u32,
+    sp: &'a SpeciesRuntime,
+    last: u32,
+    far: bool,
+}
 
 /// Instances a frame writes at a time (the runs go in parallel).
 const INSTANCE_RUN: usize = 2048;
@@ -1464,7 +1483,9 @@ impl Forest {
                         for level in a..=b {
                             run.keys.push((
                                 level * n_species + p.species,
-                                i as u32 | (old as u32) << 31,
+                                i as u32
+                                    | if switch.is_some() { REGROUPING } else { 0 }
+                                    | if old { OLD_GROUP } else { 0 },
                             ));
                         }
                     }
@@ -1536,14 +1557,15 @@ impl Forest {
             if !far {
                 // (squared distance, tree) pairs in the scratch left by the counting sort:
                 // no allocation once it has grown. Squared distances are non-negative, so
-                // their bits order as they do; the pairs are distinct, the order total.
+                // their bits order as they do; equal distances go by tree, then the old
+                // group's draw after the new one's: a total order.
                 let eye = camera.eye;
                 out.sorted.clear();
                 out.sorted.extend(out.keys[run..end].iter().map(|&(_, tagged)| {
-                    let p = self.trees[(tagged & !(1 << 31)) as usize].0.position;
+                    let p = self.trees[(tagged & TREE_BITS) as usize].0.position;
                     ((0..3).map(|k| (p[k] - eye[k]).powi(2)).sum::<f32>().to_bits(), tagged)
                 }));
-                out.sorted.sort_unstable();
+                out.sorted.sort_unstable_by_key(|&(d, tagged)| (d, tagged & !REGROUPING));
                 for (k, &(_, tagged)) in out.keys[run..end].iter_mut().zip(&out.sorted) {
                     k.1 = tagged;
                 }
@@ -1604,27 +1626,38 @@ impl Forest {
         let instances = overwrite(&mut out.instances, keys.len());
         instances.par_chunks_mut(INSTANCE_RUN).zip(keys.par_chunks(INSTANCE_RUN)).for_each(
             |(instances, keys)| {
+                // The key of the draws before (a bucket's draws are consecutive).
+                let mut bucket: Option<KeyOf<'_>> = None;
                 for (instance, &(key, tagged)) in instances.iter_mut().zip(keys) {
-                    let (i, old) = (tagged & !(1 << 31), tagged >> 31 == 1);
-                    let (p, now) = self.trees[i as usize];
+                    let KeyOf { species, level, sp, last, far, .. } = match bucket {
+                        Some(b) if b.key == key => b,
+                        _ => {
+                            let (species, level) = split(key);
+                            let sp = &self.species[species as usize];
+                            let last = lod.far_level.min(sp.model.lods.len() as u32);
+                            let far = impostor(species, level);
+                            *bucket.insert(KeyOf { key, species, level, sp, last, far })
+                        }
+                    };
+                    let i = (tagged & TREE_BITS) as usize;
+                    let (p, now) = self.trees[i];
                     // Share of the dither range this draw's group keeps: after a regroup the
                     // old group's draws keep [0, 1 − v) and the new one's [1 − v, 1).
-                    let fading = self.switches[i as usize].fading(self.time, self.regroup_fade);
+                    let fading = if tagged & REGROUPING != 0 {
+                        self.switches[i].fading(self.time, self.regroup_fade)
+                    } else {
+                        None
+                    };
                     let (g, lo, hi) = match fading {
-                        Some((v, from)) if old => (from, 0.0, 1.0 - v),
+                        Some((v, from)) if tagged & OLD_GROUP != 0 => (from, 0.0, 1.0 - v),
                         Some((v, _)) => (now, 1.0 - v, 1.0),
                         None => (now, 0.0, 1.0),
                     };
-                    let sp = &self.species[p.species as usize];
                     let group = &sp.groups[g as usize];
-                    let (species, level) = split(key);
-                    let chain = sp.model.lods.len() as u32;
-                    let far = impostor(species, level);
                     // Within the group's share, two levels split it as [lo, lo + (1 − w)(hi −
                     // lo)) and the rest; a range reaching 1 is written open to 2.
                     let w = if lod.geometry {
-                        let x = states[i as usize];
-                        let (a, b, w) = blend_levels(x, lod.far_level.min(chain), lod.band);
+                        let (a, b, w) = blend_levels(states[i], last, lod.band);
                         match (a == b, level == a) {
                             (true, _) => None,
                             (false, true) => Some((true, w)),
