@@ -1275,7 +1275,7 @@ impl Forest {
         let (wanted, drawn, animation) = (&self.want, &self.shown, self.lod.animation);
         let coarse_levels = self.spec.lod.wind;
         // Species in parallel; each samples the shared, read-only field for its groups.
-        self.species.par_iter_mut().for_each(|s| {
+        let work = |s: &mut SpeciesRuntime| {
             let all = s.batch.species().len();
             let trunk = s.order.trunk;
             s.coarse_wind = 0;
@@ -1372,7 +1372,20 @@ impl Forest {
                 leaf.step(&mut g.leaf, speed, dt);
             }
             s.batch.step(dt, &s.winds);
-        });
+        };
+        // The species that stepped the most joints last time starts at once on this thread
+        // (a near crown can take most of the step), the others beside it. The order changes
+        // no result, only when each species is stepped.
+        let heaviest = (0..self.species.len())
+            .max_by_key(|&k| self.species[k].batch.joint_updates())
+            .unwrap_or(0);
+        let (before, rest) = self.species.split_at_mut(heaviest);
+        if let Some((first, after)) = rest.split_first_mut() {
+            rayon::join(
+                || work(first),
+                || before.par_iter_mut().chain(after.par_iter_mut()).for_each(work),
+            );
+        }
         self.last_sim_ms = start.elapsed().as_secs_f64() * 1e3;
     }
 
