@@ -1373,18 +1373,24 @@ impl Forest {
             }
             s.batch.step(dt, &s.winds);
         };
-        // The species that stepped the most joints last time starts at once on this thread
-        // (a near crown can take most of the step), the others beside it. The order changes
-        // no result, only when each species is stepped.
-        let heaviest = (0..self.species.len())
-            .max_by_key(|&k| self.species[k].batch.joint_updates())
-            .unwrap_or(0);
-        let (before, rest) = self.species.split_at_mut(heaviest);
-        if let Some((first, after)) = rest.split_first_mut() {
-            rayon::join(
-                || work(first),
-                || before.par_iter_mut().chain(after.par_iter_mut()).for_each(work),
-            );
+        // A species that stepped more joints last time than all the others together (a
+        // near crown) starts at once on its own, the others beside it; otherwise the species
+        // are shared out as they come. The order changes no result, only when each species
+        // is stepped.
+        let updates = |s: &SpeciesRuntime| s.batch.joint_updates();
+        let total: usize = self.species.iter().map(updates).sum();
+        let heaviest = (0..self.species.len()).max_by_key(|&k| updates(&self.species[k]));
+        match heaviest {
+            Some(m) if 2 * updates(&self.species[m]) > total => {
+                let (before, rest) = self.species.split_at_mut(m);
+                if let Some((first, after)) = rest.split_first_mut() {
+                    rayon::join(
+                        || work(first),
+                        || before.par_iter_mut().chain(after.par_iter_mut()).for_each(work),
+                    );
+                }
+            }
+            _ => self.species.par_iter_mut().for_each(work),
         }
         self.last_sim_ms = start.elapsed().as_secs_f64() * 1e3;
     }
