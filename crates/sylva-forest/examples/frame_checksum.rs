@@ -1,0 +1,67 @@
+//! Steps a scene along its default camera path and builds every frame, as `sylva bench
+//! table3` does on the CPU side, and prints the median simulation and frame-building ms
+//! with a checksum of everything the frames hold for the renderer (instances, palettes,
+//! buckets, figures). Two builds that print the same checksum built the same frames, bit
+//! for bit: the check behind changes meant to change only speed.
+//!
+//! ```text
+//! cargo run --release -p sylva-forest --example frame_checksum -- D 300 [all|no-geometry|no-animation|no-wind]
+//! ```
+//! (scene name or file, frames along the path, the configuration; the checksum is Rust's
+//! default hasher, the same for builds of one toolchain.)
+
+use std::hash::{DefaultHasher, Hash, Hasher};
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use sylva_forest::{Forest, FrameData, SceneSpec, default_camera_path};
+
+fn main() -> Result<()> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let name = args.first().map_or("D", String::as_str);
+    let frames: usize = match args.get(1) {
+        Some(n) => n.parse().with_context(|| format!("frames: {n:?} is not a count"))?,
+        None => 300,
+    };
+    if frames < 2 {
+        bail!("frames: at least 2");
+    }
+    let mut spec = SceneSpec::load(name)?;
+    match args.get(2).map_or("all", String::as_str) {
+        "all" => {}
+        "no-geometry" => spec.lod.geometry = false,
+        "no-animation" => spec.lod.animation = false,
+        "no-wind" => spec.lod.wind = false,
+        other => bail!("configuration {other:?}: all, no-geometry, no-animation or no-wind"),
+    }
+    let mut forest = Forest::new(&spec)?;
+    let duration = default_camera_path(&spec, forest.radius).last().map_or(12.0, |k| k.t);
+    let mut frame = FrameData::default();
+    let (mut sim, mut build) = (Vec::new(), Vec::new());
+    let mut hasher = DefaultHasher::new();
+    for i in 0..frames {
+        let camera = forest.camera_at(duration * i as f32 / (frames - 1) as f32);
+        let t = Instant::now();
+        forest.step(0.1);
+        sim.push(t.elapsed().as_secs_f64() * 1e3);
+        let t = Instant::now();
+        forest.frame(&camera, 4.0 / 3.0, &mut frame);
+        build.push(t.elapsed().as_secs_f64() * 1e3);
+        bytemuck::cast_slice::<_, u8>(&frame.instances).hash(&mut hasher);
+        bytemuck::cast_slice::<_, u8>(&frame.palettes).hash(&mut hasher);
+        format!("{:?}", frame.buckets).hash(&mut hasher);
+        // The figures, less the step's wall time.
+        let stats = sylva_forest::FrameStats { sim_ms: 0.0, ..frame.stats };
+        format!("{stats:?}").hash(&mut hasher);
+    }
+    for v in [&mut sim, &mut build] {
+        v.sort_by(f64::total_cmp);
+    }
+    println!(
+        "{name}: simulation {:.3} ms, frame {:.3} ms (medians of {frames}), checksum {:016x}",
+        sim[frames / 2],
+        build[frames / 2],
+        hasher.finish()
+    );
+    Ok(())
+}
