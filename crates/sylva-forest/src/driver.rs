@@ -1407,6 +1407,8 @@ impl Forest {
             out.lod_state.clear();
             out.lod_state.resize(self.trees.len(), f32::NAN);
         }
+        // A scene holds at most a million trees (`SceneSpec` refuses more).
+        debug_assert!(self.trees.len() <= TREE_BITS as usize, "too many trees to tag");
         let sims = self.lane_groups * LANES;
         out.need_max.reset(sims);
         out.want_max.reset(sims);
