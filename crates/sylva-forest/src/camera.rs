@@ -123,6 +123,14 @@ impl ViewCone {
         }
         size * self.inv_height / depth
     }
+
+    /// Whether an object of `size` m at `p`, in front of the eye, covers less than `bound` of
+    /// the image height: [`screen_fraction`](Self::screen_fraction) without its division.
+    /// Behind the eye it answers false, as it may where the fraction is within rounding of
+    /// `bound`: a caller leaves a margin.
+    pub fn fraction_below(&self, p: [f32; 3], size: f32, bound: f32) -> bool {
+        size * self.inv_height < bound * dot(sub(p, self.eye), self.forward)
+    }
 }
 
 #[cfg(test)]
@@ -190,5 +198,34 @@ mod tests {
             if margin < 0.0 { inside += 1 } else { outside += 1 }
         }
         assert!(inside > 100 && outside > 100);
+    }
+
+    #[test]
+    fn fraction_below_is_the_projected_size_below_a_bound() {
+        // Against the fraction itself, away from the bound by more than rounding; behind
+        // the eye (fraction 0) it declines to answer.
+        let c = Camera {
+            eye: [2.0, 1.0, 3.0],
+            target: [9.0, 40.0, 0.0],
+            fov_deg: 50.0,
+            near: 0.5,
+            far: 1e4,
+        };
+        let cone = c.cone(1.5);
+        let (mut below, mut above) = (0, 0);
+        for k in 0..3000 {
+            let a = k as f32 * 0.53;
+            let p = [2.0 + 60.0 * a.cos(), 1.0 + 60.0 * (1.1 * a).sin(), 3.0 + 5.0 * a.sin()];
+            let size = 1.0 + (k % 13) as f32;
+            let bound = 0.01 * (1 + k % 29) as f32;
+            let frac = cone.screen_fraction(p, size);
+            if frac == 0.0 {
+                assert!(!cone.fraction_below(p, size, bound), "behind the eye: {p:?}");
+            } else if (frac / bound - 1.0).abs() > 1e-5 {
+                assert_eq!(cone.fraction_below(p, size, bound), frac < bound, "{p:?}, {size}");
+                if frac < bound { below += 1 } else { above += 1 }
+            }
+        }
+        assert!(below > 300 && above > 300, "{below} below, {above} above");
     }
 }

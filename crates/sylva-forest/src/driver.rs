@@ -36,6 +36,10 @@
 //! tree is drawn at both that level and the next, cross-faded per pixel by a screen-space
 //! dither: the two draws keep complementary pixel sets ([`Instance::fade`]), so no frame
 //! shows a tree jump from one level to the next. Trees outside the view cone are culled.
+//! The per-tree state stops at [`lod_cap`], half a level past the far level, where nothing
+//! drawn or simulated changes any more; a tree whose image fraction is surely below
+//! [`past_cap_fraction`] (one multiplication, no division or logarithm) goes there without
+//! its coordinate being computed, which is most trees of a large forest.
 //!
 //! **Joint order, uploads and animation LOD.** Each species' skeleton is put in LOD order
 //! (`sylva_tree::lod_order`): the trunk first, then the joints of the coarsest level, and
@@ -211,6 +215,39 @@ impl Default for LodSettings {
 /// values.
 pub fn lod_coordinate(frac: f32, h0: f32) -> f32 {
     (1.0 + (h0 / frac.max(1e-9)).ln() / 3f32.ln()).max(0.0)
+}
+
+/// Where a tree's LOD state stops: `far + SIM_MARGIN`. From this coordinate on a tree at
+/// far level `far` is drawn at that level alone (its impostor, or its last mesh level) and
+/// simulates only its trunk, whatever the coordinate's value, and the hysteresis commutes
+/// with the cap (`min(hysteresis(p, x, w), cap) = min(hysteresis(min(p, cap), x, w), cap)`,
+/// the clamp being monotone in `p`), so a frame built from the capped state is the frame
+/// built from the uncapped one. A tree whose image fraction is surely below
+/// [`past_cap_fraction`] goes to the cap without its logarithm: most of a large forest.
+pub fn lod_cap(far: u32) -> f32 {
+    far as f32 + SIM_MARGIN
+}
+
+/// The image-height fraction below which [`lod_coordinate`] with this `h0` is at least
+/// `cap + half_width` (so that the hysteresis takes a tree to the cap at least), made smaller
+/// by 10⁻³ of itself (about 10⁻³ of a level), far more than the rounding of the
+/// coordinate, the fraction and this bound.
+pub fn past_cap_fraction(h0: f32, cap: f32, half_width: f32) -> f32 {
+    h0 * 3f32.powf(1.0 - cap - half_width) * (1.0 - 1e-3)
+}
+
+/// A tree's LOD state after a frame: the coordinate `x()` through the hysteresis of
+/// `half_width`, capped at `cap` ([`lod_cap`]). `past` says the coordinate is surely at
+/// least `cap + half_width`: whatever the state before, the hysteresis then gives at least
+/// `cap`, so the state is the cap and `x` is not called.
+pub fn next_lod_state(
+    prev: f32,
+    x: impl FnOnce() -> f32,
+    past: bool,
+    half_width: f32,
+    cap: f32,
+) -> f32 {
+    if past { cap } else { hysteresis(prev, x(), half_width).min(cap) }
 }
 
 /// The first `n` values of `buf`, for the caller to write every one of: a frame's palettes
@@ -481,7 +518,8 @@ pub struct FrameStats {
     pub regrouping: usize,
     /// Trees in view that changed instance group since the previous frame of this view.
     pub group_changes: usize,
-    /// Trees whose level changed since the previous frame of this view.
+    /// Trees whose level changed since the previous frame of this view (levels past the
+    /// far level count as the far level: an impostor stays one as it recedes).
     pub level_changes: usize,
     /// Simulated instances that read the wind pyramid's coarse level in the last step.
     pub coarse_wind: usize,
@@ -525,7 +563,8 @@ pub struct FrameData {
     /// Counting-sort scratch.
     counts: Vec<u32>,
     sorted: Vec<(u32, u32)>,
-    /// Per tree: continuous level after hysteresis (NaN: not seen yet).
+    /// Per tree: continuous level after hysteresis, capped at [`lod_cap`] (NaN: not seen
+    /// yet).
     lod_state: Vec<f32>,
     /// Per simulation (lane group · 16 + lane, all species in a row): joints its drawn
     /// trees read (a prefix; 0: not drawn).
@@ -536,6 +575,9 @@ pub struct FrameData {
     want: Vec<u32>,
     /// The pass over the trees, a run of them at a time.
     runs: Vec<TreeRun>,
+    /// Per species, the image fraction below which a tree at its LOD cap stays there
+    /// ([`past_cap_fraction`]).
+    past_cap: Vec<f32>,
     /// Per lane group drawn: where its palettes go.
     copies: Vec<PaletteCopy>,
     /// `need` and `want` as the runs raise them.
@@ -1435,6 +1477,13 @@ impl Forest {
         let (need_max, want_max) = (&out.need_max, &out.want_max);
         // The animation LOD's coordinate less the geometry LOD's: the same for every tree.
         let ahead = (ANIMATION_FRACTION / lod.fraction).ln() / 3f32.ln();
+        // Per species, the fraction below which a tree at its LOD cap stays there.
+        let mut past_cap = std::mem::take(&mut out.past_cap);
+        past_cap.clear();
+        past_cap.extend(self.species.iter().map(|sp| {
+            let far = lod.far_level.min(sp.model.lods.len() as u32);
+            past_cap_fraction(lod.fraction, lod_cap(far), lod.hysteresis)
+        }));
         out.runs[..runs]
             .par_iter_mut()
             .zip(out.lod_state.par_chunks_mut(TREE_RUN))
@@ -1461,11 +1510,16 @@ impl Forest {
                             sp.order.prefix[l as usize]
                         }
                     };
-                    let frac = cone.screen_fraction(c, h);
+                    let frac = || cone.screen_fraction(c, h);
                     let (a, b, sim, x) = if lod.geometry {
-                        let x = lod_coordinate(frac, lod.fraction);
-                        let x = hysteresis(*state, x, lod.hysteresis);
                         let before = *state;
+                        let x = next_lod_state(
+                            before,
+                            || lod_coordinate(frac(), lod.fraction),
+                            cone.fraction_below(c, h, past_cap[p.species as usize]),
+                            lod.hysteresis,
+                            lod_cap(far),
+                        );
                         // Levels as `blend_levels` takes them (both are ≥ 0).
                         if !before.is_nan() && before as u32 != x as u32 {
                             run.stats.level_changes += 1;
@@ -1485,7 +1539,7 @@ impl Forest {
                         // With the geometry LOD on, from its coordinate (and so its hysteresis), so
                         // the two agree wherever their thresholds do.
                         let by_size = if x.is_nan() {
-                            lod_coordinate(frac, ANIMATION_FRACTION)
+                            lod_coordinate(frac(), ANIMATION_FRACTION)
                         } else {
                             x + ahead
                         } - SIM_MARGIN;
@@ -1518,6 +1572,7 @@ impl Forest {
                     run.stats.impostors += (lod.geometry && b >= lod.far_level.min(chain)) as usize;
                 }
             });
+        out.past_cap = past_cap;
         out.need.clear();
         out.need.extend(out.need_max.0.iter().map(|m| m.load(Ordering::Relaxed)));
         out.want.clear();

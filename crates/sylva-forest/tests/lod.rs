@@ -1,8 +1,10 @@
 //! The geometry and animation LODs in the frame driver: level choice, hysteresis and
 //! cross-fade weights; what is uploaded and what is stepped; determinism.
 
+use sylva_forest::driver::SIM_MARGIN;
 use sylva_forest::{
-    Camera, Forest, FrameData, LodSettings, SceneSpec, blend_levels, hysteresis, lod_coordinate,
+    Camera, Forest, FrameData, LodSettings, SceneSpec, blend_levels, hysteresis, lod_cap,
+    lod_coordinate, next_lod_state, past_cap_fraction,
 };
 use sylva_sway::{LANES, STATE_BYTES, SwayBatch};
 
@@ -57,6 +59,65 @@ fn level_is_monotone_in_projected_size_with_hysteresis_and_fades_sum_to_one() {
         let w = blend_levels(x, 4, 0.3).2;
         assert!(w >= last - 1e-6 && w - last < 0.05, "weight jumps to {w} at {x}");
         last = w;
+    }
+}
+
+#[test]
+fn a_tree_past_its_lod_cap_is_drawn_and_simulated_as_without_the_cap() {
+    // A coordinate wandering in and out past the cap, in small steps and jumps: the capped
+    // state is the uncapped one's minimum with the cap, bit for bit, so the levels drawn,
+    // their fade and the level simulated are the same; past the cap by the hysteresis'
+    // width, a tree goes to the cap without its coordinate being computed.
+    for far in [1, 2, 4] {
+        for hw in [0.0, 0.1, 0.5] {
+            let cap = lod_cap(far);
+            let (mut free, mut capped) = (f32::NAN, f32::NAN);
+            let mut skipped = 0;
+            for k in 0..4000 {
+                let t = k as f32;
+                let jump = if k % 97 == 0 { 2.0 * (0.1 * t).sin() } else { 0.0 };
+                let x = ((cap + 1.0) * (1.0 + (0.013 * t).sin()) + 0.3 * (0.731 * t).sin() + jump)
+                    .max(0.0);
+                free = hysteresis(free, x, hw);
+                let mut computed = false;
+                let past = x >= cap + hw;
+                capped = next_lod_state(
+                    capped,
+                    || {
+                        computed = true;
+                        x
+                    },
+                    past,
+                    hw,
+                    cap,
+                );
+                skipped += !computed as usize;
+                assert_eq!(capped.to_bits(), free.min(cap).to_bits(), "step {k}");
+                assert_eq!(blend_levels(capped, far, 0.3), blend_levels(free, far, 0.3));
+                let sim = |s: f32| blend_levels((s - SIM_MARGIN).max(0.0), far, 0.0).0;
+                assert_eq!(sim(capped), sim(free), "step {k}: simulated level");
+            }
+            assert!(skipped > 400, "far {far}, hw {hw}: {skipped} coordinates skipped");
+        }
+    }
+    // Below `past_cap_fraction` (to within rounding of the fraction), the coordinate is
+    // past the cap by the hysteresis' width, so any state goes to the cap; and the
+    // bound gives away no more than a hundredth of a level.
+    for h0 in [0.01, 0.2, 1.0, 7.0, 100.0] {
+        for far in 1..=5 {
+            for hw in [0.0, 0.1, 0.5] {
+                let cap = lod_cap(far);
+                let bound = past_cap_fraction(h0, cap, hw);
+                for frac in [bound * (1.0 + 1e-5), bound, 0.5 * bound, 1e-3 * bound, 0.0] {
+                    let x = lod_coordinate(frac, h0);
+                    assert!(x >= cap + hw, "h0 {h0}, far {far}, hw {hw}: {x} at {frac}");
+                    for prev in [f32::NAN, 0.0, cap - 0.5 * hw, cap, cap + 9.0] {
+                        assert_eq!(hysteresis(prev, x, hw).min(cap), cap);
+                    }
+                }
+                assert!(lod_coordinate(bound * 1.02, h0) < cap + hw);
+            }
+        }
     }
 }
 
