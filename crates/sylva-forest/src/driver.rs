@@ -1477,7 +1477,7 @@ impl Forest {
         let (need_max, want_max) = (&out.need_max, &out.want_max);
         // The animation LOD's coordinate less the geometry LOD's: the same for every tree.
         let ahead = (ANIMATION_FRACTION / lod.fraction).ln() / 3f32.ln();
-        // Per species, the fraction below which a tree at its LOD cap stays there.
+        // Per species, the fraction below which a tree goes to its LOD cap.
         let mut past_cap = std::mem::take(&mut out.past_cap);
         past_cap.clear();
         past_cap.extend(self.species.iter().map(|sp| {
