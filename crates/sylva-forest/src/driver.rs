@@ -560,8 +560,7 @@ pub struct FrameData {
     pub stats: FrameStats,
     /// (bucket key, tagged tree: see `TREE_BITS`) of each draw.
     keys: Vec<(u32, u32)>,
-    /// Counting-sort scratch.
-    counts: Vec<u32>,
+    /// Distance-sort scratch.
     sorted: Vec<(u32, u32)>,
     /// Per tree: continuous level after hysteresis, capped at [`lod_cap`] (NaN: not seen
     /// yet).
@@ -610,10 +609,11 @@ struct KeyOf<'a> {
 /// Instances a frame writes at a time (the runs go in parallel).
 const INSTANCE_RUN: usize = 2048;
 
-/// What a run of trees adds to a frame: its draws' keys in tree order, and its counts.
+/// What a run of trees adds to a frame: per bucket key, its draws' tagged trees in tree
+/// order; and its counts.
 #[derive(Debug, Clone, Default)]
 struct TreeRun {
-    keys: Vec<(u32, u32)>,
+    by_key: Vec<Vec<u32>>,
     stats: FrameStats,
 }
 
@@ -1461,6 +1461,9 @@ impl Forest {
         let cone = camera.cone(aspect);
         // Bucket keys: level-major, so the finest levels are drawn first.
         let n_species = self.species.len().max(1) as u32;
+        // Keys: levels 0 to the longest chain (its impostor) for each species.
+        let longest = self.species.iter().map(|s| s.model.lods.len()).max().unwrap_or(0);
+        let n_keys = (longest + 1) * n_species as usize;
         let split = |key: u32| (key % n_species, key / n_species);
         // Whether a tree of `species` at `level` is drawn as its impostor.
         let impostor = |species: u32, level: u32| {
@@ -1490,7 +1493,10 @@ impl Forest {
             .zip(self.trees.par_chunks(TREE_RUN))
             .enumerate()
             .for_each(|(r, ((run, states), trees))| {
-                run.keys.clear();
+                if run.by_key.len() < n_keys {
+                    run.by_key.resize_with(n_keys, Vec::new);
+                }
+                run.by_key.iter_mut().for_each(Vec::clear);
                 run.stats = FrameStats::default();
                 for (k, ((p, g), state)) in trees.iter().zip(states).enumerate() {
                     let i = r * TREE_RUN + k;
@@ -1558,12 +1564,11 @@ impl Forest {
                         need_max.raise(own, joints(a) as u32);
                         want_max.raise(own, moving as u32);
                         for level in a..=b {
-                            run.keys.push((
-                                level * n_species + p.species,
+                            run.by_key[(level * n_species + p.species) as usize].push(
                                 i as u32
                                     | if switch.is_some() { REGROUPING } else { 0 }
                                     | if old { OLD_GROUP } else { 0 },
-                            ));
+                            );
                         }
                     }
                     run.stats.drawn += 1;
@@ -1578,7 +1583,6 @@ impl Forest {
         out.want.clear();
         out.want.extend(out.want_max.0.iter().map(|m| m.load(Ordering::Relaxed)));
         for run in &out.runs[..runs] {
-            out.keys.extend_from_slice(&run.keys);
             let r = &run.stats;
             stats.level_changes += r.level_changes;
             stats.group_changes += r.group_changes;
@@ -1587,28 +1591,14 @@ impl Forest {
             stats.fading += r.fading;
             stats.impostors += r.impostors;
         }
-        // Into (level, species) order, trees in order within each: a counting sort, the
-        // keys being few (levels × species).
-        out.counts.clear();
-        for &(key, _) in &out.keys {
-            let k = key as usize;
-            if k >= out.counts.len() {
-                out.counts.resize(k + 1, 0);
+        // Into (level, species) order, trees in order within each: key by key, each run's
+        // draws of that key in run order, as a stable sort of the runs' draws by key would
+        // put them.
+        for k in 0..n_keys {
+            for run in &out.runs[..runs] {
+                out.keys.extend(run.by_key[k].iter().map(|&tagged| (k as u32, tagged)));
             }
-            out.counts[k] += 1;
         }
-        let mut at = 0;
-        for c in &mut out.counts {
-            (*c, at) = (at, at + *c);
-        }
-        out.sorted.clear();
-        out.sorted.resize(out.keys.len(), (0, 0));
-        for &(key, i) in &out.keys {
-            let slot = &mut out.counts[key as usize];
-            out.sorted[*slot as usize] = (key, i);
-            *slot += 1;
-        }
-        std::mem::swap(&mut out.keys, &mut out.sorted);
         // The draws: a run of equal keys is one species at one level, one bucket (impostors
         // are bucketed as level `chain`, one past the last mesh). Within each bucket drawn
         // as meshes, the trees nearest the camera first (the impostors, two triangles each,
@@ -1633,7 +1623,7 @@ impl Forest {
             stats.triangles +=
                 (end - run) * if far { 2 } else { sp.model.lods[level as usize].triangles() };
             if !far {
-                // (squared distance, tree) pairs in the scratch left by the counting sort:
+                // (squared distance, tree) pairs in the distance-sort scratch:
                 // no allocation once it has grown. Squared distances are non-negative, so
                 // their bits order as they do; equal distances go by tree, then the old
                 // group's draw after the new one's: a total order.
