@@ -133,6 +133,37 @@ impl ViewCone {
     }
 }
 
+sylva_core::simd_kernel! {
+    /// [`ViewCone::may_see`] for a run of trees, one flag each into `seen`: tree `i` stands
+    /// at (`x[i]`, `y[i]`, `z[i]`) and is `h[i]` m tall, its crown the sphere of radius
+    /// 0.75 h about the point h / 2 up, as [`Forest::frame`](crate::Forest::frame) culls
+    /// it. The same arithmetic as `may_see`, lane by lane (both square roots taken, the
+    /// early answer for a camera inside a sphere a select), so the same flags bit for bit,
+    /// computed many trees at a time.
+    pub fn may_see_trees(
+        cone: &ViewCone,
+        x: &[f32],
+        y: &[f32],
+        z: &[f32],
+        h: &[f32],
+        seen: &mut [bool],
+    ) {
+        let n = seen.len();
+        let (x, y, z, h) = (&x[..n], &y[..n], &z[..n], &h[..n]);
+        let ([ex, ey, ez], [fx, fy, fz]) = (cone.eye, cone.forward);
+        for i in 0..n {
+            let radius = 0.75 * h[i];
+            let d = [x[i] - ex, y[i] - ey, (z[i] + 0.5 * h[i]) - ez];
+            let dist2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+            let along = d[0] * fx + d[1] * fy + d[2] * fz;
+            let in_cone =
+                along >= cone.cos_h * (dist2 - radius * radius).sqrt() - radius * cone.sin_h;
+            let near = dist2.sqrt() - radius < cone.far;
+            seen[i] = dist2 <= radius * radius || (in_cone & near);
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -227,5 +258,75 @@ mod tests {
             }
         }
         assert!(below > 300 && above > 300, "{below} below, {above} above");
+    }
+
+    #[test]
+    fn trees_culled_many_at_a_time_are_culled_as_one_at_a_time() {
+        // Trees scattered round the eye (some with the eye inside the crown, some past the
+        // far distance), and trees placed where `may_see` flips, found to the last bit
+        // along lines that cross the cone's side or the far distance: the run's flags are
+        // `may_see`'s, tree by tree.
+        let c = Camera {
+            eye: [-40.0, 7.0, 30.0],
+            target: [0.0, 0.0, 0.0],
+            fov_deg: 45.0,
+            near: 1.0,
+            far: 90.0,
+        };
+        let cone = c.cone(16.0 / 9.0);
+        let f = c.forward();
+        let (mut x, mut y, mut z, mut h) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        let mut add = |p: [f32; 3], height: f32| {
+            x.push(p[0]);
+            y.push(p[1]);
+            z.push(p[2]);
+            h.push(height);
+        };
+        for k in 0..3000 {
+            let a = k as f32 * 0.37;
+            let reach = 1.0 + (k % 40) as f32 * 3.0;
+            let p =
+                [-40.0 + reach * a.cos(), 7.0 + reach * (1.3 * a).sin(), 30.0 - reach * a.sin()];
+            add(p, 2.0 + (k % 9) as f32 * 3.0);
+        }
+        let seen_one = |p: [f32; 3], height: f32| {
+            cone.may_see([p[0], p[1], p[2] + 0.5 * height], 0.75 * height)
+        };
+        for k in 0..300 {
+            let height = 4.0 + (k % 7) as f32 * 5.0;
+            let s = k as f32 * 0.61;
+            let a = [0, 1, 2].map(|i| c.eye[i] + 20.0 * f[i]);
+            let b = if k % 3 == 2 {
+                [0, 1, 2].map(|i| c.eye[i] + (c.far + 80.0) * f[i])
+            } else {
+                [0, 1, 2].map(|i| a[i] + 80.0 * [s.cos(), s.sin(), (1.7 * s).sin()][i])
+            };
+            let at = |t: f32| [0, 1, 2].map(|i| a[i] + t * (b[i] - a[i]));
+            if !seen_one(at(0.0), height) || seen_one(at(1.0), height) {
+                continue;
+            }
+            let (mut lo, mut hi) = (0.0f32, 1.0f32);
+            while lo.next_up() < hi {
+                let mid = (0.5 * (lo + hi)).clamp(lo.next_up(), hi.next_down());
+                if seen_one(at(mid), height) { lo = mid } else { hi = mid }
+            }
+            let mut t = lo;
+            for _ in 0..4 {
+                t = t.next_down();
+            }
+            for _ in 0..9 {
+                add(at(t), height);
+                t = t.next_up();
+            }
+        }
+        let mut seen = vec![false; x.len()];
+        may_see_trees(&cone, &x, &y, &z, &h, &mut seen);
+        let (mut yes, mut no) = (0, 0);
+        for i in 0..x.len() {
+            let want = seen_one([x[i], y[i], z[i]], h[i]);
+            assert_eq!(seen[i], want, "tree {i} at {:?}, {} m", [x[i], y[i], z[i]], h[i]);
+            if want { yes += 1 } else { no += 1 }
+        }
+        assert!(yes > 1000 && no > 1000 && x.len() > 4000, "{yes} seen, {no} not, of {}", x.len());
     }
 }

@@ -74,7 +74,7 @@ use sylva_tree::{LodOrder, Species, lod_order};
 use sylva_wind::{FieldView, Grid, NearField, OwnedPyramid, SynthParams, WindField, WindParams};
 use thiserror::Error;
 
-use crate::camera::Camera;
+use crate::camera::{Camera, may_see_trees};
 use crate::groups::{assign_slots, morton, partition};
 use crate::lanes;
 use crate::scene::{
@@ -615,6 +615,32 @@ const INSTANCE_RUN: usize = 2048;
 struct TreeRun {
     by_key: Vec<Vec<u32>>,
     stats: FrameStats,
+    /// Per tree of the run: whether it may be in view.
+    seen: Vec<bool>,
+}
+
+/// The trees' feet and heights as separate arrays (what culling reads, in the layout that
+/// lets [`may_see_trees`] test many trees at a time).
+#[derive(Debug, Clone, Default)]
+struct Crowns {
+    x: Vec<f32>,
+    y: Vec<f32>,
+    z: Vec<f32>,
+    h: Vec<f32>,
+}
+
+impl Crowns {
+    /// From the trees' placements and each species' height.
+    fn new(trees: &[(Placement, u32)], height: impl Fn(u32) -> f32) -> Crowns {
+        let mut c = Crowns::default();
+        for (p, _) in trees {
+            c.x.push(p.position[0]);
+            c.y.push(p.position[1]);
+            c.z.push(p.position[2]);
+            c.h.push(height(p.species) * p.scale);
+        }
+        c
+    }
 }
 
 /// Per-simulation maxima that the runs of trees raise together.
@@ -744,6 +770,8 @@ pub struct Forest {
     pub species: Vec<SpeciesRuntime>,
     /// Trees: placement and the (species-local) group each one follows.
     trees: Vec<(Placement, u32)>,
+    /// The trees' feet and heights, one array each, for culling many at a time.
+    crowns: Crowns,
     /// The wind field and its mip pyramid (the wind-field LOD).
     wind: OwnedPyramid,
     /// The fine tile read near the camera, where the field is coarser than the trees.
@@ -985,11 +1013,13 @@ impl Forest {
         let SceneWind { field, near } = wind_field(spec, radius)?;
         let wind = OwnedPyramid::new(field);
         let n_trees = trees.len();
+        let crowns = Crowns::new(&trees, |s| species[s as usize].model.tree.stats.height);
         Ok(Forest {
             spec: spec.clone(),
             terrain,
             species,
             trees,
+            crowns,
             wind,
             near,
             leaf_params: spec.leaves,
@@ -1497,15 +1527,21 @@ impl Forest {
                     run.by_key.resize_with(n_keys, Vec::new);
                 }
                 run.by_key.iter_mut().for_each(Vec::clear);
+                let (first, n) = (r * TREE_RUN, trees.len());
+                run.seen.resize(n, false);
+                let (cr, span) = (&self.crowns, first..first + n);
+                let (x, y) = (&cr.x[span.clone()], &cr.y[span.clone()]);
+                let (z, h) = (&cr.z[span.clone()], &cr.h[span]);
+                may_see_trees(&cone, x, y, z, h, &mut run.seen[..n]);
                 run.stats = FrameStats::default();
                 for (k, ((p, g), state)) in trees.iter().zip(states).enumerate() {
                     let i = r * TREE_RUN + k;
                     let sp = &self.species[p.species as usize];
-                    let h = sp.model.tree.stats.height * p.scale;
-                    let c = [p.position[0], p.position[1], p.position[2] + 0.5 * h];
-                    if !cone.may_see(c, 0.75 * h) {
+                    if !run.seen[k] {
                         continue;
                     }
+                    let h = sp.model.tree.stats.height * p.scale;
+                    let c = [p.position[0], p.position[1], p.position[2] + 0.5 * h];
                     let chain = sp.model.lods.len() as u32;
                     let far = lod.far_level.min(chain);
                     // Joints level `l` draws (a prefix in LOD order).
