@@ -574,7 +574,7 @@ pub struct FrameData {
     want: Vec<u32>,
     /// The pass over the trees, a run of them at a time.
     runs: Vec<TreeRun>,
-    /// Per species, the image fraction below which a tree at its LOD cap stays there
+    /// Per species, the image fraction below which a tree goes to its LOD cap
     /// ([`past_cap_fraction`]).
     past_cap: Vec<f32>,
     /// Per lane group drawn: where its palettes go.
