@@ -104,14 +104,19 @@ impl ViewCone {
     /// direction and the centre, less the sphere's angular radius β = asin(r / d), is at most
     /// the half-angle h; as cosines (h + β ≤ π), d·f ≥ cos h √(d² − r²) − r sin h.
     pub fn may_see(&self, c: [f32; 3], radius: f32) -> bool {
-        let d = sub(c, self.eye);
+        self.sees(sub(c, self.eye), radius)
+    }
+
+    /// [`may_see`](Self::may_see) for a sphere at `d` from the eye, without branches (both
+    /// square roots are taken; a camera inside the sphere is a select), so that a loop over
+    /// many spheres vectorises ([`may_see_trees`]).
+    #[inline(always)]
+    fn sees(&self, d: [f32; 3], radius: f32) -> bool {
         let dist2 = dot(d, d);
-        if dist2 <= radius * radius {
-            return true;
-        }
         let along = dot(d, self.forward);
-        along >= self.cos_h * (dist2 - radius * radius).sqrt() - radius * self.sin_h
-            && dist2.sqrt() - radius < self.far
+        let in_cone = along >= self.cos_h * (dist2 - radius * radius).sqrt() - radius * self.sin_h;
+        let near = dist2.sqrt() - radius < self.far;
+        dist2 <= radius * radius || (in_cone & near)
     }
 
     /// Fraction of the image height that an object of `size` m at `p` covers (0 behind the
@@ -137,9 +142,7 @@ sylva_core::simd_kernel! {
     /// [`ViewCone::may_see`] for a run of trees, one flag each into `seen`: tree `i` stands
     /// at (`x[i]`, `y[i]`, `z[i]`) and is `h[i]` m tall, its crown the sphere of radius
     /// 0.75 h about the point h / 2 up, as [`Forest::frame`](crate::Forest::frame) culls
-    /// it. The same arithmetic as `may_see`, lane by lane (both square roots taken, the
-    /// early answer for a camera inside a sphere a select), so the same flags bit for bit,
-    /// computed many trees at a time.
+    /// it. The same test, lane by lane, so the same flags, computed many trees at a time.
     pub fn may_see_trees(
         cone: &ViewCone,
         x: &[f32],
@@ -150,16 +153,9 @@ sylva_core::simd_kernel! {
     ) {
         let n = seen.len();
         let (x, y, z, h) = (&x[..n], &y[..n], &z[..n], &h[..n]);
-        let ([ex, ey, ez], [fx, fy, fz]) = (cone.eye, cone.forward);
         for i in 0..n {
-            let radius = 0.75 * h[i];
-            let d = [x[i] - ex, y[i] - ey, (z[i] + 0.5 * h[i]) - ez];
-            let dist2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-            let along = d[0] * fx + d[1] * fy + d[2] * fz;
-            let in_cone =
-                along >= cone.cos_h * (dist2 - radius * radius).sqrt() - radius * cone.sin_h;
-            let near = dist2.sqrt() - radius < cone.far;
-            seen[i] = dist2 <= radius * radius || (in_cone & near);
+            let c = [x[i], y[i], z[i] + 0.5 * h[i]];
+            seen[i] = cone.sees(sub(c, cone.eye), 0.75 * h[i]);
         }
     }
 }
