@@ -1530,9 +1530,9 @@ impl Forest {
                 let (first, n) = (r * TREE_RUN, trees.len());
                 run.seen.resize(n, false);
                 let (cr, span) = (&self.crowns, first..first + n);
-                let (x, y) = (&cr.x[span.clone()], &cr.y[span.clone()]);
-                let (z, h) = (&cr.z[span.clone()], &cr.h[span]);
-                may_see_trees(&cone, x, y, z, h, &mut run.seen[..n]);
+                let (cx, cy) = (&cr.x[span.clone()], &cr.y[span.clone()]);
+                let (cz, ch) = (&cr.z[span.clone()], &cr.h[span]);
+                may_see_trees(&cone, cx, cy, cz, ch, &mut run.seen[..n]);
                 run.stats = FrameStats::default();
                 for (k, ((p, g), state)) in trees.iter().zip(states).enumerate() {
                     let i = r * TREE_RUN + k;
@@ -1540,8 +1540,9 @@ impl Forest {
                     if !run.seen[k] {
                         continue;
                     }
-                    let h = sp.model.tree.stats.height * p.scale;
-                    let c = [p.position[0], p.position[1], p.position[2] + 0.5 * h];
+                    // The crown's height and centre, as the culling took them.
+                    let h = ch[k];
+                    let c = [cx[k], cy[k], cz[k] + 0.5 * h];
                     let chain = sp.model.lods.len() as u32;
                     let far = lod.far_level.min(chain);
                     // Joints level `l` draws (a prefix in LOD order).
