@@ -1450,12 +1450,24 @@ fn pass_to_parent<const W: usize>(sp: &SwaySpecies, loads: &mut [[[f32; W]; 6]],
         return;
     }
     let p = p as usize;
-    let (o, op) = (sp.origin[i], sp.origin[p]);
-    let r = [o[0] - op[0], o[1] - op[1], o[2] - op[2]];
     let (lp, li) = {
         let (a, b) = loads.split_at_mut(i);
         (&mut a[p], &b[0])
     };
+    pass_on::<W>(sp, i, li, p, lp);
+}
+
+/// Pass joint `i`'s loads `li` on to its parent `p`'s, `lp` (see [`pass_to_parent`]).
+#[inline(always)]
+fn pass_on<const W: usize>(
+    sp: &SwaySpecies,
+    i: usize,
+    li: &[[f32; W]; 6],
+    p: usize,
+    lp: &mut [[f32; W]; 6],
+) {
+    let (o, op) = (sp.origin[i], sp.origin[p]);
+    let r = [o[0] - op[0], o[1] - op[1], o[2] - op[2]];
     for l in 0..W {
         let fi = [li[0][l], li[1][l], li[2][l]];
         lp[0][l] += fi[0];

@@ -72,6 +72,81 @@ pub struct SwaySpecies {
     pub(crate) priority: Vec<u32>,
     /// Rank of each joint in `priority`.
     pub(crate) rank: Vec<u32>,
+    /// The skeleton cut into whole subtrees, for the sweeps along it on several threads.
+    pub(crate) cut: Cut,
+}
+
+/// A skeleton cut into a small top, closed under taking parents, and whole subtrees below it
+/// gathered into bins of similar size: the sweeps along the skeleton (loads tips inwards,
+/// palettes root outwards) can then run bin by bin on several threads, each joint's sums
+/// taken in the same order as in one sweep over all the joints.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Cut {
+    /// Joints whose subtree holds more than a bin's share of the skeleton, ascending.
+    pub(crate) top: Vec<u32>,
+    /// Whether each joint is in `top`.
+    pub(crate) in_top: Vec<bool>,
+    /// The other joints, ascending in each bin; a subtree is never split between bins.
+    pub(crate) bins: Vec<Vec<u32>>,
+    /// `top` and the joints whose parent is in it (the roots of the bins' subtrees),
+    /// ascending: where the bins' loads meet.
+    pub(crate) seam: Vec<u32>,
+}
+
+/// Bins a skeleton is cut into, about: enough for the threads of a large machine to share
+/// the sweeps, few enough that each is thousands of joints on a near crown.
+const BINS: usize = 16;
+
+impl Cut {
+    /// Cut the skeleton of `parent` (every parent before its children).
+    pub(crate) fn new(parent: &[u32]) -> Cut {
+        let n = parent.len();
+        let share = n.div_ceil(BINS).max(1);
+        let mut size = vec![1usize; n];
+        for i in (0..n).rev() {
+            let p = parent[i];
+            if p != sylva_tree::NO_PARENT {
+                size[p as usize] += size[i];
+            }
+        }
+        let in_top: Vec<bool> = size.iter().map(|&s| s > share).collect();
+        // Each joint below the top, the subtree root it hangs from.
+        let mut root = vec![0u32; n];
+        let mut bin_of_root = vec![u32::MAX; n];
+        let (mut bins, mut filled) = (0u32, 0usize);
+        for i in 0..n {
+            if in_top[i] {
+                continue;
+            }
+            let p = parent[i];
+            if p == sylva_tree::NO_PARENT || in_top[p as usize] {
+                root[i] = i as u32;
+                if filled == 0 || filled >= share {
+                    bins += 1;
+                    filled = 0;
+                }
+                bin_of_root[i] = bins - 1;
+                filled += size[i];
+            } else {
+                root[i] = root[p as usize];
+            }
+        }
+        let mut cut = Cut { bins: vec![Vec::new(); bins as usize], ..Cut::default() };
+        for i in 0..n {
+            let p = parent[i];
+            let hangs = p == sylva_tree::NO_PARENT || in_top[p as usize];
+            if in_top[i] {
+                cut.top.push(i as u32);
+            } else {
+                cut.bins[bin_of_root[root[i] as usize] as usize].push(i as u32);
+            }
+            if in_top[i] || hangs {
+                cut.seam.push(i as u32);
+            }
+        }
+        cut.in_top = in_top;
+        cut
+    }
 }
 
 /// Wind speed, m/s, under which no joint may bend more than [`DESIGN_BEND`] at rest: a
@@ -105,6 +180,7 @@ impl SwaySpecies {
             springs: Vec::with_capacity(n),
             priority: Vec::new(),
             rank: vec![0; n],
+            cut: Cut::default(),
             drag_scale: crown_drag_scale(skeleton, &params),
         };
         let scale = sp.drag_scale;
@@ -199,6 +275,7 @@ impl SwaySpecies {
             sp.rank[j as usize] = r as u32;
         }
         sp.priority = order;
+        sp.cut = Cut::new(&sp.parent);
         Ok(sp)
     }
 
@@ -295,5 +372,60 @@ impl Transition {
             a22: a22 as f32,
             inv_k: 1.0 / s.stiffness,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The cut of a near crown (the black tupelo, 19 000 joints): every joint is in the top
+    /// or in one bin; the top is closed under taking parents; a bin joint's parent is in the
+    /// top or in the same bin (a bin holds whole subtrees, so its sweeps need no other bin);
+    /// the seam is the top and the bins' subtree roots; and the bins share the skeleton
+    /// (none more than twice its share plus one subtree), so the sweeps do split.
+    #[test]
+    fn a_cut_holds_whole_subtrees_in_bins_of_similar_size() {
+        let model = sylva_tree::Species::preset("black_tupelo").expect("preset").model(5, 4);
+        let sp = SwaySpecies::new(&model.expect("model").tree.skeleton, SwayParams::default())
+            .expect("species");
+        let (n, cut) = (sp.len(), &sp.cut);
+        let mut bin_of = vec![usize::MAX; n];
+        for (b, bin) in cut.bins.iter().enumerate() {
+            assert!(bin.windows(2).all(|w| w[0] < w[1]), "bin {b} ascending");
+            for &j in bin {
+                assert_eq!(bin_of[j as usize], usize::MAX, "joint {j} in two bins");
+                bin_of[j as usize] = b;
+            }
+        }
+        assert!(cut.top.windows(2).all(|w| w[0] < w[1]));
+        for j in 0..n {
+            let p = sp.parent[j];
+            let in_bin = bin_of[j] != usize::MAX;
+            assert_eq!(cut.in_top[j], cut.top.binary_search(&(j as u32)).is_ok());
+            assert!(cut.in_top[j] != in_bin, "joint {j}: in the top or in a bin, not both");
+            let hangs = in_bin && (p == sylva_tree::NO_PARENT || cut.in_top[p as usize]);
+            if p != sylva_tree::NO_PARENT {
+                let p = p as usize;
+                if cut.in_top[j] {
+                    assert!(cut.in_top[p], "joint {j} in the top, its parent {p} not");
+                } else if !hangs {
+                    assert_eq!(bin_of[p], bin_of[j], "joint {j} and its parent {p}");
+                }
+            }
+            assert_eq!(
+                cut.seam.binary_search(&(j as u32)).is_ok(),
+                cut.in_top[j] || hangs,
+                "joint {j} on the seam"
+            );
+        }
+        let share = n.div_ceil(BINS);
+        assert!(
+            n > 10_000 && cut.top.len() < n / 100,
+            "{} of {n} joints in the top",
+            cut.top.len()
+        );
+        assert!(cut.bins.len() >= BINS / 2, "{} bins", cut.bins.len());
+        assert!(cut.bins.iter().all(|b| b.len() <= 2 * share + 1), "bins over twice a share");
     }
 }

@@ -10,17 +10,24 @@
 //! which the processor overlaps (the spring pass in chunks of 16 joints gathered into lane
 //! arrays, which the compiler vectorises), where the fused sweep made each joint wait for
 //! the one before it. On a large skeleton (a near crown of thousands of joints) those two
-//! passes run in runs of joints on several threads: each joint's arithmetic is the same
-//! wherever it runs, so the result is the same bits for any number of threads.
+//! passes run in runs of joints on several threads, and the two sweeps bin by bin of the
+//! species' [`Cut`] (whole subtrees, each bin swept on a thread of its own, the few joints
+//! above them swept alone): each joint's arithmetic, and the order of every sum, is the
+//! same wherever it runs, so the result is the same bits for any number of threads.
+//!
+//! [`Cut`]: crate::species::Cut
 //!
 //! [`step_group`]: super::step_group
 
+use std::marker::PhantomData;
+
+use rayon::prelude::*;
 use sylva_core::simd_kernel;
 use sylva_core::v3::dot;
 
 use super::{
-    Group, LANES, LEVER_SERIES, Lanes, MAX_BEND, add_held, any_angle, compose, held_wind,
-    lever_bend, local_palette, own_drag, pass_to_parent, small_angle,
+    Group, LANES, LEVER_SERIES, Lanes, Lump, MAX_BEND, add_held, any_angle, compose, held_wind,
+    lever_bend, local_palette, own_drag, pass_on, pass_to_parent, small_angle,
 };
 use crate::species::{SwaySpecies, Transition};
 
@@ -28,7 +35,8 @@ use crate::species::{SwaySpecies, Transition};
 const CHUNK: usize = 16;
 
 /// A skeleton of at least twice this many joints has its independent passes split into
-/// runs of joints, stepped in parallel (runs of 1 024 were no faster on scene D).
+/// runs of joints, stepped in parallel (runs of 1 024 were no faster on scene D), and its
+/// sweeps stepped bin by bin.
 const RUN: usize = 2048;
 
 /// A run of joints, from joint `first`: their state and what the passes write.
@@ -113,31 +121,184 @@ simd_kernel! {
         // after it), then its own, then the lumped drag of the joints held beyond it; they
         // pass to its parent.
         let q = held_wind::<W>(u, inv_ur);
-        for i in (0..n).rev() {
-            let own = &st.lanes[i];
-            let li = &mut st.loads[i];
-            for c in 0..6 {
-                li[c][0] += own[c][0];
+        if n >= 2 * RUN {
+            loads_in_bins::<W>(sp, n, st.held, &q, st.lanes, st.loads);
+        } else {
+            for i in (0..n).rev() {
+                gather::<W>(&mut st.loads[i], &st.lanes[i], st.held, i, &q);
+                pass_to_parent::<W>(sp, st.loads, i);
             }
-            if let Some(held) = st.held {
-                add_held::<W>(li, &held[i], &q);
-            }
-            pass_to_parent::<W>(sp, st.loads, i);
         }
         // (2) Springs and blend weights, then each joint's rotation about its rest position
         // (T(o) R_i T(−o)) into its palette slot; the loads cleared for the next step.
         in_runs(Part::of(st, n), &|part| springs::<W>(sp, tr, blend, on, bud, part));
         // (3) Palettes, root outwards: M_i = M_parent · (T(o) R_i T(−o)).
-        for i in 0..n {
+        // On a large skeleton, the cut's top first, then its bins on their threads.
+        let place_at = |lanes: &mut [[[f32; W]; 12]], i: usize| {
             let p = sp.parent[i];
             if p != sylva_tree::NO_PARENT {
-                let (before, rest) = st.lanes.split_at_mut(i);
-                let parent = std::array::from_fn(|e| before[p as usize][e][0]);
-                let local = std::array::from_fn(|e| rest[0][e][0]);
-                let m = compose(&parent, &local);
-                for (e, x) in m.into_iter().enumerate() {
-                    rest[0][e][0] = x;
-                }
+                let (before, rest) = lanes.split_at_mut(i);
+                place::<W>(&before[p as usize], &mut rest[0]);
+            }
+        };
+        if n >= 2 * RUN {
+            let top = &sp.cut.top;
+            for &i in &top[..top.partition_point(|&j| (j as usize) < n)] {
+                place_at(st.lanes, i as usize);
+            }
+            let rows = Rows::new(st.lanes);
+            sp.cut.bins.par_iter().for_each(|bin| {
+                bin_palettes::<W>(sp, &bin[..bin.partition_point(|&j| (j as usize) < n)], &rows);
+            });
+        } else {
+            for i in 0..n {
+                place_at(st.lanes, i);
+            }
+        }
+    }
+}
+
+/// A joint's loads `li` take its own drag (the first six rows of its palette slot `own`)
+/// and the lumped drag of the joints `held` beyond joint `i`, in the wind `q`.
+#[inline(always)]
+fn gather<const W: usize>(
+    li: &mut [[f32; W]; 6],
+    own: &[[f32; W]; 12],
+    held: Option<&[Lump]>,
+    i: usize,
+    q: &[[[f32; W]; 3]; 2],
+) {
+    for c in 0..6 {
+        li[c][0] += own[c][0];
+    }
+    if let Some(held) = held {
+        add_held::<W>(li, &held[i], q);
+    }
+}
+
+/// A joint's palette slot `local`, holding its rotation about its rest position, becomes its
+/// palette: its parent's palette `parent` composed with it.
+#[inline(always)]
+fn place<const W: usize>(parent: &[[f32; W]; 12], local: &mut [[f32; W]; 12]) {
+    let m = compose(&std::array::from_fn(|e| parent[e][0]), &std::array::from_fn(|e| local[e][0]));
+    for (e, x) in m.into_iter().enumerate() {
+        local[e][0] = x;
+    }
+}
+
+/// Rows of one slice that the threads stepping the bins of a [`Cut`] reach at once: each
+/// thread writes the joints of its own bin only, and reads those and the cut's top, which no
+/// thread writes meanwhile.
+///
+/// [`Cut`]: crate::species::Cut
+struct Rows<'s, T> {
+    ptr: *mut T,
+    len: usize,
+    rows: PhantomData<&'s mut [T]>,
+}
+
+// SAFETY: a `Rows` is only reached through `row` and `row_mut`, whose callers keep the
+// threads on disjoint rows.
+unsafe impl<T: Send> Sync for Rows<'_, T> {}
+
+impl<'s, T> Rows<'s, T> {
+    fn new(rows: &'s mut [T]) -> Self {
+        Rows { ptr: rows.as_mut_ptr(), len: rows.len(), rows: PhantomData }
+    }
+
+    /// Row `i`, to read.
+    ///
+    /// # Safety
+    /// No thread writes row `i` while the reference lives.
+    #[allow(clippy::mut_from_ref)]
+    unsafe fn row(&self, i: usize) -> &T {
+        assert!(i < self.len, "row {i} of {}", self.len);
+        // SAFETY: in bounds; the caller keeps writers off row `i`.
+        unsafe { &*self.ptr.add(i) }
+    }
+
+    /// Row `i`, to write.
+    ///
+    /// # Safety
+    /// No other reference to row `i` lives while this one does.
+    #[allow(clippy::mut_from_ref)]
+    unsafe fn row_mut(&self, i: usize) -> &mut T {
+        assert!(i < self.len, "row {i} of {}", self.len);
+        // SAFETY: in bounds; the caller keeps every other reference off row `i`.
+        unsafe { &mut *self.ptr.add(i) }
+    }
+}
+
+/// Pass (1b) of [`step`] on a large skeleton, the first `n` joints: each bin of the
+/// species' [`Cut`] tips inwards on its own thread, its subtrees' roots keeping their loads;
+/// then the seam, tips inwards, the roots passing theirs on. A joint's loads take its
+/// children's in the order one sweep over all the joints takes them (descending index), so
+/// the bits are the same.
+///
+/// [`Cut`]: crate::species::Cut
+fn loads_in_bins<const W: usize>(
+    sp: &SwaySpecies,
+    n: usize,
+    held: Option<&[Lump]>,
+    q: &[[[f32; W]; 3]; 2],
+    lanes: &[[[f32; W]; 12]],
+    loads: &mut [[[f32; W]; 6]],
+) {
+    let cut = &sp.cut;
+    {
+        let rows = Rows::new(loads);
+        cut.bins.par_iter().for_each(|bin| {
+            let bin = &bin[..bin.partition_point(|&j| (j as usize) < n)];
+            bin_loads::<W>(sp, held, q, lanes, bin, &rows);
+        });
+    }
+    let seam = &cut.seam[..cut.seam.partition_point(|&j| (j as usize) < n)];
+    for &i in seam.iter().rev() {
+        let i = i as usize;
+        if cut.in_top[i] {
+            gather::<W>(&mut loads[i], &lanes[i], held, i, q);
+        }
+        pass_to_parent::<W>(sp, loads, i);
+    }
+}
+
+simd_kernel! {
+    /// The loads of one bin's joints, tips inwards (see [`loads_in_bins`]).
+    fn bin_loads<const W: usize>(
+        sp: &SwaySpecies,
+        held: Option<&[Lump]>,
+        q: &[[[f32; W]; 3]; 2],
+        lanes: &[[[f32; W]; 12]],
+        bin: &[u32],
+        rows: &Rows<'_, [[f32; W]; 6]>,
+    ) {
+        for &i in bin.iter().rev() {
+            let i = i as usize;
+            // SAFETY: joint `i` is in this bin alone, and so is its parent unless the parent
+            // is in the top (which this pass does not touch); the parent precedes `i`.
+            let li = unsafe { rows.row_mut(i) };
+            gather::<W>(li, &lanes[i], held, i, q);
+            let p = sp.parent[i];
+            if p != sylva_tree::NO_PARENT && !sp.cut.in_top[p as usize] {
+                // SAFETY: as above: the parent is in this bin, and is not joint `i`.
+                let lp = unsafe { rows.row_mut(p as usize) };
+                pass_on::<W>(sp, i, li, p as usize, lp);
+            }
+        }
+    }
+}
+
+simd_kernel! {
+    /// The palettes of one bin's joints, root outwards, the top's being done.
+    fn bin_palettes<const W: usize>(sp: &SwaySpecies, bin: &[u32], rows: &Rows<'_, [[f32; W]; 12]>) {
+        for &i in bin {
+            let i = i as usize;
+            let p = sp.parent[i];
+            if p != sylva_tree::NO_PARENT {
+                // SAFETY: the parent is in the top, which no thread writes now, or earlier in
+                // this bin, which this thread alone writes; joint `i` is in this bin alone.
+                let (parent, local) = unsafe { (rows.row(p as usize), rows.row_mut(i)) };
+                place::<W>(parent, local);
             }
         }
     }
