@@ -220,7 +220,8 @@ fn batches_are_bit_identical_for_one_and_two_threads() {
 }
 
 /// A crown of thousands of joints (a near tree) stepped alone has its joints'
-/// independent work split into runs on several threads. Each joint's arithmetic is the
+/// independent work split into runs on several threads, and its sweeps along the skeleton
+/// into bins of whole subtrees. Each joint's arithmetic, and the order of its sums, is the
 /// same wherever it runs: the palettes are the same bits on one thread and on two, and the
 /// same as those of a full group of 16 such instances in the same wind (stepped together,
 /// nothing split).
