@@ -369,12 +369,27 @@ simd_kernel! {
                 active[j] = part.first + i < on && rank[i] < bud;
                 part.loads[i] = [[0.0; W]; 6];
             }
+            // The Newton step only where a joint of the chunk needs it (as a group does):
+            // below LEVER_SERIES each joint takes the series whichever way the chunk goes.
+            let mut e2 = [0.0f32; CHUNK];
+            let mut heavy = false;
             for j in 0..CHUNK {
-                let e2 = eqs[0][j] * eqs[0][j] + eqs[1][j] * eqs[1][j];
-                let full = lever_bend(e2);
-                let f = if e2 > LEVER_SERIES { full } else { 1.0 - 0.5 * e2 };
-                eqs[0][j] *= f;
-                eqs[1][j] *= f;
+                e2[j] = eqs[0][j] * eqs[0][j] + eqs[1][j] * eqs[1][j];
+                heavy |= e2[j] > LEVER_SERIES;
+            }
+            let mut f = [0.0f32; CHUNK];
+            for j in 0..CHUNK {
+                f[j] = 1.0 - 0.5 * e2[j];
+            }
+            if heavy {
+                for j in 0..CHUNK {
+                    let full = lever_bend(e2[j]);
+                    f[j] = if e2[j] > LEVER_SERIES { full } else { f[j] };
+                }
+            }
+            for j in 0..CHUNK {
+                eqs[0][j] *= f[j];
+                eqs[1][j] *= f[j];
             }
             for j in 0..CHUNK {
                 let restart = active[j] && w[j] == 0.0;
@@ -396,17 +411,27 @@ simd_kernel! {
                 w[j] = if active[j] { (w[j] + blend).min(1.0) } else { (w[j] - blend).max(0.0) };
             }
             let mut phi = [[0.0f32; CHUNK]; 3];
-            let mut sc = [[0.0f32; CHUNK]; 2];
+            let mut a2 = [0.0f32; CHUNK];
+            let mut large = false;
             for j in 0..CHUNK {
                 let (t0, t1) = (w[j] * th[0][j], w[j] * th[1][j]);
                 for c in 0..3 {
                     phi[c][j] = t0 * axis[0][c][j] + t1 * axis[1][c][j];
                 }
-                let a2 = phi[0][j] * phi[0][j] + phi[1][j] * phi[1][j] + phi[2][j] * phi[2][j];
-                let (small, any) = (small_angle(a2), any_angle(a2));
-                let (s, c) = if a2 < 0.25 { small } else { any };
-                sc[0][j] = s;
-                sc[1][j] = c;
+                a2[j] = phi[0][j] * phi[0][j] + phi[1][j] * phi[1][j] + phi[2][j] * phi[2][j];
+                large |= a2[j] >= 0.25;
+            }
+            // The formula for any angle only where a joint of the chunk turns that far: each
+            // joint takes the series below a² = 0.25 whichever way the chunk goes.
+            let mut sc = [[0.0f32; CHUNK]; 2];
+            for j in 0..CHUNK {
+                (sc[0][j], sc[1][j]) = small_angle(a2[j]);
+            }
+            if large {
+                for j in 0..CHUNK {
+                    let any = any_angle(a2[j]);
+                    (sc[0][j], sc[1][j]) = if a2[j] < 0.25 { (sc[0][j], sc[1][j]) } else { any };
+                }
             }
             for (j, i) in joints.enumerate() {
                 for c in 0..2 {
