@@ -503,11 +503,92 @@ fn popping(a: &Table3Bench) -> anyhow::Result<String> {
             let s = &frame.stats;
             diffs.push(gpu.render(&frame, &camera)?, s.level_changes > 0, s.fading > 0);
         }
-        diffs.row(&mut md, label);
+        diffs.row(&mut md, label, &[]);
     }
-    regroup_popping(a, &mut md, gpu.as_mut().context("renderer")?)?;
+    let gpu = gpu.as_mut().context("renderer")?;
+    fly_out_popping(a, &mut md, gpu)?;
+    regroup_popping(a, &mut md, gpu)?;
     println!("{md}");
     Ok(md)
+}
+
+/// How far the fly-out takes the camera from the trees, as a factor on its first distance.
+const FLY_OUT: f32 = 10.0;
+
+/// Popping along a camera path: the small scene in calm air, the camera backing away from
+/// the point it looks at, its distance growing by the same factor each frame up to
+/// [`FLY_OUT`] times the first (the trees shrink on screen and walk down the chain as they
+/// would in a fly-out); frames split as in [`popping`], with the cross-fade, with instant
+/// switches, and at full detail throughout (how much the path alone changes each frame).
+/// Every frame moves the whole picture here, so this shows whether a switch stands out
+/// against the motion a user sees with it, where the fixed camera above shows the switch
+/// alone.
+fn fly_out_popping(a: &Table3Bench, md: &mut String, gpu: &mut Headless) -> anyhow::Result<()> {
+    let (w, h) = (512, 384);
+    let mut spec = SceneSpec::builtin("small")?;
+    spec.wind = "calm".into();
+    let n = a.popping_frames;
+    let _ = writeln!(
+        md,
+        "\nAlong a camera path — scene `small` in calm air, the camera backing away from its target to {FLY_OUT}× its distance over {n} frames (the same factor each frame), {w}×{h}; mean |Δ| (0–255) between consecutive frames:\n"
+    );
+    let _ = writeln!(
+        md,
+        "| level switch | frames with no tree fading or changing level: median / max | fading, no change: median / max | with a level change: median / max | the frames with a level change less the same frames at full detail: median / max |"
+    );
+    let _ = writeln!(md, "|---|---|---|---|---|");
+    // Full detail first: its frame-by-frame differences are what the path alone does.
+    let mut full: Vec<f64> = Vec::new();
+    for (label, geometry, band) in [
+        ("full detail throughout (the path's own motion)", false, None),
+        ("cross-faded (default)", true, None),
+        ("instant (band 0)", true, Some(0.0)),
+    ] {
+        let mut forest = Forest::new(&spec)?;
+        let lod = forest.lod();
+        forest.set_lod(sylva_forest::LodSettings {
+            geometry,
+            band: band.unwrap_or(lod.band),
+            hysteresis: band.unwrap_or(lod.hysteresis),
+            ..lod
+        });
+        let start = forest.default_camera();
+        let back: [f32; 3] = std::array::from_fn(|k| start.eye[k] - start.target[k]);
+        let mut frame = FrameData::default();
+        let mut diffs = FrameDiffs::default();
+        for i in 0..n {
+            let k = FLY_OUT.powf(i as f32 / (n - 1) as f32);
+            let camera = Camera {
+                eye: std::array::from_fn(|c| start.target[c] + k * back[c]),
+                far: start.far * k,
+                ..start
+            };
+            forest.step(0.1);
+            forest.frame(&camera, w as f32 / h as f32, &mut frame);
+            let s = &frame.stats;
+            diffs.push(gpu.render(&frame, &camera)?, s.level_changes > 0, s.fading > 0);
+        }
+        let mut excess: Vec<f64> = if geometry {
+            diffs
+                .sequence
+                .iter()
+                .zip(&full)
+                .filter(|((_, sw), _)| *sw)
+                .map(|((d, _), f)| d - f)
+                .collect()
+        } else {
+            full = diffs.sequence.iter().map(|&(d, _)| d).collect();
+            Vec::new()
+        };
+        let cell = if excess.is_empty() {
+            "—".to_string()
+        } else {
+            let (m, x) = median_max(&mut excess);
+            format!("{m:+.2} / {x:+.2}")
+        };
+        diffs.row(md, label, &[cell]);
+    }
+    Ok(())
 }
 
 /// Mean |Δ| between consecutive frames, split three ways: frames where nothing is fading or
@@ -520,6 +601,8 @@ struct FrameDiffs {
     calm: Vec<f64>,
     fading: Vec<f64>,
     switching: Vec<f64>,
+    /// Every frame's difference in frame order, and whether something switched in it.
+    sequence: Vec<(f64, bool)>,
 }
 
 impl FrameDiffs {
@@ -531,6 +614,7 @@ impl FrameDiffs {
                 .map(|(x, y)| (*x as i32 - *y as i32).unsigned_abs() as f64)
                 .sum::<f64>()
                 / p.len() as f64;
+            self.sequence.push((d, switched));
             match (switched, fading) {
                 (true, _) => self.switching.push(d),
                 (false, true) => self.fading.push(d),
@@ -540,8 +624,9 @@ impl FrameDiffs {
         self.prev = Some(img);
     }
 
-    /// A Markdown row: median / max of each kind of frame, and the frame counts.
-    fn row(&mut self, md: &mut String, label: &str) {
+    /// A Markdown row: median / max of each kind of frame, and the frame counts (and the
+    /// cells `more` after them).
+    fn row(&mut self, md: &mut String, label: &str, more: &[String]) {
         let cell = |v: &mut Vec<f64>| {
             if v.is_empty() {
                 "— (0 frames)".to_string()
@@ -551,7 +636,8 @@ impl FrameDiffs {
             }
         };
         let (c, f, s) = (cell(&mut self.calm), cell(&mut self.fading), cell(&mut self.switching));
-        let _ = writeln!(md, "| {label} | {c} | {f} | {s} |");
+        let more: String = more.iter().map(|m| format!(" {m} |")).collect();
+        let _ = writeln!(md, "| {label} | {c} | {f} | {s} |{more}");
     }
 }
 
@@ -607,7 +693,7 @@ fn regroup_popping(a: &Table3Bench, md: &mut String, gpu: &mut Headless) -> anyh
             let s = &frame.stats;
             diffs.push(gpu.render(&frame, &camera)?, s.group_changes > 0, s.regrouping > 0);
         }
-        diffs.row(md, label);
+        diffs.row(md, label, &[]);
     }
     Ok(())
 }
