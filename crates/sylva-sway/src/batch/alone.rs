@@ -210,7 +210,6 @@ impl<'s, T> Rows<'s, T> {
     ///
     /// # Safety
     /// No thread writes row `i` while the reference lives.
-    #[allow(clippy::mut_from_ref)]
     unsafe fn row(&self, i: usize) -> &T {
         assert!(i < self.len, "row {i} of {}", self.len);
         // SAFETY: in bounds; the caller keeps writers off row `i`.
