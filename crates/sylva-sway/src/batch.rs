@@ -475,6 +475,25 @@ fn lever_bend(e2: f32) -> f32 {
     root / e
 }
 
+/// Per lane, [`lever_bend`]'s factor from e², or its series 1 − e²/2 below [`LEVER_SERIES`]:
+/// the Newton step is taken only where some lane is above it, and each lane's factor is the
+/// same whichever way its neighbours go.
+#[inline(always)]
+fn lever_factors<const N: usize>(e2: &[f32; N]) -> [f32; N] {
+    let heavy = e2.iter().fold(false, |h, &x| h | (x > LEVER_SERIES));
+    let mut f = [0.0f32; N];
+    for l in 0..N {
+        f[l] = 1.0 - 0.5 * e2[l];
+    }
+    if heavy {
+        for l in 0..N {
+            let full = lever_bend(e2[l]);
+            f[l] = if e2[l] > LEVER_SERIES { full } else { f[l] };
+        }
+    }
+    f
+}
+
 /// (sin a / a, (1 − cos a) / a²) from a² by Taylor series, for a² < 0.25.
 #[inline(always)]
 fn small_angle(a2: f32) -> (f32, f32) {
@@ -1308,24 +1327,13 @@ simd_kernel! {
             // it takes the Newton step, and each lane's factor depends on its own load alone.
             let mut eqs = [[0.0f32; W]; 2];
             let mut e2 = [0.0f32; W];
-            let mut heavy = false;
             for l in 0..W {
                 let mom = [li[3][l], li[4][l], li[5][l]];
                 eqs[0][l] = dot(mom, ax) * t.inv_k;
                 eqs[1][l] = dot(mom, ay) * t.inv_k;
                 e2[l] = eqs[0][l] * eqs[0][l] + eqs[1][l] * eqs[1][l];
-                heavy |= e2[l] > LEVER_SERIES;
             }
-            let mut f = [0.0f32; W];
-            for l in 0..W {
-                f[l] = 1.0 - 0.5 * e2[l];
-            }
-            if heavy {
-                for l in 0..W {
-                    let full = lever_bend(e2[l]);
-                    f[l] = if e2[l] > LEVER_SERIES { full } else { f[l] };
-                }
-            }
+            let f = lever_factors(&e2);
             for l in 0..W {
                 eqs[0][l] *= f[l];
                 eqs[1][l] *= f[l];

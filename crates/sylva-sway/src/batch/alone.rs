@@ -26,8 +26,8 @@ use sylva_core::simd_kernel;
 use sylva_core::v3::dot;
 
 use super::{
-    Group, LANES, LEVER_SERIES, Lanes, Lump, MAX_BEND, add_held, any_angle, compose, held_wind,
-    lever_bend, local_palette, own_drag, pass_on, pass_to_parent, small_angle,
+    Group, LANES, Lanes, Lump, MAX_BEND, add_held, any_angle, compose, held_wind, lever_factors,
+    local_palette, own_drag, pass_on, pass_to_parent, small_angle,
 };
 use crate::species::{SwaySpecies, Transition};
 
@@ -368,24 +368,12 @@ simd_kernel! {
                 active[j] = part.first + i < on && rank[i] < bud;
                 part.loads[i] = [[0.0; W]; 6];
             }
-            // The Newton step only where a joint of the chunk needs it (as a group does):
-            // below LEVER_SERIES each joint takes the series whichever way the chunk goes.
+            // The Newton step only where a joint of the chunk needs it, as a group does.
             let mut e2 = [0.0f32; CHUNK];
-            let mut heavy = false;
             for j in 0..CHUNK {
                 e2[j] = eqs[0][j] * eqs[0][j] + eqs[1][j] * eqs[1][j];
-                heavy |= e2[j] > LEVER_SERIES;
             }
-            let mut f = [0.0f32; CHUNK];
-            for j in 0..CHUNK {
-                f[j] = 1.0 - 0.5 * e2[j];
-            }
-            if heavy {
-                for j in 0..CHUNK {
-                    let full = lever_bend(e2[j]);
-                    f[j] = if e2[j] > LEVER_SERIES { full } else { f[j] };
-                }
-            }
+            let f = lever_factors(&e2);
             for j in 0..CHUNK {
                 eqs[0][j] *= f[j];
                 eqs[1][j] *= f[j];
