@@ -473,15 +473,13 @@ fn popping(a: &Table3Bench) -> anyhow::Result<String> {
     spec.wind = "calm".into();
     let n = a.popping_frames;
     let mut md = String::new();
-    let _ = writeln!(
-        md,
-        "\nPopping — scene `small` in calm air, fixed camera, {n} frames while h₀ sweeps 0.3 → 3 (trees coarsen as if the camera backed off ×10), {w}×{h}; mean |Δ| (0–255) between consecutive frames:\n"
+    table_head(
+        &mut md,
+        &format!(
+            "Popping — scene `small` in calm air, fixed camera, {n} frames while h₀ sweeps 0.3 → 3 (trees coarsen as if the camera backed off ×10), {w}×{h}; mean |Δ| (0–255) between consecutive frames:"
+        ),
+        "| level switch | frames with no tree fading or changing level: median / max | fading, no change: median / max | with a level change: median / max |",
     );
-    let _ = writeln!(
-        md,
-        "| level switch | frames with no tree fading or changing level: median / max | fading, no change: median / max | with a level change: median / max |"
-    );
-    let _ = writeln!(md, "|---|---|---|---|");
     let mut gpu: Option<Headless> = None;
     for (label, band, hysteresis) in
         [("cross-faded (default)", 0.3, 0.1), ("instant (band 0)", 0.0, 0.0)]
@@ -528,15 +526,13 @@ fn fly_out_popping(a: &Table3Bench, md: &mut String, gpu: &mut Headless) -> anyh
     let mut spec = SceneSpec::builtin("small")?;
     spec.wind = "calm".into();
     let n = a.popping_frames;
-    let _ = writeln!(
+    table_head(
         md,
-        "\nAlong a camera path — scene `small` in calm air, the camera backing away from its target to {FLY_OUT}× its distance over {n} frames (the same factor each frame), {w}×{h}; mean |Δ| (0–255) between a frame and the frame before (as shown), or the frame before drawn from this frame's camera (the switch alone):\n"
+        &format!(
+            "Along a camera path — scene `small` in calm air, the camera backing away from its target to {FLY_OUT}× its distance over {n} frames (the same factor each frame), {w}×{h}; mean |Δ| (0–255) between a frame and the frame before (as shown), or the frame before drawn from this frame's camera (the switch alone):"
+        ),
+        "| level switch, compared with | frames with no tree fading or changing level: median / max | fading, no change: median / max | with a level change: median / max |",
     );
-    let _ = writeln!(
-        md,
-        "| level switch, compared with | frames with no tree fading or changing level: median / max | fading, no change: median / max | with a level change: median / max |"
-    );
-    let _ = writeln!(md, "|---|---|---|---|");
     for (label, geometry, band) in [
         ("cross-faded (default)", true, None),
         ("instant (band 0)", true, Some(0.0)),
@@ -578,6 +574,13 @@ fn fly_out_popping(a: &Table3Bench, md: &mut String, gpu: &mut Headless) -> anyh
         alone.row(md, &format!("{label}, the frame before from this camera"));
     }
     Ok(())
+}
+
+/// A popping table's title (a paragraph of its own) and its header row: `head`'s columns
+/// and a rule under them.
+fn table_head(md: &mut String, title: &str, head: &str) {
+    let _ =
+        writeln!(md, "\n{title}\n\n{head}\n{}|", "|---".repeat(head.matches(" | ").count() + 1));
 }
 
 /// Mean |Δ| over the channels of two images of the same size (0–255).
@@ -645,15 +648,13 @@ fn regroup_popping(a: &Table3Bench, md: &mut String, gpu: &mut Headless) -> anyh
     spec.trees = 60;
     spec.sim_joint_budget = 150_000;
     let n = a.popping_frames;
-    let _ = writeln!(
+    table_head(
         md,
-        "\nRegrouping — scene `small` with 60 trees sharing about a dozen simulations per species, a breeze, camera outside the forest sliding {STEP} m a frame (0.1 s), {n} frames, {w}×{h}; mean |Δ| (0–255) between consecutive frames:\n"
+        &format!(
+            "Regrouping — scene `small` with 60 trees sharing about a dozen simulations per species, a breeze, camera outside the forest sliding {STEP} m a frame (0.1 s), {n} frames, {w}×{h}; mean |Δ| (0–255) between consecutive frames:"
+        ),
+        "| group switch | frames with no tree regrouping: median / max | fading between groups, no change: median / max | with a group change: median / max |",
     );
-    let _ = writeln!(
-        md,
-        "| group switch | frames with no tree regrouping: median / max | fading between groups, no change: median / max | with a group change: median / max |"
-    );
-    let _ = writeln!(md, "|---|---|---|---|");
     for (label, fade) in
         [("cross-faded over 1 s (default)", sylva_forest::REGROUP_FADE), ("instant", 0.0)]
     {
