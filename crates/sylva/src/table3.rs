@@ -478,7 +478,7 @@ fn popping(a: &Table3Bench) -> anyhow::Result<String> {
         &format!(
             "Popping — scene `small` in calm air, fixed camera, {n} frames while h₀ sweeps 0.3 → 3 (trees coarsen as if the camera backed off ×10), {w}×{h}; mean |Δ| (0–255) between consecutive frames:"
         ),
-        "| level switch | frames with no tree fading or changing level: median / max | fading, no change: median / max | with a level change: median / max |",
+        "| level switch | frames with no tree fading or changing level: median / max | fading, no change: median / max | with a level change: median / max | a frame with a level change over the nearest frames either side without one: median / max |",
     );
     let mut gpu: Option<Headless> = None;
     for (label, band, hysteresis) in
@@ -531,7 +531,7 @@ fn fly_out_popping(a: &Table3Bench, md: &mut String, gpu: &mut Headless) -> anyh
         &format!(
             "Along a camera path — scene `small` in calm air, the camera backing away from its target to {FLY_OUT}× its distance over {n} frames (the same factor each frame), {w}×{h}; mean |Δ| (0–255) between a frame and the frame before (as shown), or the frame before drawn from this frame's camera (the switch alone):"
         ),
-        "| level switch, compared with | frames with no tree fading or changing level: median / max | fading, no change: median / max | with a level change: median / max |",
+        "| level switch, compared with | frames with no tree fading or changing level: median / max | fading, no change: median / max | with a level change: median / max | a frame with a level change over the nearest frames either side without one: median / max |",
     );
     for (label, geometry, band) in [
         ("cross-faded (default)", true, None),
@@ -600,6 +600,8 @@ struct FrameDiffs {
     calm: Vec<f64>,
     fading: Vec<f64>,
     switching: Vec<f64>,
+    /// Every frame's difference in frame order, and whether something switched in it.
+    sequence: Vec<(f64, bool)>,
 }
 
 impl FrameDiffs {
@@ -612,6 +614,7 @@ impl FrameDiffs {
 
     /// Count a frame's difference `d` from what it is compared with.
     fn add(&mut self, d: f64, switched: bool, fading: bool) {
+        self.sequence.push((d, switched));
         match (switched, fading) {
             (true, _) => self.switching.push(d),
             (false, true) => self.fading.push(d),
@@ -619,7 +622,39 @@ impl FrameDiffs {
         }
     }
 
-    /// A Markdown row: median / max of each kind of frame, and the frame counts.
+    /// Each frame where something switched, its difference over the mean difference of the
+    /// nearest frames either side where nothing did (one side at the ends of the sequence):
+    /// whether the switch stands out from the frames around it, as a pop does, whatever
+    /// those frames hold.
+    fn spikes(&self) -> Vec<f64> {
+        let q = &self.sequence;
+        let calm = |mut i: usize, back: bool| loop {
+            i = if back { i.checked_sub(1)? } else { i + 1 };
+            match q.get(i) {
+                Some(&(d, false)) => return Some(d),
+                Some(_) => continue,
+                None => return None,
+            }
+        };
+        (0..q.len())
+            .filter(|&i| q[i].1)
+            .filter_map(|i| {
+                let around: Vec<f64> =
+                    [calm(i, true), calm(i, false)].into_iter().flatten().collect();
+                let mean = around.iter().sum::<f64>() / around.len() as f64;
+                // A switch among frames that do not change at all stands out without bound.
+                let spike = match (mean > 0.0, q[i].0 > 0.0) {
+                    (true, _) => q[i].0 / mean,
+                    (false, true) => f64::INFINITY,
+                    (false, false) => 1.0,
+                };
+                (!around.is_empty()).then_some(spike)
+            })
+            .collect()
+    }
+
+    /// A Markdown row: median / max of each kind of frame, and the frame counts; then
+    /// median / max of [`FrameDiffs::spikes`].
     fn row(&mut self, md: &mut String, label: &str) {
         let cell = |v: &mut Vec<f64>| {
             if v.is_empty() {
@@ -629,8 +664,15 @@ impl FrameDiffs {
                 format!("{m:.2} / {x:.2} ({} frames)", v.len())
             }
         };
+        let mut spikes = self.spikes();
+        let spike = if spikes.is_empty() {
+            "—".to_string()
+        } else {
+            let (m, x) = median_max(&mut spikes);
+            format!("×{m:.2} / ×{x:.2}")
+        };
         let (c, f, s) = (cell(&mut self.calm), cell(&mut self.fading), cell(&mut self.switching));
-        let _ = writeln!(md, "| {label} | {c} | {f} | {s} |");
+        let _ = writeln!(md, "| {label} | {c} | {f} | {s} | {spike} |");
     }
 }
 
@@ -653,7 +695,7 @@ fn regroup_popping(a: &Table3Bench, md: &mut String, gpu: &mut Headless) -> anyh
         &format!(
             "Regrouping — scene `small` with 60 trees sharing about a dozen simulations per species, a breeze, camera outside the forest sliding {STEP} m a frame (0.1 s), {n} frames, {w}×{h}; mean |Δ| (0–255) between consecutive frames:"
         ),
-        "| group switch | frames with no tree regrouping: median / max | fading between groups, no change: median / max | with a group change: median / max |",
+        "| group switch | frames with no tree regrouping: median / max | fading between groups, no change: median / max | with a group change: median / max | a frame with a group change over the nearest frames either side without one: median / max |",
     );
     for (label, fade) in
         [("cross-faded over 1 s (default)", sylva_forest::REGROUP_FADE), ("instant", 0.0)]
