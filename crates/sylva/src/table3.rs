@@ -927,3 +927,36 @@ fn write_outputs(
     println!("wrote {}/table3.md, table3.csv, table3.png", a.out.display());
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::FrameDiffs;
+
+    /// Frames as (mean |Δ| from the frame before, whether something switched in it).
+    fn diffs(frames: &[(f64, bool)]) -> FrameDiffs {
+        let mut d = FrameDiffs::default();
+        for &(x, switched) in frames {
+            d.add(x, switched, false);
+        }
+        d
+    }
+
+    /// A switch that jumps out of the frames around it reads as the ratio of its change to
+    /// theirs, the neighbours taken past other switching frames; a switch within a fade
+    /// that moves every frame alike reads about 1; a switch among frames that do not change
+    /// at all has no bound.
+    #[test]
+    fn a_switch_is_measured_against_the_nearest_frames_without_one() {
+        let pop = diffs(&[(0.1, false), (0.1, false), (4.0, true), (3.0, true), (0.3, false)]);
+        assert_eq!(pop.spikes(), vec![4.0 / 0.2, 3.0 / 0.2]);
+        let fade = diffs(&[(0.5, false), (0.5, false), (0.5, true), (0.5, false)]);
+        assert_eq!(fade.spikes(), vec![1.0]);
+        // At the end of the sequence, the one side there is.
+        let last = diffs(&[(0.25, false), (0.5, false), (0.75, true)]);
+        assert_eq!(last.spikes(), vec![1.5]);
+        let still = diffs(&[(0.0, false), (1.0, true), (0.0, false)]);
+        assert_eq!(still.spikes(), vec![f64::INFINITY]);
+        // Nothing to compare with: no figure rather than a made-up one.
+        assert!(diffs(&[(1.0, true)]).spikes().is_empty());
+    }
+}
