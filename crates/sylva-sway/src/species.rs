@@ -98,9 +98,15 @@ pub(crate) struct Cut {
 const BINS: usize = 16;
 
 impl Cut {
-    /// Cut the skeleton of `parent` (every parent before its children).
+    /// Cut the skeleton of `parent` (every parent before its children, as `Skeleton`
+    /// validates: the bins' threads write disjoint joints only because of it, so it is
+    /// checked here again).
     pub(crate) fn new(parent: &[u32]) -> Cut {
         let n = parent.len();
+        assert!(
+            parent.iter().enumerate().all(|(i, &p)| p == sylva_tree::NO_PARENT || (p as usize) < i),
+            "a joint's parent after it"
+        );
         let share = n.div_ceil(BINS).max(1);
         let mut size = vec![1usize; n];
         for i in (0..n).rev() {

@@ -533,19 +533,16 @@ fn fly_out_popping(a: &Table3Bench, md: &mut String, gpu: &mut Headless) -> anyh
         ),
         "| level switch, compared with | frames with no tree fading or changing level: median / max | fading, no change: median / max | with a level change: median / max | a frame with a level change over the nearest frames either side without one: median / max |",
     );
-    for (label, geometry, band) in [
-        ("cross-faded (default)", true, None),
-        ("instant (band 0)", true, Some(0.0)),
-        ("full detail throughout", false, None),
+    for (label, geometry, instant) in [
+        ("cross-faded (default)", true, false),
+        ("instant (band 0)", true, true),
+        ("full detail throughout", false, false),
     ] {
         let mut forest = Forest::new(&spec)?;
         let lod = forest.lod();
-        forest.set_lod(sylva_forest::LodSettings {
-            geometry,
-            band: band.unwrap_or(lod.band),
-            hysteresis: band.unwrap_or(lod.hysteresis),
-            ..lod
-        });
+        // Switched at once: no cross-fade band, and no hysteresis to hold a level.
+        let (band, hysteresis) = if instant { (0.0, 0.0) } else { (lod.band, lod.hysteresis) };
+        forest.set_lod(sylva_forest::LodSettings { geometry, band, hysteresis, ..lod });
         let start = forest.default_camera();
         let back: [f32; 3] = std::array::from_fn(|k| start.eye[k] - start.target[k]);
         let (mut frame, mut before) = (FrameData::default(), FrameData::default());
@@ -641,14 +638,16 @@ impl FrameDiffs {
             .filter_map(|i| {
                 let around: Vec<f64> =
                     [calm(i, true), calm(i, false)].into_iter().flatten().collect();
+                if around.is_empty() {
+                    return None;
+                }
                 let mean = around.iter().sum::<f64>() / around.len() as f64;
                 // A switch among frames that do not change at all stands out without bound.
-                let spike = match (mean > 0.0, q[i].0 > 0.0) {
+                Some(match (mean > 0.0, q[i].0 > 0.0) {
                     (true, _) => q[i].0 / mean,
                     (false, true) => f64::INFINITY,
                     (false, false) => 1.0,
-                };
-                (!around.is_empty()).then_some(spike)
+                })
             })
             .collect()
     }

@@ -406,7 +406,8 @@ simd_kernel! {
                     phi[c][j] = t0 * axis[0][c][j] + t1 * axis[1][c][j];
                 }
                 a2[j] = phi[0][j] * phi[0][j] + phi[1][j] * phi[1][j] + phi[2][j] * phi[2][j];
-                large |= a2[j] >= 0.25;
+                // (As `a2 < 0.25` decides it below: NaN takes the formula for any angle.)
+                large |= a2[j] >= 0.25 || a2[j].is_nan();
             }
             // The formula for any angle only where a joint of the chunk turns that far: each
             // joint takes the series below a² = 0.25 whichever way the chunk goes.
