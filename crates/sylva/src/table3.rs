@@ -545,8 +545,8 @@ fn fly_out_popping(a: &Table3Bench, md: &mut String, gpu: &mut Headless) -> anyh
         forest.set_lod(sylva_forest::LodSettings { geometry, band, hysteresis, ..lod });
         let start = forest.default_camera();
         let back: [f32; 3] = std::array::from_fn(|k| start.eye[k] - start.target[k]);
-        let (mut frame, mut before) = (FrameData::default(), FrameData::default());
-        let (mut shown, mut alone) = (FrameDiffs::default(), FrameDiffs::default());
+        let mut frame = FrameData::default();
+        let mut diffs = TwoWays::default();
         for i in 0..n {
             let k = FLY_OUT.powf(i as f32 / (n - 1) as f32);
             let camera = Camera {
@@ -554,23 +554,57 @@ fn fly_out_popping(a: &Table3Bench, md: &mut String, gpu: &mut Headless) -> anyh
                 far: start.far * k,
                 ..start
             };
-            // A copy: the frame carries each tree's LOD state on to the next.
-            before.clone_from(&frame);
+            diffs.keep(&frame);
             forest.step(0.1);
             forest.frame(&camera, w as f32 / h as f32, &mut frame);
             let s = &frame.stats;
-            let (switched, fading) = (s.level_changes > 0, s.fading > 0);
-            let img = gpu.render(&frame, &camera)?;
-            if i > 0 {
-                let then = gpu.render(&before, &camera)?;
-                alone.add(mean_abs_difference(&then, &img), switched, fading);
-            }
-            shown.push(img, switched, fading);
+            diffs.add(gpu, &frame, &camera, s.level_changes > 0, s.fading > 0)?;
         }
-        shown.row(md, &format!("{label}, the frame before"));
-        alone.row(md, &format!("{label}, the frame before from this camera"));
+        diffs.rows(md, label);
     }
     Ok(())
+}
+
+/// Each frame compared two ways: with the frame before as shown (a switch against the
+/// camera's motion that comes with it), and with the frame before drawn from this frame's
+/// camera (the switch alone, the camera's motion taken out).
+#[derive(Default)]
+struct TwoWays {
+    shown: FrameDiffs,
+    alone: FrameDiffs,
+    before: FrameData,
+}
+
+impl TwoWays {
+    /// Keep `frame` as the frame before the next: called before the next is built over it
+    /// (a copy, as a frame carries each tree's LOD state on to the next).
+    fn keep(&mut self, frame: &FrameData) {
+        self.before.clone_from(frame);
+    }
+
+    /// Draw `frame`, and the frame kept before it, from `camera`, and count both differences.
+    fn add(
+        &mut self,
+        gpu: &mut Headless,
+        frame: &FrameData,
+        camera: &Camera,
+        switched: bool,
+        fading: bool,
+    ) -> anyhow::Result<()> {
+        let img = gpu.render(frame, camera)?;
+        if self.shown.prev.is_some() {
+            let then = gpu.render(&self.before, camera)?;
+            self.alone.add(mean_abs_difference(&then, &img), switched, fading);
+        }
+        self.shown.push(img, switched, fading);
+        Ok(())
+    }
+
+    /// Two Markdown rows, one for each comparison.
+    fn rows(&mut self, md: &mut String, label: &str) {
+        self.shown.row(md, &format!("{label}, the frame before"));
+        self.alone.row(md, &format!("{label}, the frame before from this camera"));
+    }
 }
 
 /// A popping table's title (a paragraph of its own) and its header row: `head`'s columns
@@ -692,9 +726,9 @@ fn regroup_popping(a: &Table3Bench, md: &mut String, gpu: &mut Headless) -> anyh
     table_head(
         md,
         &format!(
-            "Regrouping — scene `small` with 60 trees sharing about a dozen simulations per species, a breeze, camera outside the forest sliding {STEP} m a frame (0.1 s), {n} frames, {w}×{h}; mean |Δ| (0–255) between consecutive frames:"
+            "Regrouping — scene `small` with 60 trees sharing about a dozen simulations per species, a breeze, camera outside the forest sliding {STEP} m a frame (0.1 s), {n} frames, {w}×{h}; mean |Δ| (0–255) between a frame and the frame before (as shown), or the frame before drawn from this frame's camera (the switch and a step of sway, the slide taken out):"
         ),
-        "| group switch | frames with no tree regrouping: median / max | fading between groups, no change: median / max | with a group change: median / max | a frame with a group change over the nearest frames either side without one: median / max |",
+        "| group switch, compared with | frames with no tree regrouping: median / max | fading between groups, no change: median / max | with a group change: median / max | a frame with a group change over the nearest frames either side without one: median / max |",
     );
     for (label, fade) in
         [("cross-faded over 1 s (default)", sylva_forest::REGROUP_FADE), ("instant", 0.0)]
@@ -710,7 +744,7 @@ fn regroup_popping(a: &Table3Bench, md: &mut String, gpu: &mut Headless) -> anyh
             (camera.target[0] + k * back[0], camera.target[1] + k * back[1]);
         camera.eye[2] = camera.target[2] + 0.6 * r;
         let mut frame = FrameData::default();
-        let mut diffs = FrameDiffs::default();
+        let mut diffs = TwoWays::default();
         // Sideways: across the line of sight, horizontally.
         let f = [camera.target[0] - camera.eye[0], camera.target[1] - camera.eye[1]];
         let norm = (f[0] * f[0] + f[1] * f[1]).sqrt().max(1e-6);
@@ -720,12 +754,13 @@ fn regroup_popping(a: &Table3Bench, md: &mut String, gpu: &mut Headless) -> anyh
                 camera.eye[k] += side[k];
                 camera.target[k] += side[k];
             }
+            diffs.keep(&frame);
             forest.step(0.1);
             forest.frame(&camera, w as f32 / h as f32, &mut frame);
             let s = &frame.stats;
-            diffs.push(gpu.render(&frame, &camera)?, s.group_changes > 0, s.regrouping > 0);
+            diffs.add(gpu, &frame, &camera, s.group_changes > 0, s.regrouping > 0)?;
         }
-        diffs.row(md, label);
+        diffs.rows(md, label);
     }
     Ok(())
 }
