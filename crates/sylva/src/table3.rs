@@ -19,7 +19,7 @@ use std::time::Instant;
 
 use anyhow::Context;
 use clap::Args;
-use sylva_forest::{Camera, Forest, FrameData, SceneSpec};
+use sylva_forest::{Camera, Forest, FrameData, FrameStats, SceneSpec};
 use sylva_render::Headless;
 use sylva_wind::io::atomic::write_atomic;
 
@@ -554,11 +554,9 @@ fn fly_out_popping(a: &Table3Bench, md: &mut String, gpu: &mut Headless) -> anyh
                 far: start.far * k,
                 ..start
             };
-            diffs.keep(&frame);
-            forest.step(0.1);
-            forest.frame(&camera, w as f32 / h as f32, &mut frame);
-            let s = &frame.stats;
-            diffs.add(gpu, &frame, &camera, s.level_changes > 0, s.fading > 0)?;
+            diffs.next(gpu, &mut forest, &mut frame, &camera, w as f32 / h as f32, |s| {
+                (s.level_changes > 0, s.fading > 0)
+            })?;
         }
         diffs.rows(md, label);
     }
@@ -576,21 +574,23 @@ struct TwoWays {
 }
 
 impl TwoWays {
-    /// Keep `frame` as the frame before the next: called before the next is built over it
-    /// (a copy, as a frame carries each tree's LOD state on to the next).
-    fn keep(&mut self, frame: &FrameData) {
-        self.before.clone_from(frame);
-    }
-
-    /// Draw `frame`, and the frame kept before it, from `camera`, and count both differences.
-    fn add(
+    /// Step `forest` 0.1 s and build its next frame over `frame` from `camera`, then draw it
+    /// and the frame before from `camera` and count both differences; `switch` reads from
+    /// the frame's figures whether something switched in it and whether something is fading.
+    fn next(
         &mut self,
         gpu: &mut Headless,
-        frame: &FrameData,
+        forest: &mut Forest,
+        frame: &mut FrameData,
         camera: &Camera,
-        switched: bool,
-        fading: bool,
+        aspect: f32,
+        switch: impl Fn(&FrameStats) -> (bool, bool),
     ) -> anyhow::Result<()> {
+        // A copy: a frame carries each tree's LOD state on to the next.
+        self.before.clone_from(frame);
+        forest.step(0.1);
+        forest.frame(camera, aspect, frame);
+        let (switched, fading) = switch(&frame.stats);
         let img = gpu.render(frame, camera)?;
         if self.shown.prev.is_some() {
             let then = gpu.render(&self.before, camera)?;
@@ -754,11 +754,9 @@ fn regroup_popping(a: &Table3Bench, md: &mut String, gpu: &mut Headless) -> anyh
                 camera.eye[k] += side[k];
                 camera.target[k] += side[k];
             }
-            diffs.keep(&frame);
-            forest.step(0.1);
-            forest.frame(&camera, w as f32 / h as f32, &mut frame);
-            let s = &frame.stats;
-            diffs.add(gpu, &frame, &camera, s.group_changes > 0, s.regrouping > 0)?;
+            diffs.next(gpu, &mut forest, &mut frame, &camera, w as f32 / h as f32, |s| {
+                (s.group_changes > 0, s.regrouping > 0)
+            })?;
         }
         diffs.rows(md, label);
     }
