@@ -478,7 +478,7 @@ fn popping(a: &Table3Bench) -> anyhow::Result<String> {
         &format!(
             "Popping — scene `small` in calm air, fixed camera, {n} frames while h₀ sweeps 0.3 → 3 (trees coarsen as if the camera backed off ×10), {w}×{h}; mean |Δ| (0–255) between consecutive frames:"
         ),
-        "| level switch | frames with no tree fading or changing level: median / max | fading, no change: median / max | with a level change: median / max | a frame with a level change over the nearest frames either side without one: median / max |",
+        "| level switch | frames with no tree fading or changing level: median / max | fading, no change: median / max | with a level change: median / max | a frame with a level change over the nearest frames either side without one, their mean: median / max | over the larger of the two: median / max |",
     );
     let mut gpu: Option<Headless> = None;
     for (label, band, hysteresis) in
@@ -531,7 +531,7 @@ fn fly_out_popping(a: &Table3Bench, md: &mut String, gpu: &mut Headless) -> anyh
         &format!(
             "Along a camera path — scene `small` in calm air, the camera backing away from its target to {FLY_OUT}× its distance over {n} frames (the same factor each frame), {w}×{h}; mean |Δ| (0–255) between a frame and the frame before (as shown), or the frame before drawn from this frame's camera (the switch alone):"
         ),
-        "| level switch, compared with | frames with no tree fading or changing level: median / max | fading, no change: median / max | with a level change: median / max | a frame with a level change over the nearest frames either side without one: median / max |",
+        "| level switch, compared with | frames with no tree fading or changing level: median / max | fading, no change: median / max | with a level change: median / max | a frame with a level change over the nearest frames either side without one, their mean: median / max | over the larger of the two: median / max |",
     );
     for (label, geometry, instant) in [
         ("cross-faded (default)", true, false),
@@ -621,6 +621,14 @@ fn mean_abs_difference(a: &[u8], b: &[u8]) -> f64 {
     sum / a.len().max(1) as f64
 }
 
+/// What [`FrameDiffs::spikes`] sets a switching frame's difference against: the nearest
+/// frames either side without a switch, their mean or the larger of them.
+#[derive(Debug, Clone, Copy)]
+enum Against {
+    Mean,
+    Larger,
+}
+
 /// Mean |Δ| between consecutive frames, split three ways: frames where nothing is fading or
 /// switching, frames where a cross-fade is under way but nothing switched, and frames where
 /// something switched (a switch ends a fade, so it is to be compared with the second kind
@@ -653,11 +661,14 @@ impl FrameDiffs {
         }
     }
 
-    /// Each frame where something switched, its difference over the mean difference of the
-    /// nearest frames either side where nothing did (one side at the ends of the sequence):
-    /// whether the switch stands out from the frames around it, as a pop does, whatever
-    /// those frames hold.
-    fn spikes(&self) -> Vec<f64> {
+    /// Each frame where something switched, its difference over the differences of the
+    /// nearest frames either side where nothing did (one side at the ends of the sequence),
+    /// taken `against` their mean or the larger of them: whether the switch stands out
+    /// from the frames around it, as a pop does, whatever those frames hold. Against the
+    /// mean, a switch that ends a fade next to a still frame reads about half its fade's
+    /// step over that step; against the larger, a frame reads above 1 only where it changes
+    /// more than both sides, a spike.
+    fn spikes(&self, against: Against) -> Vec<f64> {
         let q = &self.sequence;
         let calm = |mut i: usize, back: bool| loop {
             i = if back { i.checked_sub(1)? } else { i + 1 };
@@ -675,10 +686,13 @@ impl FrameDiffs {
                 if around.is_empty() {
                     return None;
                 }
-                let mean = around.iter().sum::<f64>() / around.len() as f64;
+                let base = match against {
+                    Against::Mean => around.iter().sum::<f64>() / around.len() as f64,
+                    Against::Larger => around.iter().copied().fold(0.0, f64::max),
+                };
                 // A switch among frames that do not change at all stands out without bound.
-                Some(match (mean > 0.0, q[i].0 > 0.0) {
-                    (true, _) => q[i].0 / mean,
+                Some(match (base > 0.0, q[i].0 > 0.0) {
+                    (true, _) => q[i].0 / base,
                     (false, true) => f64::INFINITY,
                     (false, false) => 1.0,
                 })
@@ -687,7 +701,7 @@ impl FrameDiffs {
     }
 
     /// A Markdown row: median / max of each kind of frame, and the frame counts; then
-    /// median / max of [`FrameDiffs::spikes`].
+    /// median / max of [`FrameDiffs::spikes`], against the mean and the larger neighbour.
     fn row(&mut self, md: &mut String, label: &str) {
         let cell = |v: &mut Vec<f64>| {
             if v.is_empty() {
@@ -697,15 +711,18 @@ impl FrameDiffs {
                 format!("{m:.2} / {x:.2} ({} frames)", v.len())
             }
         };
-        let mut spikes = self.spikes();
-        let spike = if spikes.is_empty() {
-            "—".to_string()
-        } else {
-            let (m, x) = median_max(&mut spikes);
-            format!("×{m:.2} / ×{x:.2}")
+        let spike = |against| {
+            let mut spikes = self.spikes(against);
+            if spikes.is_empty() {
+                "—".to_string()
+            } else {
+                let (m, x) = median_max(&mut spikes);
+                format!("×{m:.2} / ×{x:.2}")
+            }
         };
+        let (mean, larger) = (spike(Against::Mean), spike(Against::Larger));
         let (c, f, s) = (cell(&mut self.calm), cell(&mut self.fading), cell(&mut self.switching));
-        let _ = writeln!(md, "| {label} | {c} | {f} | {s} | {spike} |");
+        let _ = writeln!(md, "| {label} | {c} | {f} | {s} | {mean} | {larger} |");
     }
 }
 
@@ -728,7 +745,7 @@ fn regroup_popping(a: &Table3Bench, md: &mut String, gpu: &mut Headless) -> anyh
         &format!(
             "Regrouping — scene `small` with 60 trees sharing about a dozen simulations per species, a breeze, camera outside the forest sliding {STEP} m a frame (0.1 s), {n} frames, {w}×{h}; mean |Δ| (0–255) between a frame and the frame before (as shown), or the frame before drawn from this frame's camera (the switch and a step of sway, the slide taken out):"
         ),
-        "| group switch, compared with | frames with no tree regrouping: median / max | fading between groups, no change: median / max | with a group change: median / max | a frame with a group change over the nearest frames either side without one: median / max |",
+        "| group switch, compared with | frames with no tree regrouping: median / max | fading between groups, no change: median / max | with a group change: median / max | a frame with a group change over the nearest frames either side without one, their mean: median / max | over the larger of the two: median / max |",
     );
     for (label, fade) in
         [("cross-faded over 1 s (default)", sylva_forest::REGROUP_FADE), ("instant", 0.0)]
@@ -962,7 +979,7 @@ fn write_outputs(
 
 #[cfg(test)]
 mod tests {
-    use super::FrameDiffs;
+    use super::{Against, FrameDiffs};
 
     /// Frames as (mean |Δ| from the frame before, whether something switched in it).
     fn diffs(frames: &[(f64, bool)]) -> FrameDiffs {
@@ -980,15 +997,29 @@ mod tests {
     #[test]
     fn a_switch_is_measured_against_the_nearest_frames_without_one() {
         let pop = diffs(&[(0.1, false), (0.1, false), (4.0, true), (3.0, true), (0.3, false)]);
-        assert_eq!(pop.spikes(), vec![4.0 / 0.2, 3.0 / 0.2]);
+        assert_eq!(pop.spikes(Against::Mean), vec![4.0 / 0.2, 3.0 / 0.2]);
+        assert_eq!(pop.spikes(Against::Larger), vec![4.0 / 0.3, 3.0 / 0.3]);
         let fade = diffs(&[(0.5, false), (0.5, false), (0.5, true), (0.5, false)]);
-        assert_eq!(fade.spikes(), vec![1.0]);
+        assert_eq!(fade.spikes(Against::Mean), vec![1.0]);
+        assert_eq!(fade.spikes(Against::Larger), vec![1.0]);
         // At the end of the sequence, the one side there is.
         let last = diffs(&[(0.25, false), (0.5, false), (0.75, true)]);
-        assert_eq!(last.spikes(), vec![1.5]);
+        assert_eq!(last.spikes(Against::Mean), vec![1.5]);
+        assert_eq!(last.spikes(Against::Larger), vec![1.5]);
         let still = diffs(&[(0.0, false), (1.0, true), (0.0, false)]);
-        assert_eq!(still.spikes(), vec![f64::INFINITY]);
+        assert_eq!(still.spikes(Against::Mean), vec![f64::INFINITY]);
+        assert_eq!(still.spikes(Against::Larger), vec![f64::INFINITY]);
         // Nothing to compare with: no figure rather than a made-up one.
-        assert!(diffs(&[(1.0, true)]).spikes().is_empty());
+        assert!(diffs(&[(1.0, true)]).spikes(Against::Mean).is_empty());
+    }
+
+    /// A fade that ends next to a still frame: its last step is no larger than the steps
+    /// before it, so it is no spike, and reads at most 1 against the larger neighbour;
+    /// against the mean it reads about twice its share, as the still side halves the mean.
+    #[test]
+    fn a_fade_that_ends_beside_a_still_frame_is_no_spike_against_the_larger_side() {
+        let end = diffs(&[(1.3, false), (1.3, false), (1.1, true), (0.0, false), (0.0, false)]);
+        assert_eq!(end.spikes(Against::Larger), vec![1.1 / 1.3]);
+        assert_eq!(end.spikes(Against::Mean), vec![1.1 / 0.65]);
     }
 }
