@@ -297,6 +297,69 @@ fn check_shadows(spec: &SceneSpec, impostors: bool, camera: Option<Camera>) {
     assert!(2 * kept > trees, "only {kept} of {trees} sunlit points unchanged by shadows");
 }
 
+/// A tree drawn with only part of a cross-fade (the pixels whose dither value lies in its
+/// fade range) casts that part of its shadow: the texels of the sun's map whose dither
+/// value lies in the range. So the two draws of a tree fading between levels or instance
+/// groups cast one shadow between them, not two, and no shadow appears or vanishes whole
+/// when a fade starts or ends. Every tree of the small scene given half the fade darkens
+/// the ground where its shadow falls by about half what it does drawn whole; as meshes
+/// (the branch and leaf shadow shaders) and as impostors (the impostor's).
+#[test]
+fn a_tree_drawn_with_part_of_a_cross_fade_casts_that_part_of_its_shadow() {
+    for impostors in [false, true] {
+        let mut spec = SceneSpec::builtin("small").expect("small scene");
+        if impostors {
+            spec.lod.fraction = 100.0;
+        }
+        let sun = spec.lighting.sun_unit();
+        // Image with every tree given `fade`, shadows on or off, and the points of the
+        // ground where each tree's crown (7 m up) puts its shadow.
+        let draw = |fade: [f32; 2], shadows: bool| {
+            let mut spec = spec.clone();
+            spec.lighting.shadows = shadows;
+            let mut forest = Forest::new(&spec).expect("forest");
+            let camera = forest.default_camera();
+            let mut gpu = Headless::new(&forest, W, H).unwrap_or_else(|e| panic!("{e}"));
+            let mut frame = FrameData::default();
+            forest.step(1.0 / 30.0);
+            forest.frame(&camera, W as f32 / H as f32, &mut frame);
+            if impostors {
+                assert!(frame.instances.iter().all(|i| i.tag & 15 == 15), "all impostors");
+            }
+            for inst in &mut frame.instances {
+                inst.fade = fade;
+            }
+            let points: Vec<(u32, u32)> = frame
+                .instances
+                .iter()
+                .filter_map(|inst| {
+                    let (b, up) = (inst.position, 7.0 * inst.scale);
+                    pixel_of(
+                        &camera,
+                        [b[0] - sun[0] * up / sun[2], b[1] - sun[1] * up / sun[2], b[2]],
+                    )
+                })
+                .collect();
+            (gpu.render(&frame, &camera).expect("render"), points)
+        };
+        // Summed over the shadow points: how much darker the ground is with shadows.
+        let darkening = |fade: [f32; 2]| {
+            let ((lit, points), (flat, _)) = (draw(fade, true), draw(fade, false));
+            assert!(points.len() >= 3, "only {} shadow points in view", points.len());
+            points.iter().map(|&p| brightness(&flat, p) - brightness(&lit, p)).sum::<f64>()
+        };
+        // Whole: the range [0, 2) keeps every dither value in [0, 1).
+        let (whole, half) = (darkening([0.0, 2.0]), darkening([0.0, 0.5]));
+        let what = if impostors { "impostors" } else { "meshes" };
+        assert!(whole > 20.0, "{what}: the shadows darken the ground by only {whole:.1}");
+        let share = half / whole;
+        assert!(
+            (0.3..0.7).contains(&share),
+            "{what}: half of the fade casts {share:.2} of the shadow ({half:.1} of {whole:.1})"
+        );
+    }
+}
+
 #[test]
 fn the_fir_crown_hides_most_of_the_sky_behind_it_at_twenty_metres() {
     // One Douglas fir seen from 20 m: within the outline of its crown (from the image with

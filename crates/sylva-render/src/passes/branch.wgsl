@@ -1,6 +1,7 @@
 // Branches: generalized cylinders skinned to the joint palette of their instance
 // (up to four joints per vertex), bark-textured, lit (with the sun's shadow) and fogged;
-// the shadow pass draws them into the sun's depth map with the same vertex shader. `fs_bake` writes albedo and
+// the shadow pass draws them into the sun's depth map with the same vertex shader (`fs_shadow`:
+// the cross-fade's share only). `fs_bake` writes albedo and
 // tree-space normal instead, for the impostor atlas (far.rs).
 
 struct BranchIn {
@@ -58,6 +59,16 @@ fn fs_main(in: BranchOut) -> @location(0) vec4<f32> {
     let n = normalize(in.normal);
     let lit = albedo * lighting(n, sun_visibility(in.world, n));
     return finish(mix_fog(overlay(lit, in.tag), in.fog));
+}
+
+// Into the sun's shadow map: a tree cross-fading between two levels (or two instance
+// groups) casts from each draw the texels of its share of the fade, as it is seen, so its
+// shadow fades with it rather than doubling while it fades and jumping when it ends.
+@fragment
+fn fs_shadow(in: BranchOut) {
+    if (!dither_keeps(in.clip.xy, in.fade)) {
+        discard;
+    }
 }
 
 @fragment

@@ -164,7 +164,9 @@ fn vs_main(@builtin(vertex_index) vi: u32, inst: InstanceIn) -> FarOut {
 @fragment
 fn fs_shadow(in: FarOut) {
     let k = select(in.views.x, in.views.y, in.blend >= 0.5);
-    if (textureSample(far_albedo, linear_sampler, view_uv(in.uv, k, 0u)).a < 0.5) {
+    let a = textureSample(far_albedo, linear_sampler, view_uv(in.uv, k, 0u)).a;
+    // The cross-fade's share of the texels, as in branch.wgsl's `fs_shadow`.
+    if (a < 0.5 || !dither_keeps(in.clip.xy, in.fade)) {
         discard;
     }
 }

@@ -127,7 +127,8 @@ fn fs_main(in: LeafOut) -> @location(0) vec4<f32> {
 @fragment
 fn fs_shadow(in: LeafOut) {
     let t = textureSample(leaf_texture, linear_sampler, in.uv);
-    if (t.a < 0.5) {
+    // The cross-fade's share of the texels, as in branch.wgsl's `fs_shadow`.
+    if (t.a < 0.5 || !dither_keeps(in.clip.xy, in.fade)) {
         discard;
     }
 }

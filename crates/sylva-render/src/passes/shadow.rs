@@ -76,7 +76,7 @@ impl ShadowPass {
             .create_view(&wgpu::TextureViewDescriptor::default())
         };
         ShadowPass {
-            branch: pipeline(dev, &spec("branch.wgsl", "", &branch_buffers)),
+            branch: pipeline(dev, &spec("branch.wgsl", "fs_shadow", &branch_buffers)),
             leaf: pipeline(dev, &spec("leaf.wgsl", "fs_shadow", &leaf_buffers)),
             map: depth(SHADOW_SIZE, CASCADES, "shadow map"),
             placeholder: depth(1, 1, "no shadow map"),
