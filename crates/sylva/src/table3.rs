@@ -665,9 +665,9 @@ impl FrameDiffs {
     /// nearest frames either side where nothing did (one side at the ends of the sequence),
     /// taken `against` their mean or the larger of them: whether the switch stands out
     /// from the frames around it, as a pop does, whatever those frames hold. Against the
-    /// mean, a switch that ends a fade next to a still frame reads about half its fade's
-    /// step over that step; against the larger, a frame reads above 1 only where it changes
-    /// more than both sides, a spike.
+    /// mean, a switch that ends a fade beside a still frame reads up to twice its change
+    /// over the fade's steps, as the still side halves the mean; against the larger, a
+    /// frame reads above 1 only where it changes more than both sides, a spike.
     fn spikes(&self, against: Against) -> Vec<f64> {
         let q = &self.sequence;
         let calm = |mut i: usize, back: bool| loop {
