@@ -129,12 +129,104 @@ impl ViewCone {
         size * self.inv_height / depth
     }
 
+    /// Whether the shadow of a sphere of `radius` at `c` may fall in view: the sphere
+    /// swept `length` m along the unit direction `away` (away from the sun, downwards) may
+    /// meet the cone. The swept sphere (a capsule) is covered by spheres of radius
+    /// √(r² + (s/2)²) at steps of s ≥ r / 2 along it (at most [`SHADOW_SAMPLES`] of them),
+    /// so the answer is conservative: false only where no part of the capsule is in view.
+    /// The sphere itself is not tested (the caller culls it on its own).
+    pub fn may_see_shadow(&self, c: [f32; 3], radius: f32, away: [f32; 3], length: f32) -> bool {
+        if length.is_nan() || length <= 0.0 {
+            return false;
+        }
+        let step = (0.5 * radius).max(length / SHADOW_SAMPLES as f32);
+        let grown = (radius * radius + 0.25 * step * step).sqrt();
+        let n = (length / step).ceil() as usize;
+        (1..=n.min(SHADOW_SAMPLES)).any(|k| {
+            let t = (k as f32 * step).min(length);
+            self.may_see([c[0] + t * away[0], c[1] + t * away[1], c[2] + t * away[2]], grown)
+        })
+    }
+
     /// Whether an object of `size` m at `p`, in front of the eye, covers less than `bound` of
     /// the image height: [`screen_fraction`](Self::screen_fraction) without its division.
     /// Behind the eye it answers false, as it may where the fraction is within rounding of
     /// `bound`: a caller leaves a margin.
     pub fn fraction_below(&self, p: [f32; 3], size: f32, bound: f32) -> bool {
         size * self.inv_height < bound * dot(sub(p, self.eye), self.forward)
+    }
+}
+
+/// Most spheres [`ViewCone::may_see_shadow`] tests along one swept sphere.
+pub const SHADOW_SAMPLES: usize = 64;
+
+/// How trees' shadows are swept for culling: away from the sun, until below the ground.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ShadowSweep {
+    /// Unit direction away from the sun (the way shadows fall; z < 0).
+    pub away: [f32; 3],
+    /// Length of the sweep per metre of tree height.
+    pub per_height: f32,
+    /// Longest sweep, m.
+    pub max_length: f32,
+}
+
+impl ShadowSweep {
+    /// Longest sweep, m: as far as the shadow map reaches along the view (its far
+    /// cascade's farthest reach).
+    pub const MAX_LENGTH: f32 = 1200.0;
+
+    /// The sweep for a sun in unit direction `sun` (towards it; world z up): a tree `h` m
+    /// tall has its crown sphere (radius 0.75 h about the point h / 2 up) swept until the
+    /// sphere's top has sunk a quarter of the tree's height below its foot (ground that
+    /// falls away from a tree still takes its shadow), that is 1.5 h / sin(elevation), at
+    /// most [`ShadowSweep::MAX_LENGTH`]. `None` for a sun at or below the horizon (no
+    /// shadows are cast) or a direction that is not finite.
+    pub fn new(sun: [f32; 3]) -> Option<ShadowSweep> {
+        let n = dot(sun, sun).sqrt();
+        if !(n.is_finite() && n > 0.0) || sun[2] / n <= 1e-3 {
+            return None;
+        }
+        let s = [sun[0] / n, sun[1] / n, sun[2] / n];
+        Some(ShadowSweep {
+            away: [-s[0], -s[1], -s[2]],
+            per_height: 1.5 / s[2],
+            max_length: ShadowSweep::MAX_LENGTH,
+        })
+    }
+
+    /// Length of the sweep of a tree `h` m tall, m.
+    #[inline(always)]
+    pub fn length(&self, h: f32) -> f32 {
+        (self.per_height * h).min(self.max_length)
+    }
+}
+
+sylva_core::simd_kernel! {
+    /// For a run of trees that the cone does not see (`seen[i]` false), whether their crown
+    /// swept by `sweep` may reach the view, tested as the one sphere that holds the whole
+    /// sweep (centre halfway along it, radius half its length plus the crown's): a coarse,
+    /// conservative first cut, many trees at a time, before [`ViewCone::may_see_shadow`]
+    /// tests the few it keeps. Trees as [`may_see_trees`] takes them; `shade[i]` is false
+    /// where `seen[i]` is true.
+    pub fn may_shade_trees(
+        cone: &ViewCone,
+        sweep: &ShadowSweep,
+        x: &[f32],
+        y: &[f32],
+        z: &[f32],
+        h: &[f32],
+        seen: &[bool],
+        shade: &mut [bool],
+    ) {
+        let n = shade.len();
+        let (x, y, z, h, seen) = (&x[..n], &y[..n], &z[..n], &h[..n], &seen[..n]);
+        let a = sweep.away;
+        for i in 0..n {
+            let half = 0.5 * sweep.length(h[i]);
+            let c = [x[i] + half * a[0], y[i] + half * a[1], z[i] + 0.5 * h[i] + half * a[2]];
+            shade[i] = !seen[i] & cone.sees(sub(c, cone.eye), half + 0.75 * h[i]);
+        }
     }
 }
 
@@ -324,5 +416,62 @@ mod tests {
             if want { yes += 1 } else { no += 1 }
         }
         assert!(yes > 1000 && no > 1000 && x.len() > 4000, "{yes} seen, {no} not, of {}", x.len());
+    }
+
+    #[test]
+    fn a_swept_crown_is_kept_wherever_part_of_its_sweep_is_in_view() {
+        // Trees scattered round a camera looking down, sweeps for a low and a high sun:
+        // wherever a sphere of the crown's radius at some point along the sweep (found by
+        // stepping 1/400 of its length) is in view, both the first cut and the fine test
+        // keep the tree; and the fine test keeps no tree the first cut drops.
+        let c = Camera {
+            eye: [0.0, 0.0, 40.0],
+            target: [30.0, 40.0, 0.0],
+            fov_deg: 50.0,
+            near: 0.5,
+            far: 1500.0,
+        };
+        let cone = c.cone(4.0 / 3.0);
+        for elevation in [12.0f32, 20.0, 49.0, 75.0] {
+            let (ce, se) = (elevation.to_radians().cos(), elevation.to_radians().sin());
+            let sweep = ShadowSweep::new([-0.6 * ce, -0.8 * ce, se]).expect("sun up");
+            let (mut x, mut y, mut z, mut h) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+            for k in 0..2000 {
+                let a = k as f32 * 0.41;
+                let reach = 5.0 + (k % 50) as f32 * 4.0;
+                x.push(reach * a.cos());
+                y.push(reach * (1.3 * a).sin());
+                z.push(0.0);
+                h.push(8.0 + (k % 7) as f32 * 4.0);
+            }
+            let mut seen = vec![false; x.len()];
+            may_see_trees(&cone, &x, &y, &z, &h, &mut seen);
+            let mut shade = vec![true; x.len()];
+            may_shade_trees(&cone, &sweep, &x, &y, &z, &h, &seen, &mut shade);
+            let (mut kept, mut dropped) = (0, 0);
+            for i in 0..x.len() {
+                if seen[i] {
+                    assert!(!shade[i], "a tree in view is not a shadow-only one");
+                    continue;
+                }
+                let (r, len, a) = (0.75 * h[i], sweep.length(h[i]), sweep.away);
+                let c0 = [x[i], y[i], z[i] + 0.5 * h[i]];
+                let fine = cone.may_see_shadow(c0, r, a, len);
+                let truth = (1..=400).any(|k| {
+                    let t = len * k as f32 / 400.0;
+                    cone.may_see([c0[0] + t * a[0], c0[1] + t * a[1], c0[2] + t * a[2]], r)
+                });
+                if truth {
+                    assert!(fine && shade[i], "{elevation}°, tree {i}: sweep in view, dropped");
+                }
+                assert!(shade[i] || !fine, "{elevation}°, tree {i}: kept by the fine test only");
+                if fine { kept += 1 } else { dropped += 1 }
+            }
+            assert!(kept > 20 && dropped > 200, "{elevation}°: {kept} kept, {dropped} dropped");
+        }
+        // A sun on or below the horizon casts no shadows to sweep.
+        assert!(ShadowSweep::new([1.0, 0.0, 0.0]).is_none());
+        assert!(ShadowSweep::new([0.0, 0.3, -1.0]).is_none());
+        assert!(ShadowSweep::new([f32::NAN, 0.0, 1.0]).is_none());
     }
 }

@@ -16,8 +16,9 @@ pub mod scene;
 pub use camera::{Camera, Mat4, ViewCone};
 pub use driver::{
     Bucket, Forest, ForestError, FrameData, FrameStats, Instance, LodSettings, MAX_NEAR_POINTS,
-    NEAR_REACH, REGROUP_FADE, REGROUP_TRAVEL, SceneWind, SpeciesRuntime, TreeInfo, blend_levels,
-    hysteresis, lod_cap, lod_coordinate, next_lod_state, past_cap_fraction, wind_field,
+    NEAR_REACH, REGROUP_FADE, REGROUP_TRAVEL, SHADOW_COARSER, SceneWind, SpeciesRuntime, TreeInfo,
+    blend_levels, hysteresis, lod_cap, lod_coordinate, next_lod_state, past_cap_fraction,
+    wind_field,
 };
 pub use scene::{
     CameraKey, Lighting, LodSpec, Placement, SCENES, SceneError, SceneSpec, SpeciesShare, Surround,

@@ -539,7 +539,8 @@ fn draws_go_finest_level_first_and_nearest_tree_first_within_each() {
         cam.target[0] += 5.0;
         forest.frame(&cam, 4.0 / 3.0, &mut f);
         assert!(f.buckets.len() > 2, "several levels and species");
-        let key = |b: &sylva_forest::Bucket| (b.lod, b.species);
+        // The shadow map's own casters (out of view) come after every tree in view.
+        let key = |b: &sylva_forest::Bucket| (b.shadow_only, b.lod, b.species);
         assert!(f.buckets.windows(2).all(|w| key(&w[0]) < key(&w[1])), "(level, species) order");
         let mut meshes = 0;
         for b in &f.buckets {
@@ -736,5 +737,63 @@ fn a_small_tree_at_full_detail_simulates_a_coarser_prefix_and_holds_its_twigs_wi
         if j >= level1 {
             assert_eq!(pal[j], pal[parent_of(j)], "held joint {j} rests on its parent");
         }
+    }
+}
+
+/// One aspen on flat ground and a camera looking straight down at the ground beside it:
+/// the tree is out of view, the shadow of its crown in it when the sun stands 20° up on
+/// the far side of the tree. Returns the forest's frame.
+fn lone_tree_beside_the_view(sun: [f32; 3], shadows: bool) -> FrameData {
+    let text = format!(
+        r#"
+        name = "beside"
+        seed = 5
+        trees = 1
+        terrain_amplitude = 0.0
+        wind = "calm"
+        species = [ {{ name = "quaking_aspen" }} ]
+        [lighting]
+        sun_direction = [{}, {}, {}]
+        shadows = {shadows}
+        "#,
+        sun[0], sun[1], sun[2]
+    );
+    let spec = SceneSpec::from_toml("beside.toml", &text).expect("scene");
+    let mut forest = Forest::new(&spec).expect("forest");
+    let [x, y, _] = forest.crowns()[0];
+    let h = forest.tree_info(0).expect("tree").height;
+    // 2.2 heights along +x from the trunk, 1.2 heights up: the crown's sphere lies 53° off
+    // the view axis, the image's corners 31°.
+    let camera = Camera {
+        eye: [x + 2.2 * h, y, 1.2 * h],
+        target: [x + 2.2 * h, y + 0.01, 0.0],
+        fov_deg: 40.0,
+        near: 0.5,
+        far: 2000.0,
+    };
+    forest.step(1.0 / 30.0);
+    let mut f = FrameData::default();
+    forest.frame(&camera, 4.0 / 3.0, &mut f);
+    f
+}
+
+#[test]
+fn a_tree_out_of_view_whose_shadow_falls_in_it_is_drawn_into_the_shadow_map_only() {
+    // The sun 20° up towards −x: shadows fall towards +x, 2.7 times as long as what casts
+    // them is high, so the crown's shadow lies 0.8 to 2.5 heights from the trunk, across
+    // the view.
+    let (e, z) = (20f32.to_radians().cos(), 20f32.to_radians().sin());
+    let f = lone_tree_beside_the_view([-e, 0.0, z], true);
+    assert_eq!(f.stats.drawn, 0, "the tree itself is out of view");
+    assert_eq!(f.stats.shadow_only, 1, "its shadow falls in view");
+    assert!(!f.instances.is_empty() && f.buckets.iter().all(|b| b.shadow_only));
+    assert_eq!((f.stats.triangles, f.stats.draw_calls), (0, 0), "nothing drawn in the image");
+    assert!(!f.palettes.is_empty(), "the shadow sways with the tree: its palettes are sent");
+    // The sun on the near side (shadows falling away from the view), or no shadows at all:
+    // the tree is culled as before.
+    for (sun, shadows) in [([e, 0.0, z], true), ([-e, 0.0, z], false)] {
+        let f = lone_tree_beside_the_view(sun, shadows);
+        assert_eq!((f.stats.drawn, f.stats.shadow_only), (0, 0), "sun {sun:?}, {shadows}");
+        assert!(f.instances.is_empty() && f.buckets.is_empty());
     }
 }

@@ -40,10 +40,9 @@ pub struct SceneAssets<'a> {
     pub lighting: Lighting,
 }
 
-/// Mesh levels coarser than drawn that trees cast their shadows with. Two levels: scene A's
-/// image differs from one level's by 1.7 grey levels on average, for about 6 % less
-/// rendering time on lavapipe.
-const SHADOW_COARSER: usize = 2;
+/// Mesh levels coarser than drawn that trees cast their shadows with (the frame's
+/// palettes of trees cast only into the shadow map hold just those levels' joints).
+const SHADOW_COARSER: usize = sylva_forest::SHADOW_COARSER as usize;
 
 /// The ground reaches this far beyond three forest radii, m.
 const GROUND_MARGIN: f32 = 600.0;
@@ -400,10 +399,11 @@ impl Renderer {
         let mut enc =
             dev.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
         if shadows {
-            // The sun's shadow map: every tree casts into each cascade, into the near one
-            // as drawn (meshes two levels coarser, and impostors), into the far one as an
-            // impostor: its texels span metres, and it shades only beyond the near one's
-            // reach, where the trees are small.
+            // The sun's shadow map: every tree casts into each cascade (those in view, and
+            // those out of it whose shadow may fall in it: `Bucket::shadow_only`), into the
+            // near one as drawn (meshes two levels coarser, and impostors), into the far one
+            // as an impostor: its texels span metres, and it shades only beyond the near
+            // one's reach, where the trees are small.
             let mut pass = self.shadow.begin(&mut enc);
             ShadowPass::viewport(&mut pass, 0);
             pass.set_vertex_buffer(1, self.instances.slice(..));
@@ -479,6 +479,9 @@ impl Renderer {
         for &(bucket, window, first, count) in &self.draws {
             let b = &frame.buckets[bucket];
             let Some(sp) = self.species.get(b.species as usize) else { continue };
+            if b.shadow_only && casting == Casting::No {
+                continue;
+            }
             if b.lod as usize == sp.lods.len() || casting == Casting::Every {
                 pass.set_bind_group(0, &windows[window], &[]);
                 self.far.draw(pass, &sp.far, first..first + count);
@@ -505,6 +508,9 @@ impl Renderer {
             for &(bucket, window, first, count) in &self.draws {
                 let b = &frame.buckets[bucket];
                 let Some(sp) = self.species.get(b.species as usize) else { continue };
+                if b.shadow_only && shadow.is_none() {
+                    continue;
+                }
                 let level = if shadow.is_some() {
                     (b.lod as usize + SHADOW_COARSER).min(sp.lods.len().saturating_sub(1))
                 } else {
@@ -551,7 +557,15 @@ impl Renderer {
             let span = (max_binding / 4) as usize;
             let mut order: Vec<(usize, usize, usize)> = Vec::with_capacity(frame.instances.len());
             for b in &frame.buckets {
-                let reads = self.species.get(b.species as usize).map_or(1, |s| s.reads(b.lod));
+                // A tree cast only into the shadow map reads the joints of its cast level.
+                let reads = self.species.get(b.species as usize).map_or(1, |s| {
+                    let chain = s.lods.len() as u32;
+                    if b.shadow_only && b.lod < chain {
+                        s.reads((b.lod + SHADOW_COARSER as u32).min(chain.saturating_sub(1)))
+                    } else {
+                        s.reads(b.lod)
+                    }
+                });
                 for k in b.first as usize..(b.first + b.count) as usize {
                     let i = &frame.instances[k];
                     let start = i.palette.base as usize;

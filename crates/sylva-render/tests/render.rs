@@ -360,6 +360,60 @@ fn a_tree_drawn_with_part_of_a_cross_fade_casts_that_part_of_its_shadow() {
     }
 }
 
+/// A tree out of view still casts its shadow into it: one aspen beside a camera that
+/// looks straight down at the ground, the sun 20° up on the tree's far side. The ground
+/// where the crown's shadow falls is darker with shadows on than off, though no pixel of
+/// the tree itself is drawn (before trees out of view were drawn into the shadow map,
+/// the two images were the same, and the shadow appeared at once as the tree came into
+/// view).
+#[test]
+fn a_tree_out_of_view_casts_its_shadow_into_the_view() {
+    let (e, z) = (20f32.to_radians().cos(), 20f32.to_radians().sin());
+    let draw = |shadows: bool| {
+        let text = format!(
+            r#"
+            name = "beside"
+            seed = 5
+            trees = 1
+            terrain_amplitude = 0.0
+            wind = "calm"
+            species = [ {{ name = "quaking_aspen" }} ]
+            [lighting]
+            sun_direction = [{}, 0.0, {z}]
+            shadows = {shadows}
+            "#,
+            -e
+        );
+        let spec = SceneSpec::from_toml("beside.toml", &text).expect("scene");
+        let forest = Forest::new(&spec).expect("forest");
+        let [x, y, _] = forest.crowns()[0];
+        let h = forest.tree_info(0).expect("tree").height;
+        let camera = Camera {
+            eye: [x + 2.2 * h, y, 1.2 * h],
+            target: [x + 2.2 * h, y + 0.01, 0.0],
+            fov_deg: 40.0,
+            near: 0.5,
+            far: 2000.0,
+        };
+        let (img, frame, camera) = render_spec(&spec, Some(camera));
+        assert_eq!(frame.stats.drawn, 0, "the tree is out of view");
+        // Where the upper crown's shadow falls: 0.55 to 0.85 of the height up, carried
+        // along the sun's rays to the ground.
+        let points: Vec<(u32, u32)> = (0..24)
+            .filter_map(|k| {
+                let up = h * (0.55 + 0.3 * k as f32 / 23.0);
+                pixel_of(&camera, [x + up * e / z, y, 0.0])
+            })
+            .collect();
+        (img, points)
+    };
+    let ((lit, points), (flat, _)) = (draw(true), draw(false));
+    assert!(points.len() >= 10, "only {} shadow points in view", points.len());
+    let darker = points.iter().map(|&p| brightness(&flat, p) - brightness(&lit, p)).sum::<f64>()
+        / points.len() as f64;
+    assert!(darker > 10.0, "the ground under the shadow is darker by only {darker:.1} of 255");
+}
+
 #[test]
 fn the_fir_crown_hides_most_of_the_sky_behind_it_at_twenty_metres() {
     // One Douglas fir seen from 20 m: within the outline of its crown (from the image with

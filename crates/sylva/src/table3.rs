@@ -104,6 +104,8 @@ struct Cell {
     capped: usize,
     simulated: usize,
     impostors: f64,
+    /// Trees out of view cast into the shadow map only, mean per timed frame.
+    shadow_only: f64,
     ssim: Option<f64>,
     flip: Option<f64>,
     image: Option<Vec<u8>>,
@@ -215,6 +217,7 @@ fn run_config(
             cell.state_mb = cell.state_mb.max(frame.stats.state_bytes as f64 / 1e6);
             cell.capped = cell.capped.max(frame.stats.state_capped);
             cell.impostors += frame.stats.impostors as f64;
+            cell.shadow_only += frame.stats.shadow_only as f64;
         }
         if last {
             cell.image = image;
@@ -227,6 +230,7 @@ fn run_config(
         *v /= k;
     }
     cell.impostors /= k;
+    cell.shadow_only /= k;
     cell.sim_ms = median(&mut sim);
     cell.frame_ms = median(&mut build);
     cell.render_ms = (!draw.is_empty()).then(|| median(&mut draw));
@@ -821,18 +825,18 @@ fn write_outputs(
     );
     let _ = writeln!(
         md,
-        "| scene | configuration | sim ms | frame ms | slowest sim + frame ms | render ms | M triangles | draws | joint updates | MB uploaded: mean / max | MB animation state | simulated trees | impostors | FLIP vs full detail | SSIM vs full detail | note |"
+        "| scene | configuration | sim ms | frame ms | slowest sim + frame ms | render ms | M triangles | draws | joint updates | MB uploaded: mean / max | MB animation state | simulated trees | impostors | shadow only | FLIP vs full detail | SSIM vs full detail | note |"
     );
-    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     let mut csv = String::from(
-        "scene,trees,configuration,fps,sim_ms,frame_ms,render_ms,triangles,draws,joint_updates,uploaded_mb,uploaded_max_mb,state_mb,simulated,impostors,flip,ssim,cpu_max_ms\n",
+        "scene,trees,configuration,fps,sim_ms,frame_ms,render_ms,triangles,draws,joint_updates,uploaded_mb,uploaded_max_mb,state_mb,simulated,impostors,shadow_only,flip,ssim,cpu_max_ms\n",
     );
     for (name, trees, cells) in results {
         for (c, (label, ..)) in cells.iter().zip(CONFIGS) {
             let opt = |v: Option<f64>, p: usize| v.map_or("—".into(), |v| format!("{v:.p$}"));
             let _ = writeln!(
                 md,
-                "| {name} | {label} | {:.1} | {:.1} | {:.1} | {} | {:.2} | {:.0} | {:.0} | {:.2} / {:.2} | {:.1} | {} | {:.0} | {} | {} | {} |",
+                "| {name} | {label} | {:.1} | {:.1} | {:.1} | {} | {:.2} | {:.0} | {:.0} | {:.2} / {:.2} | {:.1} | {} | {:.0} | {:.0} | {} | {} | {} |",
                 c.sim_ms,
                 c.frame_ms,
                 c.cpu_max_ms,
@@ -845,13 +849,14 @@ fn write_outputs(
                 c.state_mb,
                 c.simulated,
                 c.impostors,
+                c.shadow_only,
                 opt(c.flip, 3),
                 opt(c.ssim, 3),
                 c.note
             );
             let _ = writeln!(
                 csv,
-                "{name},{trees},{label},{},{:.3},{:.3},{},{:.0},{:.0},{:.0},{:.3},{:.3},{:.3},{},{:.0},{},{},{:.3}",
+                "{name},{trees},{label},{},{:.3},{:.3},{},{:.0},{:.0},{:.0},{:.3},{:.3},{:.3},{},{:.0},{:.0},{},{},{:.3}",
                 c.fps().map_or(String::new(), |f| format!("{f:.3}")),
                 c.sim_ms,
                 c.frame_ms,
@@ -864,6 +869,7 @@ fn write_outputs(
                 c.state_mb,
                 c.simulated,
                 c.impostors,
+                c.shadow_only,
                 c.flip.map_or(String::new(), |s| format!("{s:.4}")),
                 c.ssim.map_or(String::new(), |s| format!("{s:.4}")),
                 c.cpu_max_ms
