@@ -188,7 +188,8 @@ pub const FAR_WIND_LEVEL: usize = 2;
 /// shadow pass; a tree past the last mesh level casts its last one). Two levels: scene A's
 /// image differs from one level's by 1.7 grey levels on average, for about 6 % less
 /// rendering time on lavapipe. A tree drawn into the shadow map only
-/// ([`Bucket::shadow_only`]) needs and simulates just the joints of the level it casts.
+/// ([`Bucket::shadow_only`]) needs just the joints of the level it casts, and
+/// simulates only its trunk.
 pub const SHADOW_COARSER: u32 = 2;
 
 /// How much finer (in levels) than it is drawn a tree is simulated, so the simulation
@@ -1657,8 +1658,13 @@ impl Forest {
                         [(*g, false)].into_iter().chain(switch.map(|(_, f)| (f, true)))
                     {
                         let own = sp.lane_base * LANES + sp.lane_of[group as usize] as usize;
+                        // A tree cast only into the shadow map simulates nothing of its
+                        // own beyond the trunk (every lane steps that): the joints of its
+                        // cast level show their nearest simulated ancestor's palette, so
+                        // its shadow bends with the trunk, and the crown's joints blend in
+                        // from rest when it comes into view, as for any tree that does.
                         let (need, want) = if shadow_only {
-                            (casts(a), casts(sim).min(moving))
+                            (casts(a), sp.order.trunk)
                         } else {
                             (joints(a), moving)
                         };
