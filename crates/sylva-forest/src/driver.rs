@@ -597,9 +597,10 @@ pub struct FrameData {
     past_cap: Vec<f32>,
     /// Per lane group drawn: where its palettes go.
     copies: Vec<PaletteCopy>,
-    /// `need` and `want` as the runs raise them.
+    /// `need` and `want` as the runs raise them, and `need` of the trees in view alone.
     need_max: Maxima,
     want_max: Maxima,
+    seen_max: Maxima,
 }
 
 /// Trees a frame's pass takes at a time (the runs go in parallel).
@@ -1506,6 +1507,7 @@ impl Forest {
         let sims = self.lane_groups * LANES;
         out.need_max.reset(sims);
         out.want_max.reset(sims);
+        out.seen_max.reset(sims);
         let lod = self.lod;
         let mut stats = FrameStats { trees: self.trees.len(), ..FrameStats::default() };
         let cone = camera.cone(aspect);
@@ -1535,7 +1537,7 @@ impl Forest {
         if out.runs.len() < runs {
             out.runs.resize_with(runs, TreeRun::default);
         }
-        let (need_max, want_max) = (&out.need_max, &out.want_max);
+        let (need_max, want_max, seen_max) = (&out.need_max, &out.want_max, &out.seen_max);
         // The animation LOD's coordinate less the geometry LOD's: the same for every tree.
         let ahead = (ANIMATION_FRACTION / lod.fraction).ln() / 3f32.ln();
         // Per species, the fraction below which a tree goes to its LOD cap.
@@ -1659,18 +1661,21 @@ impl Forest {
                     {
                         let own = sp.lane_base * LANES + sp.lane_of[group as usize] as usize;
                         // A tree cast only into the shadow map needs the joints of the
-                        // level it casts, and simulates nothing of its own beyond the trunk
-                        // (every lane steps that): as it leaves the view, the joints it still
-                        // shows fade to rest (computed until then), and its shadow goes on
-                        // bending with the trunk; they blend in from rest when it comes
-                        // back, as for any tree entering the view. Simulating its cast
-                        // level's joints was measured and not kept: with every tree
-                        // simulated on its own, such a simulation wants a prefix no other
-                        // in its lane group does, and scene C's step took 45–48 ms instead
-                        // of 30–32.
+                        // level it casts and simulates nothing of its own beyond the trunk
+                        // (every lane steps that), and what it shows does not hold joints
+                        // the simulation drops: as it leaves the view, its crown's joints go
+                        // at once, as when it was culled whole, and its shadow bends with
+                        // the trunk alone (they blend in from rest when it comes back, as
+                        // for any tree entering the view). Two other ways were measured
+                        // and not kept (docs/benchmarks.md): simulating its cast level's
+                        // joints (with every tree simulated on its own such a simulation
+                        // wants a prefix no other in its lane group does: scene C's step
+                        // took 45–48 ms instead of 30–32), and letting its shown joints
+                        // fade out computed (a 300-tree stand stepped 27 % more joints).
                         let (need, want) = if shadow_only {
                             (casts(a), sp.order.trunk)
                         } else {
+                            seen_max.raise(own, joints(a) as u32);
                             (joints(a), moving)
                         };
                         need_max.raise(own, need as u32);
@@ -1824,8 +1829,10 @@ impl Forest {
         for (a, &v) in self.want.iter().zip(&out.want) {
             a.store(v, Ordering::Relaxed);
         }
-        for (a, &v) in self.shown.iter().zip(&out.need) {
-            a.store(v, Ordering::Relaxed);
+        // What the trees in view show: joints beyond it that the next step drops go at
+        // once, whatever trees out of view cast with them.
+        for (a, m) in self.shown.iter().zip(&out.seen_max.0) {
+            a.store(m.load(Ordering::Relaxed), Ordering::Relaxed);
         }
         // One instance per draw, in runs in parallel.
         let (keys, states, slots) = (&out.keys, &out.lod_state, &out.slots);
