@@ -108,6 +108,7 @@ fn figures(ui: &mut Ui, v: &Viewer) {
         row("triangles", format!("{:.2} M", s.triangles as f64 / 1e6));
         row("draw calls", s.draw_calls.to_string());
         row("trees drawn", format!("{} of {} ({} impostors)", s.drawn, s.trees, s.impostors));
+        row("shadow only", format!("{} trees out of view", s.shadow_only));
         row("joints stepped", s.joints.to_string());
         row("uploaded", format!("{:.2} MB a frame", s.uploaded_bytes as f64 / 1e6));
         let capped = match s.state_capped {
