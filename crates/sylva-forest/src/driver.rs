@@ -39,7 +39,8 @@
 //! except, with shadows on, those whose shadow may fall in view: their crown swept away
 //! from the sun ([`ShadowSweep`]) may reach the cone. They are drawn into the shadow map
 //! only ([`Bucket::shadow_only`]), at the level their size gives, so a long shadow neither
-//! appears when its tree comes into view nor changes then.
+//! appears when its tree comes into view nor changes level then (its crown's sway blends
+//! in, as for any tree entering the view).
 //! The per-tree state stops at [`lod_cap`], half a level past the far level, where nothing
 //! drawn or simulated changes any more; a tree whose image fraction is surely below
 //! [`past_cap_fraction`] (one multiplication, no division or logarithm) goes there without
