@@ -167,8 +167,6 @@ pub struct ShadowSweep {
     pub away: [f32; 3],
     /// Length of the sweep per metre of tree height.
     pub per_height: f32,
-    /// Longest sweep, m.
-    pub max_length: f32,
 }
 
 impl ShadowSweep {
@@ -188,17 +186,13 @@ impl ShadowSweep {
             return None;
         }
         let s = [sun[0] / n, sun[1] / n, sun[2] / n];
-        Some(ShadowSweep {
-            away: [-s[0], -s[1], -s[2]],
-            per_height: 1.5 / s[2],
-            max_length: ShadowSweep::MAX_LENGTH,
-        })
+        Some(ShadowSweep { away: [-s[0], -s[1], -s[2]], per_height: 1.5 / s[2] })
     }
 
     /// Length of the sweep of a tree `h` m tall, m.
     #[inline(always)]
     pub fn length(&self, h: f32) -> f32 {
-        (self.per_height * h).min(self.max_length)
+        (self.per_height * h).min(ShadowSweep::MAX_LENGTH)
     }
 }
 

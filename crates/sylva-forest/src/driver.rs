@@ -193,6 +193,12 @@ pub const FAR_WIND_LEVEL: usize = 2;
 /// simulates only its trunk.
 pub const SHADOW_COARSER: u32 = 2;
 
+/// The mesh level a tree drawn at mesh level `level` of a chain of `chain` meshes casts its
+/// shadow with: [`SHADOW_COARSER`] levels coarser, the last mesh at most.
+pub fn shadow_level(level: u32, chain: u32) -> u32 {
+    (level + SHADOW_COARSER).min(chain.saturating_sub(1))
+}
+
 /// How much finer (in levels) than it is drawn a tree is simulated, so the simulation
 /// leads the camera by a frame.
 pub const SIM_MARGIN: f32 = 0.5;
@@ -1610,7 +1616,7 @@ impl Forest {
                         if lod.geometry && l >= far {
                             sp.order.trunk
                         } else {
-                            sp.order.prefix[((l + SHADOW_COARSER) as usize).min(chain as usize - 1)]
+                            sp.order.prefix[shadow_level(l, chain) as usize]
                         }
                     };
                     let frac = || cone.screen_fraction(c, h);

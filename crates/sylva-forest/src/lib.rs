@@ -18,7 +18,7 @@ pub use driver::{
     Bucket, Forest, ForestError, FrameData, FrameStats, Instance, LodSettings, MAX_NEAR_POINTS,
     NEAR_REACH, REGROUP_FADE, REGROUP_TRAVEL, SHADOW_COARSER, SceneWind, SpeciesRuntime, TreeInfo,
     blend_levels, hysteresis, lod_cap, lod_coordinate, next_lod_state, past_cap_fraction,
-    wind_field,
+    shadow_level, wind_field,
 };
 pub use scene::{
     CameraKey, Lighting, LodSpec, Placement, SCENES, SceneError, SceneSpec, SpeciesShare, Surround,

@@ -1,10 +1,10 @@
 //! The geometry and animation LODs in the frame driver: level choice, hysteresis and
 //! cross-fade weights; what is uploaded and what is stepped; determinism.
 
-use sylva_forest::driver::{SHADOW_COARSER, SIM_MARGIN};
+use sylva_forest::driver::SIM_MARGIN;
 use sylva_forest::{
     Camera, Forest, FrameData, LodSettings, SceneSpec, blend_levels, hysteresis, lod_cap,
-    lod_coordinate, next_lod_state, past_cap_fraction,
+    lod_coordinate, next_lod_state, past_cap_fraction, shadow_level,
 };
 use sylva_sway::{LANES, STATE_BYTES, SwayBatch};
 
@@ -287,7 +287,7 @@ fn frames_are_deterministic_for_any_thread_count() {
                     // A tree cast only into the shadow map: the joints of the level it casts.
                     let chain = forest.species[b.species as usize].model.lods.len() as u32;
                     let lod = if b.shadow_only && b.lod < chain {
-                        (b.lod + SHADOW_COARSER).min(chain - 1)
+                        shadow_level(b.lod, chain)
                     } else {
                         b.lod
                     };

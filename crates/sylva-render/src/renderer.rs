@@ -3,7 +3,9 @@
 //! spares hidden fragments their shading), per-species GPU resources, and the one-way
 //! upload of [`FrameData`].
 
-use sylva_forest::{Camera, Forest, FrameData, Instance, Lighting, Surround, Terrain};
+use sylva_forest::{
+    Camera, Forest, FrameData, Instance, Lighting, Surround, Terrain, shadow_level,
+};
 use sylva_tree::mesh::TreeModel;
 
 use crate::gpu::{Gpu, RenderError};
@@ -39,10 +41,6 @@ pub struct SceneAssets<'a> {
     /// Sun, sky and fog.
     pub lighting: Lighting,
 }
-
-/// Mesh levels coarser than drawn that trees cast their shadows with (the frame's
-/// palettes of trees cast only into the shadow map hold just those levels' joints).
-const SHADOW_COARSER: usize = sylva_forest::SHADOW_COARSER as usize;
 
 /// The ground reaches this far beyond three forest radii, m.
 const GROUND_MARGIN: f32 = 600.0;
@@ -491,7 +489,7 @@ impl Renderer {
 
     /// Draw every tree drawn as a mesh (not the impostors) with `pipelines` (branches,
     /// leaves), bound through the frame's palette windows. `shadow`: into the shadow map,
-    /// through the shadow pass's windows and [`SHADOW_COARSER`] mesh levels coarser than the
+    /// through the shadow pass's windows and at its [`shadow_level`], coarser than the
     /// tree is drawn at (its joints are a prefix of the drawn level's, so its palettes are
     /// there): a shadow-map texel spans a decimetre or more, and the coarser levels keep
     /// the crown's outline and leaf area, so the finer ones add cost, not shade.
@@ -512,7 +510,7 @@ impl Renderer {
                     continue;
                 }
                 let level = if shadow.is_some() {
-                    (b.lod as usize + SHADOW_COARSER).min(sp.lods.len().saturating_sub(1))
+                    shadow_level(b.lod, sp.lods.len() as u32) as usize
                 } else {
                     b.lod as usize
                 };
@@ -561,7 +559,7 @@ impl Renderer {
                 let reads = self.species.get(b.species as usize).map_or(1, |s| {
                     let chain = s.lods.len() as u32;
                     if b.shadow_only && b.lod < chain {
-                        s.reads((b.lod + SHADOW_COARSER as u32).min(chain.saturating_sub(1)))
+                        s.reads(shadow_level(b.lod, chain))
                     } else {
                         s.reads(b.lod)
                     }
