@@ -18,6 +18,9 @@ pub enum RenderError {
     /// Reading the image back failed.
     #[error("reading the frame back failed: {0}")]
     Readback(String),
+    /// Waiting for the GPU to finish a frame failed (device lost, say).
+    #[error("waiting for the GPU to finish the frame failed: {0}")]
+    Wait(String),
     /// A size of zero or beyond the adapter's limit.
     #[error("image size {0}×{1} is invalid (1 … {2} per side)")]
     Size(u32, u32, u32),

@@ -92,6 +92,23 @@ impl Headless {
     ) -> Result<Vec<u8>, RenderError> {
         self.renderer.render(&self.gpu, frame, camera, &self.view);
         overlay(&self.gpu, &self.view);
+        self.read_back()
+    }
+
+    /// Draw `frame` from `camera` and wait until the GPU has finished it, without reading
+    /// it back: what an interactive frame costs before presentation (benchmarks time this;
+    /// [`read_back`](Self::read_back) then fetches the image when one is wanted).
+    pub fn draw(&mut self, frame: &FrameData, camera: &Camera) -> Result<(), RenderError> {
+        self.renderer.render(&self.gpu, frame, camera, &self.view);
+        self.gpu
+            .device
+            .poll(wgpu::PollType::Wait { submission_index: None, timeout: None })
+            .map_err(|e| RenderError::Wait(e.to_string()))?;
+        Ok(())
+    }
+
+    /// The image last drawn, RGBA8 rows top first.
+    pub fn read_back(&mut self) -> Result<Vec<u8>, RenderError> {
         let mut enc = self
             .gpu
             .device
