@@ -1082,7 +1082,12 @@ impl SwayBatch {
                     row.pal.resize(12 * r, 0.0);
                 }
                 *alone = solo;
-                SCRATCH.with_borrow_mut(|loads| {
+                // The scratch is taken out of the thread's slot for the step, not borrowed in
+                // it: a crown stepped alone splits its work across threads, and while this
+                // thread waits on that split it may step another group, which then finds the
+                // slot empty and grows a scratch of its own.
+                let mut loads = SCRATCH.take();
+                {
                     // Lanes stepped alone, each as a group of one on its row (the kernel at
                     // width 1, the same operations as a batch of that instance alone).
                     for l in (0..used).filter(|&l| solo >> l & 1 == 1) {
@@ -1137,7 +1142,8 @@ impl SwayBatch {
                             step_group::<W>(sp, tr, aero, blend, &bud, &u, &mut st);
                         }
                     }
-                });
+                }
+                SCRATCH.set(loads);
                 // What each lane now has live: its switched-on prefix, and the joints beyond
                 // it still fading out (the last one not yet at rest).
                 for l in 0..used {

@@ -254,3 +254,45 @@ fn a_large_crown_stepped_alone_is_the_same_on_any_threads_and_in_a_group() {
         last = one;
     }
 }
+
+/// Groups are stepped in parallel, and a large crown stepped alone within one splits its
+/// own work across threads too: a thread waiting on that split may take up another
+/// group's step meanwhile. Each group's scratch loads must then be its own, not the
+/// thread's borrowed twice (which panicked with 16 threads). Sixty-four groups, each with
+/// one near tree (every joint, in its lane alone) among fifteen far ones (their trunks),
+/// step on eight threads to the same bits as on one.
+#[test]
+fn groups_with_crowns_stepped_alone_step_on_many_threads_as_on_one() {
+    let model = Species::preset("black_tupelo").expect("preset").model(5, 4).expect("model");
+    let order = sylva_tree::lod_order(&model);
+    let model = model.reordered(&order.order).expect("reorder");
+    let sp = SwaySpecies::new(&model.tree.skeleton, SwayParams::default()).expect("species");
+    let n = sp.len();
+    assert!(n >= 4096, "{n} joints: too few to be split into runs");
+    let instances = 64 * LANES;
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
+        pool.install(|| {
+            let mut b = SwayBatch::new(sp.clone(), instances);
+            b.set_prefixes(&[order.prefix.as_slice(), &[order.trunk]].concat());
+            for i in (0..instances).filter(|i| i % LANES != 0) {
+                b.set_lane_active(i, order.trunk);
+            }
+            let winds: Vec<[f32; 3]> =
+                (0..instances).map(|i| [6.0 + (i % 5) as f32, 1.0, 0.0]).collect();
+            // The far crowns fade out over the blend time (0.5 s), then go.
+            for _ in 0..20 {
+                b.step(1.0 / 30.0, &winds);
+            }
+            let trunk = b.prefix_for(order.trunk);
+            assert_eq!(b.simulated(0), n, "the near tree is simulated in full");
+            assert_eq!(b.simulated(1), trunk, "a far tree simulates its trunk");
+            let mut bits = Vec::new();
+            for i in (0..instances).step_by(LANES) {
+                bits.extend((0..n).flat_map(|j| b.palette(i, j)).map(f32::to_bits));
+            }
+            bits
+        })
+    };
+    assert!(run(1) == run(8), "eight threads step the near crowns differently from one");
+}
