@@ -26,6 +26,11 @@ use sylva_wind::io::atomic::write_atomic;
 
 use crate::render::{median, parse_size, write_png};
 
+/// Defaults of `--max-triangles`, `--max-image-triangles` and `--popping-frames`.
+const MAX_TRIANGLES: f64 = 12e6;
+const MAX_IMAGE_TRIANGLES: f64 = 80e6;
+const POPPING_FRAMES: usize = 40;
+
 #[derive(Debug, Args)]
 pub struct Table3Bench {
     /// Scenes, comma-separated (built-in names or scene files).
@@ -41,10 +46,10 @@ pub struct Table3Bench {
     #[arg(long, default_value_t = 2)]
     warmup: usize,
     /// Configurations drawing more triangles per frame are timed on the CPU side only.
-    #[arg(value_parser = crate::finite::<f64>, long, default_value_t = 12e6)]
+    #[arg(value_parser = crate::finite::<f64>, long, default_value_t = MAX_TRIANGLES)]
     max_triangles: f64,
     /// Their last frame is still rendered for the image error below this many triangles.
-    #[arg(value_parser = crate::finite::<f64>, long, default_value_t = 80e6)]
+    #[arg(value_parser = crate::finite::<f64>, long, default_value_t = MAX_IMAGE_TRIANGLES)]
     max_image_triangles: f64,
     /// First LOD level drawn as an impostor (1 … 6; default: the scene's).
     #[arg(long)]
@@ -63,7 +68,7 @@ pub struct Table3Bench {
     #[arg(long)]
     all_lods_only: bool,
     /// Frames of the popping measurement (scene `small`, calm, along its fly-in; 0: skip).
-    #[arg(long, default_value_t = 40)]
+    #[arg(long, default_value_t = POPPING_FRAMES)]
     popping_frames: usize,
     /// Output folder: table3.md, table3.csv, table3.png and each configuration's last frame.
     #[arg(long, default_value = "out/table3")]
@@ -139,6 +144,37 @@ fn configure(
     }
     crate::render::apply_max_memory(&mut spec, a.max_memory)?;
     Ok(spec)
+}
+
+/// The command that reproduces the run: its scenes, size and frame counts, and every option
+/// set away from its default.
+fn command_line(a: &Table3Bench, (w, h): (u32, u32)) -> String {
+    let mut c = format!(
+        "sylva bench table3 --scenes {} --size {w}x{h} --frames {} --warmup {}",
+        a.scenes, a.frames, a.warmup
+    );
+    if a.max_triangles != MAX_TRIANGLES {
+        let _ = write!(c, " --max-triangles {}", a.max_triangles);
+    }
+    if a.max_image_triangles != MAX_IMAGE_TRIANGLES {
+        let _ = write!(c, " --max-image-triangles {}", a.max_image_triangles);
+    }
+    if let Some(f) = a.far_level {
+        let _ = write!(c, " --far-level {f}");
+    }
+    if let Some(h0) = a.lod_fraction {
+        let _ = write!(c, " --lod-fraction {h0}");
+    }
+    if let Some(m) = a.max_memory {
+        let _ = write!(c, " --max-memory {m}");
+    }
+    if a.all_lods_only {
+        c.push_str(" --all-lods-only");
+    }
+    if a.popping_frames != POPPING_FRAMES {
+        let _ = write!(c, " --popping-frames {}", a.popping_frames);
+    }
+    c
 }
 
 /// Length of the camera path the benchmark follows, s (the default fly-in: 12 s).
@@ -797,11 +833,8 @@ fn write_outputs(
 ) -> anyhow::Result<()> {
     let mut md = String::new();
     let _ = writeln!(md, "# Table 3 on this machine\n");
-    let _ = writeln!(
-        md,
-        "`sylva bench table3 --scenes {} --size {}x{} --frames {} --warmup {}`; machine: {machine}; adapter: {adapter}.\n",
-        a.scenes, w, h, a.frames, a.warmup
-    );
+    let _ =
+        writeln!(md, "`{}`; machine: {machine}; adapter: {adapter}.\n", command_line(a, (w, h)));
     let _ = writeln!(
         md,
         "Frames per second (paper's figure in brackets: GeForce 6600 GT, 1024×768):\n"
