@@ -69,6 +69,27 @@ impl Camera {
         self.cone(aspect).may_see(c, radius)
     }
 
+    /// How far along the view the sun's shadow map reaches, m: its near cascade 1.2 × the
+    /// distance to the point looked at, within 40 … 250 m, and its far cascade four times
+    /// that, at most 1200 m. The renderer draws its cascades for these; beyond the far one
+    /// nothing takes a shadow.
+    pub fn shadow_reach(&self) -> (f32, f32) {
+        let near = (1.2 * dot(sub(self.target, self.eye), sub(self.target, self.eye)).sqrt())
+            .clamp(40.0, 250.0);
+        (near, (4.0 * near).min(ShadowSweep::MAX_LENGTH))
+    }
+
+    /// The sphere a shadow cascade covers for the first `reach` m of the view in an image
+    /// of `aspect` = width / height: centred halfway along them, its radius out to the
+    /// view's corners at `reach`. Returns (centre, radius).
+    pub fn shadow_sphere(&self, aspect: f32, reach: f32) -> ([f32; 3], f32) {
+        let f = self.forward();
+        let tan_v = (0.5 * self.fov_deg.to_radians()).tan();
+        let radius = reach * (0.25 + tan_v * tan_v * (1.0 + aspect * aspect)).sqrt();
+        let e = self.eye;
+        ([e[0] + f[0] * 0.5 * reach, e[1] + f[1] * 0.5 * reach, e[2] + f[2] * 0.5 * reach], radius)
+    }
+
     /// The view cone for an image of `aspect` = width / height, with what per-object tests
     /// need precomputed.
     pub fn cone(&self, aspect: f32) -> ViewCone {
@@ -154,6 +175,63 @@ impl ViewCone {
     /// `bound`: a caller leaves a margin.
     pub fn fraction_below(&self, p: [f32; 3], size: f32, bound: f32) -> bool {
         size * self.inv_height < bound * dot(sub(p, self.eye), self.forward)
+    }
+}
+
+/// What one cascade of the sun's shadow map holds: an orthographic view along the sun's
+/// rays of the sphere around the first `reach` m of the view ([`Camera::shadow_sphere`]),
+/// its image a square `2 radius` wide, its depth reaching [`ShadowBox::BEYOND`] m past the
+/// sphere on either side (so tall trees outside it still cast into it). The renderer draws
+/// the cascade from it; lit pixels anywhere in the square take its shadows.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ShadowBox {
+    /// Centre of the sphere, world m.
+    pub centre: [f32; 3],
+    /// Radius of the sphere: half the square's side, m.
+    pub radius: f32,
+    /// Unit axes: right and up across the sun's view, and along its rays (away from the sun).
+    pub right: [f32; 3],
+    /// See [`ShadowBox::right`].
+    pub up: [f32; 3],
+    /// See [`ShadowBox::right`].
+    pub along: [f32; 3],
+}
+
+impl ShadowBox {
+    /// Depth the cascade reaches past its sphere, m.
+    pub const BEYOND: f32 = 150.0;
+
+    /// Texels along each side of a cascade.
+    pub const TEXELS: u32 = 1024;
+
+    /// The cascade of `camera` for the first `reach` m of the view (image `aspect` = width
+    /// / height) and a sun in direction `sun` (towards it).
+    pub fn new(camera: &Camera, aspect: f32, reach: f32, sun: [f32; 3]) -> ShadowBox {
+        let (centre, radius) = camera.shadow_sphere(aspect, reach);
+        let along = norm([-sun[0], -sun[1], -sun[2]]);
+        let right = if along[0].abs() + along[1].abs() < 1e-4 {
+            [1.0, 0.0, 0.0]
+        } else {
+            norm(cross(along, [0.0, 0.0, 1.0]))
+        };
+        let up = cross(right, along);
+        ShadowBox { centre, radius, right, up, along }
+    }
+
+    /// Whether a sphere of `radius` at `c`, swept `length` m away from the sun, may cast
+    /// into the cascade: across the sun's view the sphere overlaps the square (the sweep
+    /// runs along the rays, so it does not move there), and along them the sweep overlaps
+    /// the depth the cascade holds. `margin` m widens the square (the renderer snaps its
+    /// centre to whole texels).
+    pub fn may_take(&self, c: [f32; 3], radius: f32, length: f32, margin: f32) -> bool {
+        let d = sub(c, self.centre);
+        let side = self.radius + radius + margin;
+        let deep = self.radius + ShadowBox::BEYOND + radius;
+        let a = dot(d, self.along);
+        dot(d, self.right).abs() <= side
+            && dot(d, self.up).abs() <= side
+            && a + length.max(0.0) >= -deep
+            && a <= deep
     }
 }
 
@@ -410,6 +488,58 @@ mod tests {
             if want { yes += 1 } else { no += 1 }
         }
         assert!(yes > 1000 && no > 1000 && x.len() > 4000, "{yes} seen, {no} not, of {}", x.len());
+    }
+
+    #[test]
+    fn a_crown_casts_into_a_cascade_wherever_part_of_its_sweep_lies_in_its_box() {
+        // A camera over flat ground, the far cascade for a low and a high sun; crowns on a
+        // spiral out to 1.5 km. Wherever a sphere of the crown's radius at some point of the
+        // sweep (stepped by 1/200 of its length) meets the cascade's box — the square across
+        // the sun's view, the depth along its rays — the crown is kept; some are not.
+        let c = Camera {
+            eye: [0.0, 0.0, 30.0],
+            target: [20.0, 30.0, 0.0],
+            fov_deg: 50.0,
+            near: 0.5,
+            far: 2000.0,
+        };
+        for elevation in [15.0f32, 60.0] {
+            let (ce, se) = (elevation.to_radians().cos(), elevation.to_radians().sin());
+            let sun = [-0.6 * ce, -0.8 * ce, se];
+            let b = ShadowBox::new(&c, 1.5, c.shadow_reach().1, sun);
+            let sweep = ShadowSweep::new(sun).expect("sun up");
+            let inside = |q: [f32; 3], r: f32| {
+                let d = sub(q, b.centre);
+                // Distance from the sphere's centre to the box, axis by axis.
+                let out = |v: f32, half: f32| (v.abs() - half).max(0.0);
+                let (a, s) = (dot(d, b.along), b.radius);
+                let o = [out(dot(d, b.right), s), out(dot(d, b.up), s), out(a, s + 150.0)];
+                dot(o, o) <= r * r
+            };
+            let (mut kept, mut dropped) = (0, 0);
+            for k in 0..3000 {
+                let a = k as f32 * 0.37;
+                let reach = 10.0 * (k % 150) as f32;
+                let h = 8.0 + (k % 5) as f32 * 6.0;
+                let crown = [reach * a.cos(), reach * a.sin(), 0.5 * h];
+                let (r, len) = (0.75 * h, sweep.length(h));
+                let meets = (0..=200).any(|i| {
+                    let t = len * i as f32 / 200.0;
+                    inside([0, 1, 2].map(|j| crown[j] + t * sweep.away[j]), r)
+                });
+                let take = b.may_take(crown, r, len, 0.0);
+                assert!(take || !meets, "crown at {crown:?} meets the box but is dropped");
+                if take { kept += 1 } else { dropped += 1 }
+            }
+            assert!(kept > 100 && dropped > 100, "{elevation}°: {kept} kept, {dropped} dropped");
+        }
+        // A crown in a corner of the square, outside the circle in it, is kept (the map
+        // holds the square; lit pixels there take its shadows).
+        let b = ShadowBox::new(&c, 1.5, 160.0, [0.0, 0.0, 1.0]);
+        let corner = [0, 1, 2].map(|j| b.centre[j] + 0.9 * b.radius * (b.right[j] + b.up[j]));
+        assert!(b.may_take(corner, 1.0, 10.0, 0.0));
+        let beyond = [0, 1, 2].map(|j| b.centre[j] + 1.1 * b.radius * b.right[j]);
+        assert!(!b.may_take(beyond, 1.0, 10.0, 0.0));
     }
 
     #[test]

@@ -37,10 +37,11 @@
 //! dither: the two draws keep complementary pixel sets ([`Instance::fade`]), so no frame
 //! shows a tree jump from one level to the next. Trees outside the view cone are culled,
 //! except, with shadows on, those whose shadow may fall in view: their crown swept away
-//! from the sun ([`ShadowSweep`]) may reach the cone. They are drawn into the shadow map
-//! only ([`Bucket::shadow_only`]), at the level their size gives, so a long shadow neither
-//! appears when its tree comes into view nor changes level then (its crown's sway blends
-//! in, as for any tree entering the view).
+//! from the sun ([`ShadowSweep`]) may reach the cone, and it may cast into the shadow
+//! map's far cascade ([`ShadowBox`]; outside it nothing takes a shadow). They are drawn
+//! into the shadow map only ([`Bucket::shadow_only`]), at the level their size gives, so
+//! a long shadow neither appears when its tree comes into view nor changes level then
+//! (its crown's sway blends in, as for any tree entering the view).
 //! The per-tree state stops at [`lod_cap`], half a level past the far level, where nothing
 //! drawn or simulated changes any more; a tree whose image fraction is surely below
 //! [`past_cap_fraction`] (one multiplication, no division or logarithm) goes there without
@@ -79,7 +80,7 @@ use sylva_tree::{LodOrder, Species, lod_order};
 use sylva_wind::{FieldView, Grid, NearField, OwnedPyramid, SynthParams, WindField, WindParams};
 use thiserror::Error;
 
-use crate::camera::{Camera, ShadowSweep, may_see_trees, may_shade_trees};
+use crate::camera::{Camera, ShadowBox, ShadowSweep, may_see_trees, may_shade_trees};
 use crate::groups::{assign_slots, morton, partition};
 use crate::lanes;
 use crate::scene::{
@@ -1527,6 +1528,11 @@ impl Forest {
         // crown swept away from the sun, and keyed after every tree in view.
         let lighting = &self.spec.lighting;
         let sweep = if lighting.shadows { ShadowSweep::new(lighting.sun_unit()) } else { None };
+        // Nothing outside the shadow map's far cascade takes a shadow: a tree out of view is
+        // kept only where it may also cast into that cascade (a margin of two of its texels
+        // for the renderer's snapping).
+        let far_box = ShadowBox::new(camera, aspect, camera.shadow_reach().1, lighting.sun_unit());
+        let box_margin = 4.0 * far_box.radius / ShadowBox::TEXELS as f32;
         let all_keys = if sweep.is_some() { 2 * n_keys } else { n_keys };
         let split = |key: u32| {
             let key = key % n_keys as u32;
@@ -1596,7 +1602,10 @@ impl Forest {
                     let shadow_only = !run.seen[k];
                     if shadow_only {
                         let Some(sw) = sweep.filter(|_| run.shade[k]) else { continue };
-                        if !cone.may_see_shadow(c, 0.75 * h, sw.away, sw.length(h)) {
+                        let (r, len) = (0.75 * h, sw.length(h));
+                        if !(far_box.may_take(c, r, len, box_margin)
+                            && cone.may_see_shadow(c, r, sw.away, len))
+                        {
                             continue;
                         }
                     }

@@ -13,7 +13,7 @@ mod groups;
 mod lanes;
 pub mod scene;
 
-pub use camera::{Camera, Mat4, ViewCone};
+pub use camera::{Camera, Mat4, ShadowBox, ViewCone};
 pub use driver::{
     Bucket, Forest, ForestError, FrameData, FrameStats, Instance, LodSettings, MAX_NEAR_POINTS,
     NEAR_REACH, REGROUP_FADE, REGROUP_TRAVEL, SHADOW_COARSER, SceneWind, SpeciesRuntime, TreeInfo,

@@ -3,8 +3,8 @@
 
 use sylva_forest::driver::SIM_MARGIN;
 use sylva_forest::{
-    Camera, Forest, FrameData, LodSettings, SceneSpec, blend_levels, hysteresis, lod_cap,
-    lod_coordinate, next_lod_state, past_cap_fraction, shadow_level,
+    Camera, Forest, FrameData, LodSettings, SceneSpec, ShadowBox, blend_levels, hysteresis,
+    lod_cap, lod_coordinate, next_lod_state, past_cap_fraction, shadow_level,
 };
 use sylva_sway::{LANES, STATE_BYTES, SwayBatch};
 
@@ -751,10 +751,14 @@ fn a_small_tree_at_full_detail_simulates_a_coarser_prefix_and_holds_its_twigs_wi
     }
 }
 
-/// One aspen on flat ground and a camera looking straight down at the ground beside it:
-/// the tree is out of view, the shadow of its crown in it when the sun stands 20° up on
-/// the far side of the tree. Returns the forest's frame.
-fn lone_tree_beside_the_view(sun: [f32; 3], shadows: bool) -> FrameData {
+/// One aspen on flat ground, lit by a sun in direction `sun` (with or without shadows),
+/// and a camera that `place` puts from the tree's foot and height. Returns the forest,
+/// the camera and its frame.
+fn lone_tree(
+    sun: [f32; 3],
+    shadows: bool,
+    place: impl Fn([f32; 3], f32) -> Camera,
+) -> (Forest, Camera, FrameData) {
     let text = format!(
         r#"
         name = "beside"
@@ -771,20 +775,28 @@ fn lone_tree_beside_the_view(sun: [f32; 3], shadows: bool) -> FrameData {
     );
     let spec = SceneSpec::from_toml("beside.toml", &text).expect("scene");
     let mut forest = Forest::new(&spec).expect("forest");
-    let [x, y, _] = forest.crowns()[0];
+    let foot = forest.crowns()[0];
     let h = forest.tree_info(0).expect("tree").height;
+    let camera = place(foot, h);
+    forest.step(1.0 / 30.0);
+    let mut f = FrameData::default();
+    forest.frame(&camera, 4.0 / 3.0, &mut f);
+    (forest, camera, f)
+}
+
+/// [`lone_tree`] with a camera looking straight down at the ground beside the tree: the
+/// tree is out of view, the shadow of its crown in it when the sun stands 20° up on the
+/// far side of the tree.
+fn lone_tree_beside_the_view(sun: [f32; 3], shadows: bool) -> FrameData {
     // 2.2 heights along +x from the trunk, 1.2 heights up: the crown's sphere lies 53° off
     // the view axis, the image's corners 31°.
-    let camera = Camera {
+    let (_, _, f) = lone_tree(sun, shadows, |[x, y, _], h| Camera {
         eye: [x + 2.2 * h, y, 1.2 * h],
         target: [x + 2.2 * h, y + 0.01, 0.0],
         fov_deg: 40.0,
         near: 0.5,
         far: 2000.0,
-    };
-    forest.step(1.0 / 30.0);
-    let mut f = FrameData::default();
-    forest.frame(&camera, 4.0 / 3.0, &mut f);
+    });
     f
 }
 
@@ -807,4 +819,46 @@ fn a_tree_out_of_view_whose_shadow_falls_in_it_is_drawn_into_the_shadow_map_only
         assert_eq!((f.stats.drawn, f.stats.shadow_only), (0, 0), "sun {sun:?}, {shadows}");
         assert!(f.instances.is_empty() && f.buckets.is_empty());
     }
+}
+
+/// Nothing outside the shadow map's far cascade takes a shadow, so a tree out of view
+/// whose shadow falls in view only there is not drawn into the map either. A camera 2 m up
+/// looking along the ground towards a point 20 m ahead: the far cascade covers the first
+/// 160 m of the view. The aspen stands 800 m ahead and 510 m to the left, just outside the
+/// image's corners; with the sun 20° up on its left, its crown's shadow reaches into the
+/// view, 800 m out, far beyond the cascade.
+#[test]
+fn a_tree_whose_shadow_falls_in_view_beyond_the_shadow_map_is_not_drawn_into_it() {
+    let (e, z) = (20f32.to_radians().cos(), 20f32.to_radians().sin());
+    let sun = [-e, 0.0, z];
+    let (forest, camera, f) = lone_tree(sun, true, |[x, y, _], _| Camera {
+        eye: [x + 510.0, y - 800.0, 2.0],
+        target: [x + 510.0, y - 780.0, 1.0],
+        fov_deg: 40.0,
+        near: 0.5,
+        far: 2000.0,
+    });
+    // What the frame is tested against holds: the crown is out of view, its shadow in it,
+    // and it casts outside the far cascade.
+    let [x, y, ground] = forest.crowns()[0];
+    let h = forest.tree_info(0).expect("tree").height;
+    let (c, r) = ([x, y, ground + 0.5 * h], 0.75 * h);
+    let cone = camera.cone(4.0 / 3.0);
+    let sweep = 1.5 * h / z;
+    assert!(!cone.may_see(c, r), "the crown is out of view");
+    assert!(cone.may_see_shadow(c, r, [e, 0.0, -z], sweep), "its shadow falls in view");
+    let far = ShadowBox::new(&camera, 4.0 / 3.0, camera.shadow_reach().1, sun);
+    assert!(!far.may_take(c, r, sweep, 0.0), "it casts outside the far cascade");
+    assert_eq!((f.stats.drawn, f.stats.shadow_only), (0, 0));
+    assert!(f.instances.is_empty() && f.buckets.is_empty());
+    // Nearer, 100 m ahead and 80 m to the left (still out of view), its shadow falls
+    // within the cascade, and it is drawn into the map.
+    let (_, _, f) = lone_tree(sun, true, |[x, y, _], _| Camera {
+        eye: [x + 80.0, y - 100.0, 2.0],
+        target: [x + 80.0, y - 80.0, 1.0],
+        fov_deg: 40.0,
+        near: 0.5,
+        far: 2000.0,
+    });
+    assert_eq!((f.stats.drawn, f.stats.shadow_only), (0, 1));
 }

@@ -12,14 +12,14 @@
 //! the same skinning and flutter, projected with the sun's matrix, cards turned towards the
 //! sun, leaves alpha-tested (`fs_shadow`) so light falls between them.
 
-use sylva_forest::Camera;
+use sylva_forest::{Camera, ShadowBox};
 
 use crate::layout::{BRANCH_ATTRIBUTES, BranchVertex, LEAF_ATTRIBUTES, LeafVertex};
 use crate::layout::{instance_layout, vertex_layout};
 use crate::shared::{DEPTH, GlobalsBinding, PipelineSpec, pipeline};
 
-/// Side of each cascade of the shadow map, texels.
-pub const SHADOW_SIZE: u32 = 1024;
+/// Side of each cascade of the shadow map, texels (the forest culls casters for it).
+pub const SHADOW_SIZE: u32 = ShadowBox::TEXELS;
 
 /// Cascades of the shadow map, side by side.
 pub const CASCADES: u32 = 2;
@@ -129,16 +129,16 @@ impl ShadowPass {
     }
 
     /// How far along the view the far cascade reaches for `camera`, m: four times the near
-    /// one, within 160 … 1200 m.
+    /// one, within 160 … 1200 m ([`Camera::shadow_reach`], which the forest culls shadow
+    /// casters by).
     pub fn far_reach(camera: &Camera) -> f32 {
-        (4.0 * ShadowPass::reach(camera)).min(1200.0)
+        camera.shadow_reach().1
     }
 
     /// How far along the view the near cascade reaches for `camera`, m: 1.2 × the distance
     /// to the point looked at, within 40 … 250 m.
     pub fn reach(camera: &Camera) -> f32 {
-        let d = (0..3).map(|k| (camera.target[k] - camera.eye[k]).powi(2)).sum::<f32>().sqrt();
-        (1.2 * d).clamp(40.0, 250.0)
+        camera.shadow_reach().0
     }
 
     /// World → the near cascade's clip space for `camera` (image `aspect`) and the unit
@@ -158,39 +158,16 @@ impl ShadowPass {
         reach: f32,
     ) -> [[f32; 4]; 4] {
         let dot = |a: [f32; 3], b: [f32; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-        let norm = |a: [f32; 3]| {
-            let n = dot(a, a).sqrt().max(1e-9);
-            [a[0] / n, a[1] / n, a[2] / n]
-        };
-        let cross = |a: [f32; 3], b: [f32; 3]| {
-            [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-        };
-        let fwd = norm([
-            camera.target[0] - camera.eye[0],
-            camera.target[1] - camera.eye[1],
-            camera.target[2] - camera.eye[2],
-        ]);
-        // Sphere around the view's first `reach` metres (half-depth, corner spread).
-        let tan_v = (0.5 * camera.fov_deg.to_radians()).tan();
-        let radius = reach * (0.25 + tan_v * tan_v * (1.0 + aspect * aspect)).sqrt();
-        let centre = [
-            camera.eye[0] + fwd[0] * 0.5 * reach,
-            camera.eye[1] + fwd[1] * 0.5 * reach,
-            camera.eye[2] + fwd[2] * 0.5 * reach,
-        ];
-        let f = norm([-sun[0], -sun[1], -sun[2]]);
-        let r = if f[0].abs() + f[1].abs() < 1e-4 {
-            [1.0, 0.0, 0.0]
-        } else {
-            norm(cross(f, [0.0, 0.0, 1.0]))
-        };
-        let u = cross(r, f);
+        // Sphere around the view's first `reach` metres (half-depth, corner spread), seen
+        // along the sun's rays: the box the forest culls casters by.
+        let b = ShadowBox::new(camera, aspect, reach, sun);
+        let (centre, radius, r, u, f) = (b.centre, b.radius, b.right, b.up, b.along);
         // Snap the centre to whole texels across the sun's view.
         let texel = 2.0 * radius / SHADOW_SIZE as f32;
         let cr = (dot(centre, r) / texel).round() * texel;
         let cu = (dot(centre, u) / texel).round() * texel;
         let cf = dot(centre, f);
-        let depth = radius + 150.0;
+        let depth = radius + ShadowBox::BEYOND;
         let zs = 1.0 / (2.0 * depth);
         // Column-major: m[column][row].
         [
