@@ -831,13 +831,17 @@ fn a_tree_out_of_view_whose_shadow_falls_in_it_is_drawn_into_the_shadow_map_only
 fn a_tree_whose_shadow_falls_in_view_beyond_the_shadow_map_is_not_drawn_into_it() {
     let (e, z) = (20f32.to_radians().cos(), 20f32.to_radians().sin());
     let sun = [-e, 0.0, z];
-    let (forest, camera, f) = lone_tree(sun, true, |[x, y, _], _| Camera {
-        eye: [x + 510.0, y - 800.0, 2.0],
-        target: [x + 510.0, y - 780.0, 1.0],
-        fov_deg: 40.0,
-        near: 0.5,
-        far: 2000.0,
-    });
+    // The camera with the tree `ahead` m ahead and `left` m to the left.
+    let along_the_ground = |ahead: f32, left: f32| {
+        move |[x, y, _]: [f32; 3], _| Camera {
+            eye: [x + left, y - ahead, 2.0],
+            target: [x + left, y - ahead + 20.0, 1.0],
+            fov_deg: 40.0,
+            near: 0.5,
+            far: 2000.0,
+        }
+    };
+    let (forest, camera, f) = lone_tree(sun, true, along_the_ground(800.0, 510.0));
     // What the frame is tested against holds: the crown is out of view, its shadow in it,
     // and it casts outside the far cascade.
     let [x, y, ground] = forest.crowns()[0];
@@ -853,12 +857,6 @@ fn a_tree_whose_shadow_falls_in_view_beyond_the_shadow_map_is_not_drawn_into_it(
     assert!(f.instances.is_empty() && f.buckets.is_empty());
     // Nearer, 100 m ahead and 80 m to the left (still out of view), its shadow falls
     // within the cascade, and it is drawn into the map.
-    let (_, _, f) = lone_tree(sun, true, |[x, y, _], _| Camera {
-        eye: [x + 80.0, y - 100.0, 2.0],
-        target: [x + 80.0, y - 80.0, 1.0],
-        fov_deg: 40.0,
-        near: 0.5,
-        far: 2000.0,
-    });
+    let (_, _, f) = lone_tree(sun, true, along_the_ground(100.0, 80.0));
     assert_eq!((f.stats.drawn, f.stats.shadow_only), (0, 1));
 }
