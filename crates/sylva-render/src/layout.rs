@@ -158,6 +158,10 @@ pub struct GroundVertex {
     pub crown_spacing: f32,
     /// Mean linear albedo of the painted woodland's crowns.
     pub canopy: [f32; 3],
+    /// Where the painted woodland's crowns start to stand, m from the forest's centre, and
+    /// the width over which they thicken to full ([`crate::passes::ground::Woodland`]'s
+    /// `start` and `ramp`).
+    pub woodland_edge: [f32; 2],
 }
 
 /// `FarSpecies` in far.wgsl: one species' impostor (uniform).
@@ -233,13 +237,14 @@ pub const LEAF_ATTRIBUTES: [wgpu::VertexAttribute; 10] = [
 ];
 
 /// `GroundIn`.
-pub const GROUND_ATTRIBUTES: [wgpu::VertexAttribute; 6] = [
+pub const GROUND_ATTRIBUTES: [wgpu::VertexAttribute; 7] = [
     attr!(GroundVertex, position, Float32x3, 0),
     attr!(GroundVertex, normal, Float32x3, 1),
     attr!(GroundVertex, open, Float32, 2),
     attr!(GroundVertex, woodland, Float32, 3),
     attr!(GroundVertex, crown_spacing, Float32, 4),
     attr!(GroundVertex, canopy, Float32x3, 5),
+    attr!(GroundVertex, woodland_edge, Float32x2, 6),
 ];
 
 /// The per-instance buffer layout of every tree pipeline.

@@ -486,8 +486,16 @@ fn the_level_overlay_tints_each_tree_by_the_level_it_is_drawn_at() {
     assert!(warm > warm_before + 200, "mesh levels tinted warm: {warm} vs {warm_before}");
 }
 
-#[test]
-fn woodland_around_the_forest_is_painted_past_its_meadow_and_nowhere_else() {
+/// The small scene bare and with a woodland surround, and a ground point (with the unit
+/// direction to it from the forest's centre) 2.5 × the woodland's start out, where the
+/// ground is all woodland.
+fn woodland_scenes() -> (
+    SceneSpec,
+    SceneSpec,
+    sylva_render::passes::ground::Woodland,
+    [f32; 2],
+    impl Fn(f32) -> [f32; 3],
+) {
     use sylva_forest::Surround;
     use sylva_render::passes::ground::Woodland;
     let open = SceneSpec::builtin("small").expect("small scene");
@@ -499,14 +507,21 @@ fn woodland_around_the_forest_is_painted_past_its_meadow_and_nowhere_else() {
         spacing: open.spacing,
         shares: vec![1.0],
     };
-    // A direction in which the ground 2.5 × the woodland's start out is all woodland.
     let reach = 2.5 * woodland.start;
     let a = (0..64)
         .map(|k| k as f32 / 64.0 * std::f32::consts::TAU)
         .find(|a| woodland.share(reach * a.cos(), reach * a.sin()) > 0.99)
         .expect("woodland in some direction");
     let (c, s) = (a.cos(), a.sin());
-    let ground = |r: f32| [r * c, r * s, forest.terrain.height(r * c, r * s)];
+    let terrain = forest.terrain;
+    let ground = move |r: f32| [r * c, r * s, terrain.height(r * c, r * s)];
+    (open, wooded, woodland, [c, s], ground)
+}
+
+#[test]
+fn woodland_around_the_forest_is_painted_past_its_meadow_and_nowhere_else() {
+    let (open, wooded, woodland, _, ground) = woodland_scenes();
+    let reach = 2.5 * woodland.start;
     // From high above the forest (over its tallest crowns), looking out along that direction
     // and down at the woodland, the meadow in the lower part of the view.
     let camera = Camera {
@@ -528,6 +543,47 @@ fn woodland_around_the_forest_is_painted_past_its_meadow_and_nowhere_else() {
     let (m_open, m_wood) = (brightness(&img_open, meadow_px), brightness(&img_wood, meadow_px));
     assert!((m_open - m_wood).abs() < 1.0, "meadow {m_wood:.1} against {m_open:.1}");
     assert!((brightness(&img_open, (W / 2, 3)) - brightness(&img_wood, (W / 2, 3))).abs() < 1.0);
+}
+
+#[test]
+fn painted_woodland_crowns_stand_up_in_front_of_the_meadow_behind_them() {
+    // A canopy is crowns standing up from the ground. Looked at from outside the woodland,
+    // low over it, towards the forest, the crowns at the woodland's edge hide part of the
+    // meadow behind them (paint flat on the ground would leave every meadow point as it
+    // is), while looked at from above the same meadow points show.
+    let (open, wooded, woodland, [c, s], ground) = woodland_scenes();
+    let spacing = open.spacing;
+    let terrain = Forest::new(&open).expect("forest").terrain;
+    // Meadow points one to four spacings inside the woodland's start, across a stretch of
+    // eight spacings of it.
+    let meadow: Vec<[f32; 3]> = (1..=4)
+        .flat_map(|k| (-4..=4).map(move |l| (k, l)))
+        .map(|(k, l)| {
+            let (r, side) = (woodland.start - k as f32 * spacing, l as f32 * spacing);
+            let (x, y) = (r * c - side * s, r * s + side * c);
+            [x, y, terrain.height(x, y)]
+        })
+        .collect();
+    let target = ground(woodland.start - 2.5 * spacing);
+    // Share of the meadow points whose pixel the woodland changes, seen from `elevation_deg`
+    // above the target, 120 m out beyond the woodland's edge.
+    let hidden = |elevation_deg: f32| {
+        let (e, d) = (elevation_deg.to_radians(), 120.0);
+        let eye =
+            [target[0] + d * e.cos() * c, target[1] + d * e.cos() * s, target[2] + d * e.sin()];
+        let camera = Camera { eye, target, fov_deg: 50.0, near: 0.5, far: 8000.0 };
+        let (bare, ..) = render_spec(&open, Some(camera));
+        let (wood, ..) = render_spec(&wooded, Some(camera));
+        let changed = meadow
+            .iter()
+            .map(|&p| pixel_of(&camera, p).expect("meadow point in view"))
+            .filter(|&px| (brightness(&bare, px) - brightness(&wood, px)).abs() > 4.0)
+            .count();
+        changed as f64 / meadow.len() as f64
+    };
+    let (above, low) = (hidden(75.0), hidden(12.0));
+    assert!(above < 0.1, "from above, {:.0} % of the meadow points changed", 100.0 * above);
+    assert!(low > 0.3, "low over the woodland, {:.0} % of the meadow points hidden", 100.0 * low);
 }
 
 /// One tree, always an impostor (h₀ = 100), in calm air without shadows, seen by each of

@@ -221,6 +221,7 @@ fn ground_mesh(
     let paint = |x: f32, y: f32| woodland.map_or(0.0, |(w, _)| w.share(x, y));
     let crown_spacing = woodland.map_or(1.0, |(w, _)| w.spacing);
     let canopy = woodland.map_or([0.0; 3], |(_, c)| c);
+    let woodland_edge = woodland.map_or([0.0; 2], |(w, _)| [w.start, w.ramp]);
     let n = CELLS;
     let grid = CrownGrid::new(crowns);
     let mut verts = Vec::with_capacity(((n + 1) * (n + 1)) as usize);
@@ -239,6 +240,7 @@ fn ground_mesh(
                 woodland: paint(x, y),
                 crown_spacing,
                 canopy,
+                woodland_edge,
             });
         }
     }
@@ -268,6 +270,7 @@ fn ground_mesh(
             woodland: paint(x, y),
             crown_spacing,
             canopy,
+            woodland_edge,
         });
     }
     let m = edge.len() as u32;

@@ -1,8 +1,9 @@
 // Ground: the terrain mesh, grass and soil mixed by value noise, lit (trees' shadows from
 // the shadow map, the sky it sees past the crowns above) and fogged into the sky at the
 // horizon. Around a forest with a woodland surround, distant woodland is painted on it:
-// crowns on a jittered grid at the given spacing, each a dome lit by the sun, with shaded
-// gaps between them.
+// crowns on a jittered grid at the given spacing, each a spheroid lit by the sun, with
+// shaded gaps between them, marched as a height field along the view ray so that they
+// stand up from the ground and hide one another.
 
 struct GroundIn {
     @location(0) position: vec3<f32>,
@@ -11,6 +12,7 @@ struct GroundIn {
     @location(3) woodland: f32,
     @location(4) crown_spacing: f32,
     @location(5) canopy: vec3<f32>,
+    @location(6) woodland_edge: vec2<f32>,
 };
 
 struct GroundOut {
@@ -21,6 +23,7 @@ struct GroundOut {
     @location(3) woodland: f32,
     @location(4) @interpolate(flat) crown_spacing: f32,
     @location(5) @interpolate(flat) canopy: vec3<f32>,
+    @location(6) @interpolate(flat) woodland_edge: vec2<f32>,
 };
 
 @vertex
@@ -33,6 +36,7 @@ fn vs_main(v: GroundIn) -> GroundOut {
     out.woodland = v.woodland;
     out.crown_spacing = v.crown_spacing;
     out.canopy = v.canopy;
+    out.woodland_edge = v.woodland_edge;
     return out;
 }
 
@@ -51,50 +55,156 @@ fn noise2(p: vec2<f32>) -> f32 {
     return mix(a, b, u.y);
 }
 
-// Canopy of the painted woodland at `p`: crowns `s` m apart of mean albedo `albedo` (the
-// forest's own impostors'), resolved to `detail` (1: each crown drawn, 0: their mean, for
-// crowns a few pixels across or less). Returns the lit colour.
-fn canopy(p: vec2<f32>, s: f32, albedo: vec3<f32>, detail: f32) -> vec3<f32> {
-    // Gaps between crowns: the shaded floor under the canopy, a third of the crowns' albedo.
-    let gap = albedo * 0.35 * lighting(vec3<f32>(0.0, 0.0, 1.0), 0.0);
+// The painted woodland's crowns, in spacings: a jittered grid of cells one spacing wide,
+// each with a crown, a spheroid of radius 0.6–0.75 whose centre stands 1.1 above the
+// ground and whose vertical half-axis is 1.0, both scaled by 0.85–1.15 from crown to
+// crown (so it reaches from about 0.1 to 2.4 spacings up). A crown stands where a hash of
+// its cell is below the woodland's radial edge at its centre, so the woodland thins out
+// crown by crown at its edge.
+struct Crown {
+    id: vec2<f32>,
+    // Its centre: across the ground, and height above it.
+    across: vec2<f32>,
+    up: f32,
+    radius: f32,
+    half_height: f32,
+};
+
+// Tallest a painted crown reaches, spacings.
+const CROWN_TOP: f32 = 2.415;
+
+// Where the woodland's crowns stand, spacings: from `start` out from the forest's centre,
+// thickening to full over `ramp` (the radial edge of `Woodland::share`; its clearings,
+// hundreds of metres across, are not cut crown by crown but faded).
+struct Edge {
+    start: f32,
+    ramp: f32,
+};
+
+// The crown of cell `id`, and whether one stands there.
+fn crown_of(id: vec2<f32>, edge: Edge) -> Crown {
+    var c: Crown;
+    c.id = id;
+    c.across = id + 0.2 + 0.6 * vec2<f32>(hash2(id), hash2(id + vec2<f32>(17.0, 31.0)));
+    let scale = 0.85 + 0.3 * hash2(id + vec2<f32>(13.0, 29.0));
+    c.radius = 0.6 + 0.15 * hash2(id + vec2<f32>(5.0, 3.0));
+    c.up = 1.1 * scale;
+    c.half_height = scale;
+    // No crown: radius 0, which no ray meets.
+    if (hash2(id + vec2<f32>(23.0, 41.0)) >= smoothstep(edge.start, edge.start + edge.ramp, length(c.across))) {
+        c.radius = 0.0;
+    }
+    return c;
+}
+
+// Where the ray `o + v d` (v ≥ 0) enters crown `c`: v, or a negative number if it misses.
+fn enter_crown(o: vec3<f32>, d: vec3<f32>, c: Crown) -> f32 {
+    if (c.radius <= 0.0) {
+        return -1.0;
+    }
+    // In the crown's frame scaled to a unit sphere.
+    let scale = vec3<f32>(c.radius, c.radius, c.half_height);
+    let p = (o - vec3<f32>(c.across, c.up)) / scale;
+    let e = d / scale;
+    let a = dot(e, e);
+    let b = dot(p, e);
+    let k = dot(p, p) - 1.0;
+    let disc = b * b - a * k;
+    if (disc < 0.0) {
+        return -1.0;
+    }
+    let v = (-b - sqrt(disc)) / a;
+    if (v >= 0.0) {
+        return v;
+    }
+    // Starting inside the crown.
+    return select(-1.0, 0.0, k <= 0.0);
+}
+
+// Canopy of the painted woodland seen along the ray from the eye to ground point `world`:
+// crowns `s` m apart (see `Crown`) of mean albedo `albedo` (the forest's own impostors'),
+// standing past `edge` (m) and faded in clearings to the share `share`, over `ground` (the
+// lit ground where no crown stands). The view ray is met with the crowns it passes,
+// so seen at a glancing angle they stand up and hide the gaps between them, as a canopy
+// does. Crowns and floor a few pixels across or less are drawn as their mean: `footprint`
+// is the metres a pixel spans on the ground point, `pixel_angle` the angle it spans
+// (radians), which sizes the crowns.
+// Returns the lit colour, and where along the ray from the eye to the ground point it lies
+// (0 to 1).
+fn canopy(world: vec3<f32>, s: f32, albedo: vec3<f32>, share: f32, edge_m: vec2<f32>, ground: vec3<f32>, footprint: f32, pixel_angle: f32) -> vec4<f32> {
+    // The floor under the canopy: shaded, a third of the crowns' albedo.
+    let gap = mix(ground, albedo * 0.35 * lighting(vec3<f32>(0.0, 0.0, 1.0), 0.0), share);
     // The mean, for crowns too small to draw: far woodland is seen at a glancing angle,
     // where crowns hide the gaps between them and show their sunlit upper sides.
-    let mean = 0.85 * albedo * lighting(normalize(vec3<f32>(0.0, 0.0, 1.0) + 0.4 * globals.sun_dir), 1.0);
-    if (detail <= 0.0) {
-        return mean;
+    let mean = mix(ground, 0.85 * albedo * lighting(normalize(vec3<f32>(0.0, 0.0, 1.0) + 0.4 * globals.sun_dir), 1.0), share);
+    // In spacings, heights above the ground point: the ray from where it comes down
+    // through the crowns' tops (or from the eye, if that is lower) to the ground point.
+    let to_eye = (globals.eye - world) / s;
+    let length_to_eye = max(length(to_eye), 1e-6);
+    let back = to_eye / length_to_eye;
+    // How fully a crown `r` spacings from the eye is resolved (1: each crown drawn, 0:
+    // the mean).
+    let per_spacing = pixel_angle;
+    let floor_detail = 1.0 - smoothstep(0.12 * s, 0.4 * s, footprint);
+    let start = min(CROWN_TOP / max(back.z, 1e-6), 0.999 * length_to_eye);
+    let start_detail = 1.0 - smoothstep(0.12, 0.4, per_spacing * (length_to_eye - start));
+    if (back.z <= 1e-4 || start_detail <= 0.0) {
+        return vec4<f32>(mix(mean, gap, floor_detail), 1.0);
     }
-    // Nearest crown centre on a jittered grid of cells `s` wide.
-    let q = p / s;
-    let cell = floor(q);
-    var best = 1e9;
-    var offset = vec2<f32>(0.0);
-    var id = vec2<f32>(0.0);
-    for (var j = -1; j <= 1; j++) {
-        for (var i = -1; i <= 1; i++) {
-            let c = cell + vec2<f32>(f32(i), f32(j));
-            let centre = c + 0.2 + 0.6 * vec2<f32>(hash2(c), hash2(c + vec2<f32>(17.0, 31.0)));
-            let d = q - centre;
-            let dd = dot(d, d);
-            if (dd < best) {
-                best = dd;
-                offset = d;
-                id = c;
+    let q0 = world.xy / s;
+    let edge = Edge(edge_m.x / s, max(edge_m.y / s, 1e-3));
+    // What clearings leave of the woodland here (1 but in clearings).
+    let radial = smoothstep(edge.start, edge.start + edge.ramp, length(q0));
+    let clearing = select(1.0, clamp(share / max(radial, 1e-3), 0.0, 1.0), length(q0) > edge.start + edge.ramp);
+    let o = vec3<f32>(q0, 0.0) + back * start;
+    let d = -back;
+    // Every crown the ray can meet has its centre in a cell next to the cell of a point
+    // of the ray within half a spacing across of where it enters the crown: visit the
+    // ray's points half a spacing apart across the ground, and the nine cells about
+    // each, until past the nearest crown met.
+    let across = max(length(d.xy), 1e-6);
+    let count = min(i32(ceil(start * across / 0.5)), 64);
+    var nearest = 1e9;
+    var hit: Crown;
+    var last = vec2<f32>(1e9);
+    for (var k = 0; k <= count; k++) {
+        let v = min(f32(k) * 0.5 / across, start);
+        if (v > nearest + 0.5 / across) {
+            break;
+        }
+        let cell = floor(o.xy + d.xy * v);
+        if (all(cell == last)) {
+            continue;
+        }
+        last = cell;
+        for (var j = -1; j <= 1; j++) {
+            for (var i = -1; i <= 1; i++) {
+                let c = crown_of(cell + vec2<f32>(f32(i), f32(j)), edge);
+                let t = enter_crown(o, d, c);
+                if (t >= 0.0 && t < nearest) {
+                    nearest = t;
+                    hit = c;
+                }
             }
         }
     }
-    // A crown of radius 0.6–0.75 spacings, a dome: its normal tilts out towards the rim,
-    // and its rim sees less sky. Brightness and hue vary from crown to crown.
-    let radius = 0.6 + 0.15 * hash2(id + vec2<f32>(5.0, 3.0));
-    let t = sqrt(best) / radius;
-    var lit = gap;
-    if (t < 1.0) {
-        let up = sqrt(1.0 - t * t);
-        let n = normalize(vec3<f32>(offset / radius, up));
-        let h = hash2(id + vec2<f32>(11.0, 7.0));
-        let tint = vec3<f32>(0.8 + 0.4 * h, 0.85 + 0.3 * hash2(id + vec2<f32>(2.0, 9.0)), 0.9 + 0.2 * h);
-        lit = albedo * tint * lighting(n, 1.0) * (0.55 + 0.45 * up);
+    if (nearest > start) {
+        // No crown met; past the points visited, the mean.
+        let covered = f32(count) * 0.5 / across >= start;
+        return vec4<f32>(mix(mean, gap, select(0.0, floor_detail, covered)), 1.0);
     }
-    return mix(mean, lit, detail);
+    // Lit by the spheroid's normal there; w from -1 (its base) to 1 (its top): the
+    // lower side and the rim see less sky than the top.
+    let p = o + d * nearest - vec3<f32>(hit.across, hit.up);
+    let w = clamp(p.z / hit.half_height, -1.0, 1.0);
+    let n = normalize(vec3<f32>(p.xy / (hit.radius * hit.radius), p.z / (hit.half_height * hit.half_height)));
+    let h = hash2(hit.id + vec2<f32>(11.0, 7.0));
+    let tint = vec3<f32>(0.8 + 0.4 * h, 0.85 + 0.3 * hash2(hit.id + vec2<f32>(2.0, 9.0)), 0.9 + 0.2 * h);
+    let open = select(0.55 + 0.3 * w, 0.55 + 0.45 * w, w >= 0.0);
+    let lit = mix(gap, albedo * tint * lighting(n, 1.0) * open, clearing);
+    let r = length_to_eye - start + nearest;
+    let detail = 1.0 - smoothstep(0.12, 0.4, per_spacing * r);
+    return vec4<f32>(mix(mean, lit, detail), r / length_to_eye);
 }
 
 @fragment
@@ -102,6 +212,7 @@ fn fs_main(in: GroundOut) -> @location(0) vec4<f32> {
     let p = in.world.xy;
     // Metres a pixel spans here (in uniform control flow, before any branch).
     let footprint = length(fwidth(p));
+    let pixel_angle = length(fwidth(normalize(in.world - globals.eye)));
     let n = 0.55 * noise2(p * 0.08) + 0.3 * noise2(p * 0.5) + 0.15 * noise2(p * 3.0);
     let grass = vec3<f32>(0.07, 0.15, 0.035);
     let dry = vec3<f32>(0.17, 0.16, 0.07);
@@ -110,10 +221,15 @@ fn fs_main(in: GroundOut) -> @location(0) vec4<f32> {
     // Under the crowns the floor sees less sky: darker than the clearing, and, past the
     // shadow map's reach, shaded by the canopy it lies under.
     var lit = albedo * lighting(normal, sun_visibility(in.world, normal)) * in.open;
-    if (in.woodland > 0.0) {
-        let s = in.crown_spacing;
-        let detail = 1.0 - smoothstep(0.12 * s, 0.4 * s, footprint);
-        lit = mix(lit, canopy(p, s, in.canopy, detail), in.woodland);
+    // Painted woodland where the ground is woodland, and on the meadow where the view ray
+    // passes over woodland crowns before it (the ray's farthest point from the forest's
+    // centre below the crowns' tops is one of its ends).
+    let s = in.crown_spacing;
+    let over = in.world + (globals.eye - in.world) * min(CROWN_TOP * s / max(globals.eye.z - in.world.z, 1e-3), 1.0);
+    if (in.woodland > 0.0 || (in.woodland_edge.x > 0.0 && length(over.xy) > in.woodland_edge.x - s)) {
+        let c = canopy(in.world, s, in.canopy, in.woodland, in.woodland_edge, lit, footprint, pixel_angle);
+        // Fogged where the ray meets the crown.
+        return finish(apply_fog(c.rgb, mix(globals.eye, in.world, c.a)));
     }
     return finish(apply_fog(lit, in.world));
 }
