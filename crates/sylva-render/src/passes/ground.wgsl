@@ -148,7 +148,10 @@ fn canopy(world: vec3<f32>, s: f32, albedo: vec3<f32>, share: f32, edge_m: vec2<
     let floor_detail = 1.0 - smoothstep(0.12 * s, 0.4 * s, footprint);
     let start = min(CROWN_TOP / max(back.z, 1e-6), 0.999 * length_to_eye);
     let start_detail = 1.0 - smoothstep(0.12, 0.4, per_spacing * (length_to_eye - start));
-    if (back.z <= 1e-4 || start_detail <= 0.0) {
+    // Nor where the aerial perspective leaves less than a twentieth of the nearest crown
+    // the ray can meet (the far woodland under the haze near the horizon).
+    let haze = 1.0 - exp(-globals.fog_density * (length_to_eye - start) * s);
+    if (back.z <= 1e-4 || start_detail <= 0.0 || haze > 0.95) {
         return vec4<f32>(mix(mean, gap, floor_detail), 1.0);
     }
     let q0 = world.xy / s;
