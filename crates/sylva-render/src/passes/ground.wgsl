@@ -56,9 +56,9 @@ fn noise2(p: vec2<f32>) -> f32 {
 }
 
 // The painted woodland's crowns, in spacings: a jittered grid of cells one spacing wide,
-// each with a crown, a spheroid of radius 0.6–0.75 whose centre stands 1.1 above the
-// ground and whose vertical half-axis is 1.0, both scaled by 0.85–1.15 from crown to
-// crown (so it reaches from about 0.1 to 2.4 spacings up). A crown stands where a hash of
+// each with a crown, a spheroid of radius 0.6–0.75 whose centre stands 1.05 above the
+// ground and whose vertical half-axis is 0.85, both scaled by 0.85–1.15 from crown to
+// crown (so it reaches from about 0.2 to 2.2 spacings up: 1.4 to 15 m at 7 m spacing). A crown stands where a hash of
 // its cell is below the woodland's radial edge at its centre, so the woodland thins out
 // crown by crown at its edge.
 struct Crown {
@@ -71,7 +71,7 @@ struct Crown {
 };
 
 // Tallest a painted crown reaches, spacings.
-const CROWN_TOP: f32 = 2.415;
+const CROWN_TOP: f32 = 2.185;
 
 // Where the woodland's crowns stand, spacings: from `start` out from the forest's centre,
 // thickening to full over `ramp` (the radial edge of `Woodland::share`; its clearings,
@@ -88,8 +88,8 @@ fn crown_of(id: vec2<f32>, edge: Edge) -> Crown {
     c.across = id + 0.2 + 0.6 * vec2<f32>(hash2(id), hash2(id + vec2<f32>(17.0, 31.0)));
     let scale = 0.85 + 0.3 * hash2(id + vec2<f32>(13.0, 29.0));
     c.radius = 0.6 + 0.15 * hash2(id + vec2<f32>(5.0, 3.0));
-    c.up = 1.1 * scale;
-    c.half_height = scale;
+    c.up = 1.05 * scale;
+    c.half_height = 0.85 * scale;
     // No crown: radius 0, which no ray meets.
     if (hash2(id + vec2<f32>(23.0, 41.0)) >= smoothstep(edge.start, edge.start + edge.ramp, length(c.across))) {
         c.radius = 0.0;
@@ -156,9 +156,12 @@ fn canopy(world: vec3<f32>, s: f32, albedo: vec3<f32>, share: f32, edge_m: vec2<
     }
     let q0 = world.xy / s;
     let edge = Edge(edge_m.x / s, max(edge_m.y / s, 1e-3));
-    // What clearings leave of the woodland here (1 but in clearings).
+    // What clearings leave of the woodland here (1 but in clearings): the share over its
+    // radial edge, taken smoothly from the middle of the edge on (nearer the start both
+    // are small, and their ratio is the mesh's interpolation more than the clearings).
     let radial = smoothstep(edge.start, edge.start + edge.ramp, length(q0));
-    let clearing = select(1.0, clamp(share / max(radial, 1e-3), 0.0, 1.0), length(q0) > edge.start + edge.ramp);
+    let ratio = clamp(share / max(radial, 1e-3), 0.0, 1.0);
+    let clearing = mix(1.0, ratio, smoothstep(edge.start + 0.5 * edge.ramp, edge.start + edge.ramp, length(q0)));
     let o = vec3<f32>(q0, 0.0) + back * start;
     let d = -back;
     // Every crown the ray can meet has its centre in a cell next to the cell of a point
@@ -179,10 +182,15 @@ fn canopy(world: vec3<f32>, s: f32, albedo: vec3<f32>, share: f32, edge_m: vec2<
         if (all(cell == last)) {
             continue;
         }
-        last = cell;
         for (var j = -1; j <= 1; j++) {
             for (var i = -1; i <= 1; i++) {
-                let c = crown_of(cell + vec2<f32>(f32(i), f32(j)), edge);
+                // Consecutive points' cells are neighbours: the cells about the last one
+                // have been met already.
+                let id = cell + vec2<f32>(f32(i), f32(j));
+                if (all(abs(id - last) <= vec2<f32>(1.0))) {
+                    continue;
+                }
+                let c = crown_of(id, edge);
                 let t = enter_crown(o, d, c);
                 if (t >= 0.0 && t < nearest) {
                     nearest = t;
@@ -190,6 +198,7 @@ fn canopy(world: vec3<f32>, s: f32, albedo: vec3<f32>, share: f32, edge_m: vec2<
                 }
             }
         }
+        last = cell;
     }
     if (nearest > start) {
         // No crown met; past the points visited, the mean.
