@@ -2,9 +2,10 @@
 //! flat skirt around it out to the horizon;
 //! grass and soil mixed by value noise, lit and fogged (`ground.wgsl`). Each vertex carries
 //! how much sky it sees past the crowns above it ([`open_sky`]), so the forest floor is
-//! darker than the clearing, and how much distant woodland is painted on it ([`Woodland`]):
-//! crowns as sunlit domes at the scene's spacing with dark gaps, faded to their mean colour
-//! where a crown is smaller than a few pixels.
+//! darker than the clearing, and how much distant woodland is drawn on it ([`Woodland`]):
+//! sunlit spheroid crowns at the scene's spacing, met along the view ray in the fragment
+//! shader so that they stand up and hide one another, faded to their mean colour where a
+//! crown is smaller than a few pixels or lost in the haze.
 
 use sylva_forest::Terrain;
 
