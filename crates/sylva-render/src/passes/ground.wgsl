@@ -58,9 +58,9 @@ fn noise2(p: vec2<f32>) -> f32 {
 // The painted woodland's crowns, in spacings: a jittered grid of cells one spacing wide,
 // each with a crown, a spheroid of radius 0.6–0.75 whose centre stands 1.05 above the
 // ground and whose vertical half-axis is 0.85, both scaled by 0.85–1.15 from crown to
-// crown (so it reaches from about 0.2 to 2.2 spacings up: 1.4 to 15 m at 7 m spacing). A crown stands where a hash of
-// its cell is below the woodland's radial edge at its centre, so the woodland thins out
-// crown by crown at its edge.
+// crown (so it reaches from about 0.2 to 2.2 spacings up: 1.4 to 15 m at 7 m spacing).
+// A crown stands where a hash of its cell is below the woodland's radial edge at its
+// centre, so the woodland thins out crown by crown at its edge.
 struct Crown {
     id: vec2<f32>,
     // Its centre: across the ground, and height above it.
@@ -97,7 +97,8 @@ fn crown_of(id: vec2<f32>, edge: Edge) -> Crown {
     c.up = 1.05 * scale;
     c.half_height = 0.85 * scale;
     // No crown: radius 0, which no ray meets.
-    if (hash2(id + vec2<f32>(23.0, 41.0)) >= smoothstep(edge.start, edge.start + edge.ramp, length(c.across))) {
+    let stands = smoothstep(edge.start, edge.start + edge.ramp, length(c.across));
+    if (hash2(id + vec2<f32>(23.0, 41.0)) >= stands) {
         c.radius = 0.0;
     }
     return c;
@@ -128,7 +129,8 @@ fn enter_crown(o: vec3<f32>, d: vec3<f32>, c: Crown) -> f32 {
 }
 
 // Canopy of the painted woodland seen along the ray from the eye to ground point `world`:
-// crowns `s` m apart (see `Crown`) of mean albedo `albedo` (the forest's own impostors'),
+// crowns `s` m apart (see `Crown`) whose leaves have the mean albedo `leaves` (the forest's
+// own impostors'),
 // standing past `edge` (m) and faded in clearings to the share `share`, over `ground` (the
 // lit ground where no crown stands). The view ray is met with the crowns it passes,
 // so seen at a glancing angle they stand up and hide the gaps between them, as a canopy
@@ -137,7 +139,16 @@ fn enter_crown(o: vec3<f32>, d: vec3<f32>, c: Crown) -> f32 {
 // (radians), which sizes the crowns.
 // Returns the lit colour, and where along the ray from the eye to the ground point it lies
 // (0 to 1).
-fn canopy(world: vec3<f32>, s: f32, leaves: vec3<f32>, share: f32, edge_m: vec2<f32>, ground: vec3<f32>, footprint: f32, pixel_angle: f32) -> vec4<f32> {
+fn canopy(
+    world: vec3<f32>,
+    s: f32,
+    leaves: vec3<f32>,
+    share: f32,
+    edge_m: vec2<f32>,
+    ground: vec3<f32>,
+    footprint: f32,
+    pixel_angle: f32,
+) -> vec4<f32> {
     // A crown is its leaves and the shade within it: SHADED_CROWN of their albedo.
     let albedo = SHADED_CROWN * leaves;
     // The floor under the canopy: shaded, a third of the crowns' albedo.
@@ -169,7 +180,8 @@ fn canopy(world: vec3<f32>, s: f32, leaves: vec3<f32>, share: f32, edge_m: vec2<
     // are small, and their ratio is the mesh's interpolation more than the clearings).
     let radial = smoothstep(edge.start, edge.start + edge.ramp, length(q0));
     let ratio = clamp(share / max(radial, 1e-3), 0.0, 1.0);
-    let clearing = mix(1.0, ratio, smoothstep(edge.start + 0.5 * edge.ramp, edge.start + edge.ramp, length(q0)));
+    let past_middle = smoothstep(edge.start + 0.5 * edge.ramp, edge.start + edge.ramp, length(q0));
+    let clearing = mix(1.0, ratio, past_middle);
     let o = vec3<f32>(q0, 0.0) + back * start;
     let d = -back;
     // Every crown the ray can meet has its centre in a cell next to the cell of a point
@@ -217,7 +229,8 @@ fn canopy(world: vec3<f32>, s: f32, leaves: vec3<f32>, share: f32, edge_m: vec2<
     // lower side and the rim see less sky than the top.
     let p = o + d * nearest - vec3<f32>(hit.across, hit.up);
     let w = clamp(p.z / hit.half_height, -1.0, 1.0);
-    let n = normalize(vec3<f32>(p.xy / (hit.radius * hit.radius), p.z / (hit.half_height * hit.half_height)));
+    let axes = vec3<f32>(hit.radius, hit.radius, hit.half_height);
+    let n = normalize(p / (axes * axes));
     let h = hash2(hit.id + vec2<f32>(11.0, 7.0));
     let tint = vec3<f32>(0.8 + 0.4 * h, 0.85 + 0.3 * hash2(hit.id + vec2<f32>(2.0, 9.0)), 0.9 + 0.2 * h);
     let open = select(0.55 + 0.3 * w, 0.55 + 0.45 * w, w >= 0.0);
