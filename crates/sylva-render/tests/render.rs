@@ -486,9 +486,9 @@ fn the_level_overlay_tints_each_tree_by_the_level_it_is_drawn_at() {
     assert!(warm > warm_before + 200, "mesh levels tinted warm: {warm} vs {warm_before}");
 }
 
-/// The small scene bare and with a woodland surround, and a ground point (with the unit
-/// direction to it from the forest's centre) 2.5 × the woodland's start out, where the
-/// ground is all woodland.
+/// The small scene bare and with a woodland surround; its woodland; a unit direction from
+/// the forest's centre in which the ground 2.5 × the woodland's start out is all woodland;
+/// and the ground point at a given distance along that direction.
 fn woodland_scenes() -> (
     SceneSpec,
     SceneSpec,
