@@ -76,8 +76,14 @@ struct Crown {
 // against 75 for the forest's own edge.
 const SHADED_CROWN: f32 = 0.75;
 
+// A painted crown's centre height and vertical half-axis, spacings, before its scale of
+// 0.85 up to CROWN_SCALE_MAX.
+const CROWN_CENTRE: f32 = 1.05;
+const CROWN_HALF_HEIGHT: f32 = 0.85;
+const CROWN_SCALE_MAX: f32 = 1.15;
+
 // Tallest a painted crown reaches, spacings.
-const CROWN_TOP: f32 = 2.185;
+const CROWN_TOP: f32 = (CROWN_CENTRE + CROWN_HALF_HEIGHT) * CROWN_SCALE_MAX;
 
 // Where the woodland's crowns stand, spacings: from `start` out from the forest's centre,
 // thickening to full over `ramp` (the radial edge of `Woodland::share`; its clearings,
@@ -92,10 +98,10 @@ fn crown_of(id: vec2<f32>, edge: Edge) -> Crown {
     var c: Crown;
     c.id = id;
     c.across = id + 0.2 + 0.6 * vec2<f32>(hash2(id), hash2(id + vec2<f32>(17.0, 31.0)));
-    let scale = 0.85 + 0.3 * hash2(id + vec2<f32>(13.0, 29.0));
+    let scale = mix(0.85, CROWN_SCALE_MAX, hash2(id + vec2<f32>(13.0, 29.0)));
     c.radius = 0.6 + 0.15 * hash2(id + vec2<f32>(5.0, 3.0));
-    c.up = 1.05 * scale;
-    c.half_height = 0.85 * scale;
+    c.up = CROWN_CENTRE * scale;
+    c.half_height = CROWN_HALF_HEIGHT * scale;
     // No crown: radius 0, which no ray meets.
     let stands = smoothstep(edge.start, edge.start + edge.ramp, length(c.across));
     if (hash2(id + vec2<f32>(23.0, 41.0)) >= stands) {
