@@ -414,8 +414,8 @@ fn copy_group(
     let first = k * LANES;
     let simulated_in = |l: usize| s.batch.simulated(first + l);
     if c.kind == Layout::Rows {
-        // A gather (a transpose of lanes and elements), in tiles of joints small enough to
-        // stay in cache while each lane's run is written out in order.
+        // A transpose of lanes and elements (`sylva_core::lanes`: eight lanes at a time in
+        // registers where the CPU has AVX), each joint's block read from memory once.
         // Each simulation's run, from its slot.
         let slots = &slots[(s.lane_base + k) * LANES..][..used];
         let start = |l: usize| slots[l].base as usize - c.start;
@@ -426,26 +426,45 @@ fn copy_group(
             let sim = simulated_in(l);
             *a = if joints > sim { s.batch.anchors(sim) } else { None };
         }
-        const TILE: usize = 32;
-        for first_joint in (0..joints).step_by(TILE) {
-            for (l, &m) in need.iter().enumerate() {
-                let end = (m as usize).min(n).min(first_joint + TILE);
-                if end <= first_joint {
-                    continue;
+        // Each lane's run: the joints it shows as its own (within its simulated prefix)
+        // transposed out of the group's lanes in one pass; then the joints resting on an
+        // anchor, and the runs of lanes stepped alone, joint by joint.
+        let mut runs: [&mut [f32]; LANES] = Default::default();
+        let mut own = [0; LANES];
+        let dst_len = dst.len();
+        let mut rest = &mut *dst;
+        for (l, &m) in need.iter().enumerate() {
+            let m = (m as usize).min(n);
+            debug_assert_eq!(dst_len - rest.len(), start(l), "lane runs lie in lane order");
+            let (run, after) = std::mem::take(&mut rest).split_at_mut(12 * m);
+            rest = after;
+            own[l] = match (s.batch.lane_palettes(first + l), lane_src[l]) {
+                (Some(_), _) => 0,
+                (None, Some(_)) => m.min(simulated_in(l)),
+                (None, None) => m,
+            };
+            runs[l] = run;
+        }
+        {
+            let mut heads: [&mut [f32]; LANES] = Default::default();
+            for ((head, run), &o) in heads.iter_mut().zip(runs.iter_mut()).zip(&own) {
+                *head = &mut run[..12 * o];
+            }
+            sylva_core::lanes::lanes_to_rows(block, width, &mut heads[..used]);
+        }
+        for (l, run) in runs.iter_mut().enumerate().take(used) {
+            let src = |j: usize| lane_src[l].map_or(j, |a| a[j] as usize);
+            let tail = run.chunks_exact_mut(12).enumerate().skip(own[l]);
+            if let Some(row) = s.batch.lane_palettes(first + l) {
+                for (j, v) in tail {
+                    v.copy_from_slice(&row[12 * src(j)..][..12]);
                 }
-                let out = dst[start(l) + 12 * first_joint..].chunks_exact_mut(12);
-                let src = |j: usize| lane_src[l].map_or(j, |a| a[j] as usize);
-                if let Some(row) = s.batch.lane_palettes(first + l) {
-                    for (j, v) in (first_joint..end).zip(out) {
-                        v.copy_from_slice(&row[12 * src(j)..][..12]);
-                    }
-                    continue;
-                }
-                for (j, v) in (first_joint..end).zip(out) {
-                    let lanes = &block[src(j) * joint..][..joint];
-                    for (e, x) in v.iter_mut().enumerate() {
-                        *x = lanes[e * width + l];
-                    }
+                continue;
+            }
+            for (j, v) in tail {
+                let lanes = &block[src(j) * joint..][..joint];
+                for (e, x) in v.iter_mut().enumerate() {
+                    *x = lanes[e * width + l];
                 }
             }
         }
