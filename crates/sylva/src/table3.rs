@@ -67,6 +67,12 @@ pub struct Table3Bench {
     /// choice trades triangles for error, at a third of the full run's cost or less.
     #[arg(long)]
     all_lods_only: bool,
+    /// Rounds: every configuration runs this many times, in turn (each once, then each
+    /// again), so the machine's drift falls on all of them alike. Times are medians over
+    /// every round's timed frames; each CPU speed-up is given with its range over the
+    /// rounds. Counts, images and errors are the last round's (the same in every round).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=100))]
+    rounds: u32,
     /// Frames of the popping measurement (scene `small`, calm, along its fly-in; 0: skip).
     #[arg(long, default_value_t = POPPING_FRAMES)]
     popping_frames: usize,
@@ -117,6 +123,37 @@ struct Cell {
     image: Option<Vec<u8>>,
     /// The frame before the last, when asked for (the reference's motion floor).
     previous: Option<Vec<u8>>,
+    /// The timed frames' simulation, frame-building and rendering times, ms (every
+    /// round's, pooled for the medians).
+    samples: [Vec<f64>; 3],
+    /// Each round's median simulation + frame building, ms.
+    round_cpu: Vec<f64>,
+}
+
+impl Cell {
+    /// Pool the rounds `cells` (in order) into one: medians over all their timed frames,
+    /// the slowest frame of any, each round's CPU median; the rest from the last round.
+    fn pooled(cells: Vec<Cell>) -> Cell {
+        let mut samples: [Vec<f64>; 3] = Default::default();
+        let (mut round_cpu, mut cpu_max) = (Vec::new(), 0.0f64);
+        for c in &cells {
+            for (all, one) in samples.iter_mut().zip(&c.samples) {
+                all.extend_from_slice(one);
+            }
+            round_cpu.extend_from_slice(&c.round_cpu);
+            cpu_max = cpu_max.max(c.cpu_max_ms);
+        }
+        let Some(mut cell) = cells.into_iter().last() else { return Cell::default() };
+        if !samples[0].is_empty() {
+            cell.sim_ms = median(&mut samples[0].clone());
+            cell.frame_ms = median(&mut samples[1].clone());
+        }
+        cell.render_ms = (!samples[2].is_empty()).then(|| median(&mut samples[2].clone()));
+        cell.cpu_max_ms = cpu_max;
+        cell.samples = samples;
+        cell.round_cpu = round_cpu;
+        cell
+    }
 }
 
 impl Cell {
@@ -173,6 +210,9 @@ fn command_line(a: &Table3Bench, (w, h): (u32, u32)) -> String {
     }
     if a.popping_frames != POPPING_FRAMES {
         let _ = write!(c, " --popping-frames {}", a.popping_frames);
+    }
+    if a.rounds != 1 {
+        let _ = write!(c, " --rounds {}", a.rounds);
     }
     c
 }
@@ -272,6 +312,8 @@ fn run_config(
     cell.sim_ms = median(&mut sim);
     cell.frame_ms = median(&mut build);
     cell.render_ms = (!draw.is_empty()).then(|| median(&mut draw));
+    cell.round_cpu = vec![cell.sim_ms + cell.frame_ms];
+    cell.samples = [sim, build, draw];
     cell.simulated = frame.stats.simulated;
     if cell.capped > 0 {
         cell.note = format!(
@@ -387,30 +429,37 @@ pub fn run(a: Table3Bench) -> anyhow::Result<()> {
         let spec = SceneSpec::load(name)?;
         println!("scene {} ({} trees):", spec.name, spec.trees);
         let mut gpu: Option<Headless> = None;
-        let mut cells = Vec::new();
-        for (k, (label, g, an, wi)) in CONFIGS.into_iter().enumerate() {
-            if a.all_lods_only && k > 0 {
-                cells.push(Cell { note: "not run (--all-lods-only)".into(), ..Cell::default() });
-                continue;
+        let mut rounds: Vec<Vec<Cell>> = vec![Vec::new(); CONFIGS.len()];
+        for round in 0..a.rounds {
+            if a.rounds > 1 {
+                println!(" round {} of {}:", round + 1, a.rounds);
             }
-            let cell = run_config(&spec, &mut gpu, &a, (w, h), (g, an, wi), false)?;
-            println!(
-                "  {label:<24} {:>7} fps  sim {:>6.1} ms  frame {:>6.1} ms  (slowest {:.1})  render {:>8} ms  {:>7.2} M tris  {:>6.0} draws  {:>9.0} joints  {:>7.2} MB up (max {:.2})  {:>8.1} MB state  {}",
-                cell.fps().map_or("—".into(), |f| format!("{f:.2}")),
-                cell.sim_ms,
-                cell.frame_ms,
-                cell.cpu_max_ms,
-                cell.render_ms.map_or("—".into(), |r| format!("{r:.0}")),
-                cell.triangles / 1e6,
-                cell.draws,
-                cell.joints,
-                cell.upload_mb,
-                cell.upload_max_mb,
-                cell.state_mb,
-                cell.note
-            );
-            cells.push(cell);
+            for (k, (label, g, an, wi)) in CONFIGS.into_iter().enumerate() {
+                if a.all_lods_only && k > 0 {
+                    let note = "not run (--all-lods-only)".into();
+                    rounds[k].push(Cell { note, ..Cell::default() });
+                    continue;
+                }
+                let cell = run_config(&spec, &mut gpu, &a, (w, h), (g, an, wi), false)?;
+                println!(
+                    "  {label:<24} {:>7} fps  sim {:>6.1} ms  frame {:>6.1} ms  (slowest {:.1})  render {:>8} ms  {:>7.2} M tris  {:>6.0} draws  {:>9.0} joints  {:>7.2} MB up (max {:.2})  {:>8.1} MB state  {}",
+                    cell.fps().map_or("—".into(), |f| format!("{f:.2}")),
+                    cell.sim_ms,
+                    cell.frame_ms,
+                    cell.cpu_max_ms,
+                    cell.render_ms.map_or("—".into(), |r| format!("{r:.0}")),
+                    cell.triangles / 1e6,
+                    cell.draws,
+                    cell.joints,
+                    cell.upload_mb,
+                    cell.upload_max_mb,
+                    cell.state_mb,
+                    cell.note
+                );
+                rounds[k].push(cell);
+            }
         }
+        let mut cells: Vec<Cell> = rounds.into_iter().map(Cell::pooled).collect();
         // Reference: full detail (geometry and animation LODs off), same instance groups.
         let reference =
             run_config(&spec, &mut gpu, &a, (w, h), (false, false, true), !a.all_lods_only)?;
@@ -481,6 +530,16 @@ struct Floor {
     motion: Option<f64>,
     /// The geometry LOD's error and the sampling floor, rest pose ([`still_error`]).
     still: Option<Still>,
+}
+
+/// The lowest and highest of the rounds' CPU speed-ups (`off[r] / on[r]`, round by round);
+/// `None` with fewer than two rounds.
+fn speed_up_range(on: &[f64], off: &[f64]) -> Option<(f64, f64)> {
+    if on.len() < 2 || on.len() != off.len() {
+        return None;
+    }
+    let ratios = on.iter().zip(off).map(|(a, b)| b / a);
+    Some(ratios.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), r| (lo.min(r), hi.max(r))))
 }
 
 /// "A 0.123, B —": one figure per scene, a dash where there is none.
@@ -930,7 +989,8 @@ fn write_outputs(
     // CPU time (simulation + frame building), beside the paper's.
     let _ = writeln!(
         md,
-        "\nSpeed-up of each LOD (all LODs ÷ that LOD off): FPS here · CPU ms here · FPS in the paper:\n"
+        "\nSpeed-up of each LOD (all LODs ÷ that LOD off): FPS here · CPU ms here{} · FPS in the paper:\n",
+        if a.rounds > 1 { " (lowest–highest of the rounds)" } else { "" }
     );
     let _ = writeln!(md, "| LOD | {} |", header.join(" | "));
     let _ = writeln!(md, "|---|{}", "---|".repeat(results.len()));
@@ -945,7 +1005,11 @@ fn write_outputs(
                 };
                 let cpu_off = off.sim_ms + off.frame_ms;
                 let cpu = if cpu_off > 0.0 {
-                    format!("×{:.2}", cpu_off / (on.sim_ms + on.frame_ms))
+                    let ratio = format!("×{:.2}", cpu_off / (on.sim_ms + on.frame_ms));
+                    match speed_up_range(&on.round_cpu, &off.round_cpu) {
+                        Some((lo, hi)) => format!("{ratio} ({lo:.2}–{hi:.2})"),
+                        None => ratio,
+                    }
                 } else {
                     "—".into()
                 };
@@ -1020,7 +1084,49 @@ fn write_outputs(
 
 #[cfg(test)]
 mod tests {
-    use super::{Against, FrameDiffs};
+    use super::{Against, Cell, FrameDiffs, speed_up_range};
+
+    /// A round's cell: its timed frames' simulation and frame-building times.
+    fn round(sim: &[f64], build: &[f64], joints: f64) -> Cell {
+        let mut cell = Cell { joints, ..Cell::default() };
+        cell.sim_ms = super::median(&mut sim.to_vec());
+        cell.frame_ms = super::median(&mut build.to_vec());
+        cell.cpu_max_ms = sim.iter().zip(build).map(|(a, b)| a + b).fold(0.0, f64::max);
+        cell.round_cpu = vec![cell.sim_ms + cell.frame_ms];
+        cell.samples = [sim.to_vec(), build.to_vec(), Vec::new()];
+        cell
+    }
+
+    /// Rounds pool into medians over every round's frames, not a median of the rounds'
+    /// medians; the slowest frame is the slowest of any round; counts are the last round's.
+    #[test]
+    fn rounds_pool_their_frames_and_keep_each_rounds_cpu_time() {
+        let a = round(&[10.0, 11.0, 30.0], &[1.0, 1.0, 1.0], 5.0);
+        let b = round(&[12.0, 13.0, 14.0], &[2.0, 2.0, 2.0], 7.0);
+        let c = Cell::pooled(vec![a, b]);
+        // Pooled 10, 11, 12, 13, 14, 30: the upper median 13 (medians of the rounds: 11
+        // and 13, whose mean would be 12).
+        assert_eq!(c.sim_ms, 13.0);
+        assert_eq!(c.frame_ms, 2.0);
+        assert_eq!(c.cpu_max_ms, 31.0);
+        assert_eq!(c.round_cpu, vec![12.0, 15.0]);
+        assert_eq!(c.joints, 7.0);
+        assert!(c.render_ms.is_none(), "nothing rendered in any round");
+        // One round pools to itself.
+        let one = Cell::pooled(vec![round(&[4.0, 5.0, 6.0], &[1.0, 2.0, 3.0], 1.0)]);
+        assert_eq!((one.sim_ms, one.frame_ms, one.round_cpu.len()), (5.0, 2.0, 1));
+    }
+
+    /// A configuration's speed-up is taken round by round against the round's own run
+    /// with all LODs, so a slow round slows both sides of its ratio.
+    #[test]
+    fn the_speed_up_range_pairs_rounds() {
+        // All LODs: 10 then 20 ms (the machine twice as slow in round 2); the LOD off:
+        // 15 then 30 ms. Round by round ×1.5 both times; unpaired, 15/20 to 30/10.
+        assert_eq!(speed_up_range(&[10.0, 20.0], &[15.0, 30.0]), Some((1.5, 1.5)));
+        assert_eq!(speed_up_range(&[10.0, 20.0], &[12.0, 30.0]), Some((1.2, 1.5)));
+        assert_eq!(speed_up_range(&[10.0], &[15.0]), None, "one round: no range");
+    }
 
     /// Frames as (mean |Δ| from the frame before, whether something switched in it).
     fn diffs(frames: &[(f64, bool)]) -> FrameDiffs {
