@@ -162,6 +162,11 @@ pub struct GroundVertex {
     /// the width over which they thicken to full ([`crate::passes::ground::Woodland`]'s
     /// `start` and `ramp`).
     pub woodland_edge: [f32; 2],
+    /// The darker crowns of the painted woodland: their linear albedo, and their share of
+    /// the crowns (0: one colour). The forest's darker species (conifers, in the built-in
+    /// mixes) seen among the lighter ones; the rest take the colour that keeps `canopy`
+    /// the mean.
+    pub canopy_dark: [f32; 4],
 }
 
 /// `FarSpecies` in far.wgsl: one species' impostor (uniform).
@@ -237,7 +242,7 @@ pub const LEAF_ATTRIBUTES: [wgpu::VertexAttribute; 10] = [
 ];
 
 /// `GroundIn`.
-pub const GROUND_ATTRIBUTES: [wgpu::VertexAttribute; 7] = [
+pub const GROUND_ATTRIBUTES: [wgpu::VertexAttribute; 8] = [
     attr!(GroundVertex, position, Float32x3, 0),
     attr!(GroundVertex, normal, Float32x3, 1),
     attr!(GroundVertex, open, Float32, 2),
@@ -245,6 +250,7 @@ pub const GROUND_ATTRIBUTES: [wgpu::VertexAttribute; 7] = [
     attr!(GroundVertex, crown_spacing, Float32, 4),
     attr!(GroundVertex, canopy, Float32x3, 5),
     attr!(GroundVertex, woodland_edge, Float32x2, 6),
+    attr!(GroundVertex, canopy_dark, Float32x4, 7),
 ];
 
 /// The per-instance buffer layout of every tree pipeline.

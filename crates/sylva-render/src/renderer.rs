@@ -12,7 +12,7 @@ use crate::gpu::{Gpu, RenderError};
 use crate::layout::Globals;
 use crate::passes::branch::{self, BranchPass};
 use crate::passes::far::{BAKE_TARGETS, BakeContext, FarPass, FarSpeciesGpu, bake_level};
-use crate::passes::ground::{GroundPass, Woodland, mean_albedo};
+use crate::passes::ground::{Canopy, GroundPass, Woodland, mean_albedo};
 use crate::passes::leaf::{self, LeafPass};
 use crate::passes::shadow::{SHADOW_SIZE, ShadowPass};
 use crate::passes::sky::SkyPass;
@@ -265,15 +265,12 @@ impl Renderer {
         }
         // The woodland around the forest takes the colour of the forest's own impostors.
         let woodland = assets.woodland.as_ref().map(|w| {
-            let total: f32 = w.shares.iter().sum::<f32>().max(1e-6);
-            let mut canopy = [0.0f32; 3];
-            for (sp, share) in species.iter().zip(&w.shares) {
-                let a = mean_albedo(&sp.far.albedo);
-                for k in 0..3 {
-                    canopy[k] += a[k] * share / total;
-                }
-            }
-            (w, canopy)
+            let colours: Vec<_> = species
+                .iter()
+                .zip(&w.shares)
+                .map(|(sp, &share)| (mean_albedo(&sp.far.albedo), share))
+                .collect();
+            (w, Canopy::of(&colours))
         });
         let ground = GroundPass::new(
             gpu,

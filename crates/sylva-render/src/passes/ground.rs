@@ -4,8 +4,9 @@
 //! how much sky it sees past the crowns above it ([`open_sky`]), so the forest floor is
 //! darker than the clearing, and how much distant woodland is drawn on it ([`Woodland`]):
 //! sunlit spheroid crowns at the scene's spacing, met along the view ray in the fragment
-//! shader so that they stand up and hide one another, faded to their mean colour where a
-//! crown is smaller than a few pixels or lost in the haze.
+//! shader so that they stand up and hide one another, the forest's darker species as
+//! darker crowns ([`Canopy`]), near crowns broken into leaf clumps, faded to their mean
+//! colour where a crown is smaller than a few pixels or lost in the haze.
 
 use sylva_forest::Terrain;
 
@@ -35,7 +36,7 @@ impl GroundPass {
         terrain: &Terrain,
         extent: f32,
         crowns: &[[f32; 3]],
-        woodland: Option<(&Woodland, [f32; 3])>,
+        woodland: Option<(&Woodland, Canopy)>,
     ) -> GroundPass {
         let spec = PipelineSpec {
             shader: "ground.wgsl",
@@ -75,6 +76,41 @@ pub struct Woodland {
     /// Share of each species of the scene (in its species order) in the woodland's colour:
     /// the crowns take the mean albedo of the forest's own impostors, weighted by these.
     pub shares: Vec<f32>,
+}
+
+/// The painted woodland's colours, from the forest's species: their mean albedo, and the
+/// darker species' (`dark`: albedo and share of the crowns).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Canopy {
+    /// Mean linear albedo of the crowns, species by their share of the forest.
+    pub mean: [f32; 3],
+    /// Linear albedo of the darker crowns, and their share (0: one colour).
+    pub dark: [f32; 4],
+}
+
+impl Canopy {
+    /// From each species' mean albedo and share of the forest. Species whose luminance is
+    /// below 0.85 of the mean's are the darker crowns; none, or all, gives one colour.
+    pub fn of(species: &[([f32; 3], f32)]) -> Canopy {
+        let luma = |a: [f32; 3]| 0.2126 * a[0] + 0.7152 * a[1] + 0.0722 * a[2];
+        let blend = |pick: &dyn Fn([f32; 3]) -> bool| {
+            let (mut sum, mut share) = ([0.0f32; 3], 0.0f32);
+            for &(a, s) in species.iter().filter(|(a, s)| *s > 0.0 && pick(*a)) {
+                for k in 0..3 {
+                    sum[k] += a[k] * s;
+                }
+                share += s;
+            }
+            (sum.map(|x| x / share.max(1e-9)), share)
+        };
+        let (mean, total) = blend(&|_| true);
+        let (dark, dark_share) = blend(&|a| luma(a) < 0.85 * luma(mean));
+        let share = dark_share / total.max(1e-9);
+        if !(share > 0.0 && share < 0.999) {
+            return Canopy { mean, dark: [0.0; 4] };
+        }
+        Canopy { mean, dark: [dark[0], dark[1], dark[2], share] }
+    }
 }
 
 /// Mean linear albedo of the opaque texels (alpha ≥ ½) of an sRGB RGBA8 image; grey where
@@ -217,11 +253,12 @@ fn ground_mesh(
     terrain: &Terrain,
     extent: f32,
     crowns: &[[f32; 3]],
-    woodland: Option<(&Woodland, [f32; 3])>,
+    woodland: Option<(&Woodland, Canopy)>,
 ) -> Mesh {
     let paint = |x: f32, y: f32| woodland.map_or(0.0, |(w, _)| w.share(x, y));
     let crown_spacing = woodland.map_or(1.0, |(w, _)| w.spacing);
-    let canopy = woodland.map_or([0.0; 3], |(_, c)| c);
+    let canopy = woodland.map_or([0.0; 3], |(_, c)| c.mean);
+    let canopy_dark = woodland.map_or([0.0; 4], |(_, c)| c.dark);
     let woodland_edge = woodland.map_or([0.0; 2], |(w, _)| [w.start, w.ramp]);
     let n = CELLS;
     let grid = CrownGrid::new(crowns);
@@ -242,6 +279,7 @@ fn ground_mesh(
                 crown_spacing,
                 canopy,
                 woodland_edge,
+                canopy_dark,
             });
         }
     }
@@ -272,6 +310,7 @@ fn ground_mesh(
             crown_spacing,
             canopy,
             woodland_edge,
+            canopy_dark,
         });
     }
     let m = edge.len() as u32;
@@ -343,5 +382,29 @@ mod tests {
             open_sky(1.5, 0.0, &one, &CrownGrid::new(&one))
         });
         assert!((open(1.5, 0.0) - a * b).abs() < 1e-6 && open(1.5, 0.0) < a.min(b));
+    }
+
+    /// The woodland shows the forest's darker species as darker crowns in their share,
+    /// the rest in the colour that keeps the mean the species' share-weighted mean; a
+    /// forest of one shade has one colour.
+    #[test]
+    fn the_woodland_shows_the_darker_species_in_their_share_and_keeps_the_mean() {
+        let (fir, aspen, maple) = ([0.02, 0.05, 0.03], [0.10, 0.16, 0.05], [0.09, 0.14, 0.05]);
+        let c = Canopy::of(&[(fir, 3.0), (aspen, 3.0), (maple, 2.0), (fir, 0.0)]);
+        let mean: Vec<f32> =
+            (0..3).map(|k| (3.0 * fir[k] + 3.0 * aspen[k] + 2.0 * maple[k]) / 8.0).collect();
+        for k in 0..3 {
+            assert!((c.mean[k] - mean[k]).abs() < 1e-6, "{:?} against {mean:?}", c.mean);
+            assert!((c.dark[k] - fir[k]).abs() < 1e-6, "the fir alone is dark: {:?}", c.dark);
+            // The lighter crowns (as the shader takes them) are aspen and maple's mean.
+            let light = (c.mean[k] - c.dark[3] * c.dark[k]) / (1.0 - c.dark[3]);
+            let want = (3.0 * aspen[k] + 2.0 * maple[k]) / 5.0;
+            assert!((light - want).abs() < 1e-5, "light {light} against {want}");
+        }
+        assert!((c.dark[3] - 3.0 / 8.0).abs() < 1e-6, "share {}", c.dark[3]);
+        // One species, or species of one shade: one colour.
+        assert_eq!(Canopy::of(&[(fir, 1.0)]).dark, [0.0; 4]);
+        assert_eq!(Canopy::of(&[(aspen, 1.0), (maple, 4.0)]).dark, [0.0; 4]);
+        assert_eq!(Canopy::of(&[]).dark, [0.0; 4]);
     }
 }

@@ -1,9 +1,10 @@
 // Ground: the terrain mesh, grass and soil mixed by value noise, lit (trees' shadows from
 // the shadow map, the sky it sees past the crowns above) and fogged into the sky at the
 // horizon. Around a forest with a woodland surround, distant woodland is painted on it:
-// crowns on a jittered grid at the given spacing, each a spheroid lit by the sun, with
-// shaded gaps between them, marched as a height field along the view ray so that they
-// stand up from the ground and hide one another.
+// crowns on a jittered grid at the given spacing, each a spheroid lit by the sun (the
+// forest's darker species as darker, narrower crowns; near ones in leaf clumps), with
+// shaded gaps between them, met along the view ray so that they stand up from the ground
+// and hide one another.
 
 struct GroundIn {
     @location(0) position: vec3<f32>,
@@ -13,6 +14,7 @@ struct GroundIn {
     @location(4) crown_spacing: f32,
     @location(5) canopy: vec3<f32>,
     @location(6) woodland_edge: vec2<f32>,
+    @location(7) canopy_dark: vec4<f32>,
 };
 
 struct GroundOut {
@@ -24,6 +26,7 @@ struct GroundOut {
     @location(4) @interpolate(flat) crown_spacing: f32,
     @location(5) @interpolate(flat) canopy: vec3<f32>,
     @location(6) @interpolate(flat) woodland_edge: vec2<f32>,
+    @location(7) @interpolate(flat) canopy_dark: vec4<f32>,
 };
 
 @vertex
@@ -37,6 +40,7 @@ fn vs_main(v: GroundIn) -> GroundOut {
     out.crown_spacing = v.crown_spacing;
     out.canopy = v.canopy;
     out.woodland_edge = v.woodland_edge;
+    out.canopy_dark = v.canopy_dark;
     return out;
 }
 
@@ -68,6 +72,8 @@ struct Crown {
     up: f32,
     radius: f32,
     half_height: f32,
+    // One of the darker crowns (the forest's darker species), narrower than the others.
+    dark: bool,
 };
 
 // A crown's mean albedo against its leaves', for the shade among them that the forest's
@@ -82,15 +88,22 @@ const CROWN_CENTRE: f32 = 1.05;
 const CROWN_HALF_HEIGHT: f32 = 0.85;
 const CROWN_SCALE_MAX: f32 = 1.15;
 
+// The darker crowns (conifers, in the built-in mixes) are narrower and taller: their
+// radius and vertical half-axis against the others'.
+const DARK_NARROW: f32 = 0.65;
+const DARK_TALL: f32 = 1.15;
+
 // Tallest a painted crown reaches, spacings.
-const CROWN_TOP: f32 = (CROWN_CENTRE + CROWN_HALF_HEIGHT) * CROWN_SCALE_MAX;
+const CROWN_TOP: f32 = (CROWN_CENTRE + CROWN_HALF_HEIGHT * DARK_TALL) * CROWN_SCALE_MAX;
 
 // Where the woodland's crowns stand, spacings: from `start` out from the forest's centre,
 // thickening to full over `ramp` (the radial edge of `Woodland::share`; its clearings,
-// hundreds of metres across, are not cut crown by crown but faded).
+// hundreds of metres across, are not cut crown by crown but faded). `dark`: the share of
+// darker crowns.
 struct Edge {
     start: f32,
     ramp: f32,
+    dark: f32,
 };
 
 // The crown of cell `id`, and whether one stands there.
@@ -102,6 +115,11 @@ fn crown_of(id: vec2<f32>, edge: Edge) -> Crown {
     c.radius = 0.6 + 0.15 * hash2(id + vec2<f32>(5.0, 3.0));
     c.up = CROWN_CENTRE * scale;
     c.half_height = CROWN_HALF_HEIGHT * scale;
+    c.dark = hash2(id + vec2<f32>(37.0, 43.0)) < edge.dark;
+    if (c.dark) {
+        c.radius *= DARK_NARROW;
+        c.half_height *= DARK_TALL;
+    }
     // No crown: radius 0, which no ray meets.
     let stands = smoothstep(edge.start, edge.start + edge.ramp, length(c.across));
     if (hash2(id + vec2<f32>(23.0, 41.0)) >= stands) {
@@ -151,6 +169,7 @@ fn canopy(
     leaves: vec3<f32>,
     share: f32,
     edge_m: vec2<f32>,
+    dark: vec4<f32>,
     ground: vec3<f32>,
     footprint: f32,
     pixel_angle: f32,
@@ -180,7 +199,7 @@ fn canopy(
         return vec4<f32>(mix(mean, gap, floor_detail), 1.0);
     }
     let q0 = world.xy / s;
-    let edge = Edge(edge_m.x / s, max(edge_m.y / s, 1e-3));
+    let edge = Edge(edge_m.x / s, max(edge_m.y / s, 1e-3), dark.w);
     // What clearings leave of the woodland here (1 but in clearings): the share over its
     // radial edge, taken smoothly from the middle of the edge on (nearer the start both
     // are small, and their ratio is the mesh's interpolation more than the clearings).
@@ -240,10 +259,44 @@ fn canopy(
     let h = hash2(hit.id + vec2<f32>(11.0, 7.0));
     let tint = vec3<f32>(0.8 + 0.4 * h, 0.85 + 0.3 * hash2(hit.id + vec2<f32>(2.0, 9.0)), 0.9 + 0.2 * h);
     let open = select(0.55 + 0.3 * w, 0.55 + 0.45 * w, w >= 0.0);
-    let lit = mix(gap, albedo * tint * lighting(n, 1.0) * open, clearing);
     let r = length_to_eye - start + nearest;
+    let clumps = leaf_clumps(p / axes, n, hit.id, per_spacing * r);
+    // The darker crowns take their own albedo; the others the one that keeps the mean.
+    let light = (leaves - dark.w * dark.rgb) / max(1.0 - dark.w, 1e-3);
+    let own = SHADED_CROWN * select(light, dark.rgb, hit.dark);
+    let lit = mix(gap, own * tint * lighting(clumps.xyz, 1.0) * open * clumps.w, clearing);
     let detail = 1.0 - smoothstep(0.12, 0.4, per_spacing * r);
     return vec4<f32>(mix(mean, lit, detail), r / length_to_eye);
+}
+
+// A crown's leaves are not a smooth surface: they hang in clumps that stand out from the
+// crown, each lit on its sunward side, with shaded hollows between them. The clumps are a
+// height field over the crown's unit sphere (`u`, projected along a slanted axis so its
+// sides vary with height too), about an eighth of the crown across; it bends the normal
+// `n` (crown space, unit) and darkens the hollows. Returns the bent normal and the
+// hollows' shade (about 1 on average); both fade to the smooth crown where a pixel spans
+// more than a sixth of a spacing (`pixel`, spacings).
+fn leaf_clumps(u: vec3<f32>, n: vec3<f32>, id: vec2<f32>, pixel: f32) -> vec4<f32> {
+    let fade = 1.0 - smoothstep(0.08, 0.17, pixel);
+    if (fade <= 0.0) {
+        return vec4<f32>(n, 1.0);
+    }
+    let k = 4.0;
+    let q = k * vec2<f32>(u.x + 0.6 * u.z, u.y - 0.6 * u.z) + 7.3 * id;
+    let e = 0.1;
+    let h = clump_height(q);
+    let g = vec2<f32>(clump_height(q + vec2<f32>(e, 0.0)) - h, clump_height(q + vec2<f32>(0.0, e)) - h) / e;
+    // The height's gradient on the sphere (through q's dependence on u), in the tangent plane.
+    let grad = k * vec3<f32>(g.x, g.y, 0.6 * (g.x - g.y));
+    let tangent = grad - dot(grad, n) * n;
+    let bent = normalize(n - 0.12 * fade * tangent);
+    let shade = 1.0 + fade * 0.25 * (2.0 * smoothstep(0.25, 0.75, h) - 1.0);
+    return vec4<f32>(bent, shade);
+}
+
+// The clumps' height, 0 to 1: two octaves of value noise.
+fn clump_height(q: vec2<f32>) -> f32 {
+    return 0.65 * noise2(q) + 0.35 * noise2(2.3 * q + vec2<f32>(19.0, 7.0));
 }
 
 @fragment
@@ -266,7 +319,7 @@ fn fs_main(in: GroundOut) -> @location(0) vec4<f32> {
     let s = in.crown_spacing;
     let over = in.world + (globals.eye - in.world) * min(CROWN_TOP * s / max(globals.eye.z - in.world.z, 1e-3), 1.0);
     if (in.woodland > 0.0 || (in.woodland_edge.x > 0.0 && length(over.xy) > in.woodland_edge.x - s)) {
-        let c = canopy(in.world, s, in.canopy, in.woodland, in.woodland_edge, lit, footprint, pixel_angle);
+        let c = canopy(in.world, s, in.canopy, in.woodland, in.woodland_edge, in.canopy_dark, lit, footprint, pixel_angle);
         // Fogged where the ray meets the crown.
         return finish(apply_fog(c.rgb, mix(globals.eye, in.world, c.a)));
     }
