@@ -71,8 +71,8 @@ use bytemuck::{Pod, Zeroable};
 use rayon::prelude::*;
 use sylva_core::rng::mix64;
 use sylva_sway::{
-    IDENTITY, LANES, LeafParams, LeafSway, PaletteSlot, STATE_BYTES, SwayBatch, SwayParams,
-    SwaySpecies,
+    CrownLean, IDENTITY, LANES, LeafParams, LeafSway, PaletteSlot, STATE_BYTES, SwayBatch,
+    SwayParams, SwaySpecies,
 };
 
 use sylva_tree::mesh::{LOD_LEVELS, TreeModel};
@@ -123,7 +123,7 @@ pub enum ForestError {
 /// `max_state_mb`.
 pub const MAX_STATE_BYTES: usize = 6_000_000_000;
 
-/// One tree drawn this frame, as the vertex shaders read it (48 bytes; sylva-render maps
+/// One tree drawn this frame, as the vertex shaders read it (52 bytes; sylva-render maps
 /// each field to a vertex attribute by its offset).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, PartialEq, Pod, Zeroable)]
@@ -153,6 +153,12 @@ pub struct Instance {
     /// (15: an impostor), bits 4–7 the species, bits 8–31 the instance group within the
     /// species.
     pub tag: u32,
+    /// An impostor's crown lean: the horizontal shear at the trunk top's height (tree space,
+    /// m, as IEEE half-precision bits) that its limbs and twigs add in the wind to the
+    /// trunk's own sway, which alone moves its picture ([`sylva_sway::CrownLean`]: the
+    /// static bend of every joint off the trunk line in the instance's wind). Mesh levels
+    /// simulate those joints and do not read it.
+    pub lean: [u16; 2],
 }
 
 /// The geometry-LOD switch and thresholds (see the module documentation).
@@ -753,7 +759,9 @@ pub struct SpeciesRuntime {
     /// Geometry, LOD chain and textures.
     pub model: TreeModel,
     batch: SwayBatch,
-    /// Per group: wind sample point (world), yaw, leaf flutter.
+    /// The crown's static lean in wind, for its impostors.
+    lean: CrownLean,
+    /// Per group: wind sample point (world), yaw, leaf flutter, crown lean.
     groups: Vec<Group>,
     winds: Vec<[f32; 3]>,
     /// Its trees, in Morton order of position, and their Morton codes.
@@ -805,6 +813,9 @@ struct Group {
     sample: [f64; 3],
     yaw: f32,
     leaf: LeafSway,
+    /// The crown's static lean in the group's wind, as an impostor's shear at the trunk
+    /// top (tree space, m; see [`Instance::lean`]).
+    lean: [f32; 2],
 }
 
 /// A forest in wind.
@@ -1019,7 +1030,12 @@ impl Forest {
                     .map(|r| trees[members[r.0]].0.yaw)
                     .or(members.get(g).map(|&t| trees[t].0.yaw))
                     .unwrap_or(0.0);
-                groups.push(Group { sample: [0.0; 3], yaw, leaf: LeafSway::default() });
+                groups.push(Group {
+                    sample: [0.0; 3],
+                    yaw,
+                    leaf: LeafSway::default(),
+                    lean: [0.0; 2],
+                });
             }
             let slots: Vec<u32> = (0..runs.len() as u32).collect();
             regroup_species(&mut trees, &mut groups, &members, &runs, &slots, height, |_, _| {});
@@ -1031,6 +1047,7 @@ impl Forest {
                 name: spec.species[si].name.clone(),
                 message: e.to_string(),
             })?;
+            let lean = CrownLean::new(&sway, &model.tree.skeleton);
             let mut batch = SwayBatch::new(sway, n_groups);
             let mut prefixes = order.prefix.clone();
             prefixes.push(order.trunk);
@@ -1039,6 +1056,7 @@ impl Forest {
                 name: spec.species[si].name.clone(),
                 model,
                 batch,
+                lean,
                 winds: vec![[0.0; 3]; n_groups],
                 groups,
                 members,
@@ -1488,6 +1506,7 @@ impl Forest {
                 let w = steer(w, gain, turn);
                 let (sn, cs) = g.yaw.sin_cos();
                 s.winds[lane] = [cs * w[0] + sn * w[1], -sn * w[0] + cs * w[1], w[2]];
+                g.lean = s.lean.shear(s.winds[lane]);
                 let speed = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
                 leaf.step(&mut g.leaf, speed, dt);
             }
@@ -1928,6 +1947,7 @@ impl Forest {
                         leaf_phase: group.leaf.phase,
                         leaf_amplitude: group.leaf.amplitude,
                         fade,
+                        lean: group.lean.map(|v| half::f16::from_f32(v).to_bits()),
                         tag: if far { 15 } else { level.min(14) }
                             | (species.min(15) << 4)
                             | (g << 8),

@@ -860,3 +860,49 @@ fn a_tree_whose_shadow_falls_in_view_beyond_the_shadow_map_is_not_drawn_into_it(
     let (_, _, f) = lone_tree(sun, true, along_the_ground(100.0, 80.0));
     assert_eq!((f.stats.drawn, f.stats.shadow_only), (0, 1));
 }
+
+/// An instance's crown lean, decoded (tree space, m).
+fn lean_of(i: &sylva_forest::Instance) -> [f32; 2] {
+    i.lean.map(|b| half::f16::from_bits(b).to_f32())
+}
+
+#[test]
+fn impostors_lean_downwind_with_their_limbs_and_not_in_still_air() {
+    for speed in ["10", "0"] {
+        let spec = SceneSpec {
+            wind: speed.into(),
+            wind_direction_deg: 30.0,
+            ..SceneSpec::builtin("small").expect("small")
+        };
+        let mut forest = Forest::new(&spec).expect("forest");
+        let cam = far_camera(&forest);
+        let mut f = FrameData::default();
+        forest.frame(&cam, 4.0 / 3.0, &mut f);
+        for _ in 0..3 {
+            forest.step(1.0 / 30.0);
+            forest.frame(&cam, 4.0 / 3.0, &mut f);
+        }
+        assert!(f.stats.impostors > 0 && f.stats.impostors == f.stats.drawn);
+        let mut by_group = std::collections::BTreeMap::new();
+        for inst in &f.instances {
+            let l = lean_of(inst);
+            // Instances sharing a simulation share its lean, as they share its palettes.
+            let key = (inst.tag >> 4 & 15, inst.tag >> 8);
+            assert_eq!(*by_group.entry(key).or_insert(l), l, "group {key:?}");
+            let size = l[0].hypot(l[1]);
+            if speed == "0" {
+                assert_eq!(size, 0.0, "a lean in still air");
+                continue;
+            }
+            // In world space, downwind: the tree-space lean turned by the instance's yaw,
+            // against the wind at its crown.
+            let (s, c) = inst.yaw.sin_cos();
+            let world = [c * l[0] - s * l[1], s * l[0] + c * l[1]];
+            let p = inst.position;
+            let w = forest.wind_sample([p[0] as f64, p[1] as f64, p[2] as f64 + 10.0]);
+            let along = (world[0] * w[0] + world[1] * w[1]) / w[0].hypot(w[1]);
+            assert!(size > 0.01, "a crown in 10 m/s leans {size} m");
+            assert!(along > 0.95 * size, "lean {world:?} against the wind {w:?}");
+        }
+    }
+}

@@ -218,6 +218,18 @@ pub const INSTANCE_ATTRIBUTES: [wgpu::VertexAttribute; 6] = [
     attr!(Instance, tag, Uint32, 9),
 ];
 
+/// The impostors' instance attributes: [`INSTANCE_ATTRIBUTES`] and `LeanIn` in far.wgsl,
+/// the crown's lean (`Instance::lean`, two half floats).
+pub const FAR_INSTANCE_ATTRIBUTES: [wgpu::VertexAttribute; 7] = {
+    let mut all = [attr!(Instance, lean, Float16x2, 11); 7];
+    let mut i = 0;
+    while i < INSTANCE_ATTRIBUTES.len() {
+        all[i] = INSTANCE_ATTRIBUTES[i];
+        i += 1;
+    }
+    all
+};
+
 /// `BranchIn`.
 pub const BRANCH_ATTRIBUTES: [wgpu::VertexAttribute; 5] = [
     attr!(BranchVertex, position, Float32x3, 0),
@@ -253,12 +265,23 @@ pub const GROUND_ATTRIBUTES: [wgpu::VertexAttribute; 8] = [
     attr!(GroundVertex, canopy_dark, Float32x4, 7),
 ];
 
-/// The per-instance buffer layout of every tree pipeline.
+/// The per-instance buffer layout of the mesh pipelines.
 pub fn instance_layout() -> wgpu::VertexBufferLayout<'static> {
+    instances_read_as(&INSTANCE_ATTRIBUTES)
+}
+
+/// The per-instance buffer layout of the impostors' pipelines, which read the lean too.
+pub fn far_instance_layout() -> wgpu::VertexBufferLayout<'static> {
+    instances_read_as(&FAR_INSTANCE_ATTRIBUTES)
+}
+
+fn instances_read_as(
+    attributes: &'static [wgpu::VertexAttribute],
+) -> wgpu::VertexBufferLayout<'static> {
     wgpu::VertexBufferLayout {
         array_stride: size_of::<Instance>() as u64,
         step_mode: wgpu::VertexStepMode::Instance,
-        attributes: &INSTANCE_ATTRIBUTES,
+        attributes,
     }
 }
 

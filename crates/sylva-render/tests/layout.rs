@@ -7,8 +7,8 @@ use std::mem::{offset_of, size_of};
 use naga::{Module, ScalarKind, TypeInner, VectorSize};
 use sylva_forest::Instance;
 use sylva_render::layout::{
-    BRANCH_ATTRIBUTES, BranchVertex, FarSpecies, GROUND_ATTRIBUTES, Globals, GroundVertex,
-    INSTANCE_ATTRIBUTES, LEAF_ATTRIBUTES, LeafVertex,
+    BRANCH_ATTRIBUTES, BranchVertex, FAR_INSTANCE_ATTRIBUTES, FarSpecies, GROUND_ATTRIBUTES,
+    Globals, GroundVertex, INSTANCE_ATTRIBUTES, LEAF_ATTRIBUTES, LeafVertex,
 };
 use sylva_render::shader_source;
 use sylva_render::wgpu::{self, VertexFormat};
@@ -109,7 +109,7 @@ fn type_name(inner: &TypeInner) -> String {
 fn format_name(f: VertexFormat) -> &'static str {
     match f {
         VertexFormat::Float32 => "f32",
-        VertexFormat::Float32x2 => "vec2<f32>",
+        VertexFormat::Float32x2 | VertexFormat::Float16x2 => "vec2<f32>",
         VertexFormat::Float32x3 => "vec3<f32>",
         VertexFormat::Float32x4 => "vec4<f32>",
         VertexFormat::Uint32 => "u32",
@@ -156,6 +156,9 @@ fn vertex_attributes_match_the_shader_inputs() {
     check_attributes("leaf.wgsl", "LeafIn", &LEAF_ATTRIBUTES, size_of::<LeafVertex>());
     check_attributes("ground.wgsl", "GroundIn", &GROUND_ATTRIBUTES, size_of::<GroundVertex>());
     check_attributes("common.wgsl", "InstanceIn", &INSTANCE_ATTRIBUTES, size_of::<Instance>());
+    // The impostors read the instance as the meshes do, and the crown's lean besides.
+    assert_eq!(FAR_INSTANCE_ATTRIBUTES[..6], INSTANCE_ATTRIBUTES);
+    check_attributes("far.wgsl", "LeanIn", &FAR_INSTANCE_ATTRIBUTES[6..], size_of::<Instance>());
 }
 
 #[test]
@@ -163,7 +166,7 @@ fn instance_fields_read_together_are_adjacent() {
     // `base` = position then yaw; `leaf` = phase then amplitude (one attribute each).
     assert_eq!(offset_of!(Instance, yaw), offset_of!(Instance, position) + 12);
     assert_eq!(offset_of!(Instance, leaf_amplitude), offset_of!(Instance, leaf_phase) + 4);
-    assert_eq!(size_of::<Instance>(), 48);
+    assert_eq!(size_of::<Instance>(), 52);
 }
 
 #[test]

@@ -826,3 +826,79 @@ fn an_impostor_keeps_the_outline_of_full_detail_seen_level_and_from_above() {
         assert!(overlap > 0.65, "{elevation}°: outlines overlap by {overlap:.3}");
     }
 }
+
+#[test]
+fn an_impostor_leans_downwind_with_its_crown_as_full_detail_does() {
+    // One weeping willow 70 m off, seen across a steady 8 m/s wind once its sway has died
+    // down: how far the tree's pixels move from the rest pose, at full detail and as an
+    // impostor. The willow's hanging twigs stream out about 0.7 m while its thick trunk's
+    // top moves 4 cm, so an impostor swayed by the trunk top alone stood still while full
+    // detail leaned (the crown's lean, `Instance::lean`, moves it with them).
+    let scene = |wind: &str| {
+        let text = format!(
+            r#"
+            name = "willow"
+            seed = 3
+            trees = 1
+            terrain_amplitude = 0.0
+            wind = "{wind}"
+            wind_direction_deg = 90.0
+            species = [ {{ name = "weeping_willow" }} ]
+            [lighting]
+            shadows = false
+        "#
+        );
+        SceneSpec::from_toml("willow.toml", &text).expect("scene")
+    };
+    let camera = Camera {
+        eye: [-70.0, 0.0, 4.5],
+        target: [0.0, 0.0, 4.5],
+        fov_deg: 12.0,
+        near: 0.5,
+        far: 8000.0,
+    };
+    // Centroid (pixels) of what the tree changes in the image, against the frame without it.
+    let centroid = |wind: &str, impostor: bool| {
+        let mut spec = scene(wind);
+        if impostor {
+            spec.lod.fraction = 100.0;
+        } else {
+            spec.lod.geometry = false;
+        }
+        let mut forest = Forest::new(&spec).expect("forest");
+        let mut gpu = Headless::new(&forest, W, H).unwrap_or_else(|e| panic!("{e}"));
+        let mut frame = FrameData::default();
+        forest.frame(&camera, W as f32 / H as f32, &mut frame);
+        // 40 s (the step is exact for any dt): the trunk, the slowest joint, has settled.
+        for _ in 0..400 {
+            forest.step(0.1);
+        }
+        forest.frame(&camera, W as f32 / H as f32, &mut frame);
+        let drawn_as_impostor = frame.instances.iter().all(|i| i.tag & 15 == 15);
+        assert_eq!(drawn_as_impostor, impostor);
+        let img = gpu.render(&frame, &camera).expect("render");
+        frame.instances.clear();
+        frame.buckets.clear();
+        let empty = gpu.render(&frame, &camera).expect("render");
+        let (mut sx, mut sy, mut n) = (0.0f64, 0.0f64, 0usize);
+        for (k, (a, b)) in img.chunks(4).zip(empty.chunks(4)).enumerate() {
+            if (0..3).map(|c| a[c].abs_diff(b[c]) as u32).sum::<u32>() > 24 {
+                sx += (k as u32 % W) as f64;
+                sy += (k as u32 / W) as f64;
+                n += 1;
+            }
+        }
+        assert!(n > 2000, "the tree fills too little of the image: {n} px");
+        [sx / n as f64, sy / n as f64]
+    };
+    let shift = |impostor: bool| {
+        let (at_rest, in_wind) = (centroid("0", impostor), centroid("8", impostor));
+        [in_wind[0] - at_rest[0], in_wind[1] - at_rest[1]]
+    };
+    let (full, far) = (shift(false), shift(true));
+    let size = |v: [f64; 2]| v[0].hypot(v[1]);
+    let off = size([far[0] - full[0], far[1] - full[1]]);
+    eprintln!("full detail moves {full:.2?} px, the impostor {far:.2?} px: off by {off:.2} px");
+    assert!(size(full) > 3.0, "full detail leans {full:?} px");
+    assert!(off < 0.3 * size(full), "the impostor moves {far:?} px, full detail {full:?} px");
+}

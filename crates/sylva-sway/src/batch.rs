@@ -444,8 +444,7 @@ pub struct SwayBatch {
 
 /// Rotation matrix of the rotation vector φ (axis × angle), Rodrigues' formula. Small
 /// angles use Taylor series of sin a/a and (1 − cos a)/a² (error < 1e-9 below 0.5 rad).
-#[cfg(test)]
-fn rotation(phi: [f32; 3]) -> [[f32; 3]; 3] {
+pub(crate) fn rotation(phi: [f32; 3]) -> [[f32; 3]; 3] {
     let a2 = dot(phi, phi);
     let (s, c) = if a2 < 0.25 { small_angle(a2) } else { large_angle(a2) };
     rodrigues(phi, s, c)
@@ -464,7 +463,7 @@ const LEVER_SERIES: f32 = 0.01;
 /// Solved by one Newton step from e / √(1 + (2e/π)²) (within 0.6 % of the root for every
 /// e), with short polynomials for cos and sin on [0, π/2] so the lane loop vectorises.
 #[inline(always)]
-fn lever_bend(e2: f32) -> f32 {
+pub(crate) fn lever_bend(e2: f32) -> f32 {
     // Floored so that no load divides by zero (the factor tends to 1 there).
     let e = e2.sqrt().max(1e-6);
     let t = e / (1.0 + e2 * (4.0 / (PI * PI))).sqrt();
@@ -503,7 +502,6 @@ fn small_angle(a2: f32) -> (f32, f32) {
     )
 }
 
-#[cfg(test)]
 fn large_angle(a2: f32) -> (f32, f32) {
     let a = a2.sqrt();
     (a.sin() / a, (1.0 - a.cos()) / a2)

@@ -9,10 +9,12 @@
 //! * [`SwayBatch`] — many instances stepped together with an exact (any-dt) integrator,
 //!   active-joint budgets with smooth blending, palettes; parallel and deterministic.
 //! * [`leaves`] — the flutter model a vertex shader evaluates.
+//! * [`CrownLean`] — the crown's static lean in wind, for a stand-in bent at the trunk only.
 #![warn(missing_docs)]
 
 pub mod batch;
 pub mod frontal;
+pub mod lean;
 pub mod leaves;
 pub mod params;
 pub mod probe;
@@ -23,6 +25,7 @@ pub use batch::{
     transform,
 };
 pub use frontal::{Frontal, frontal_area};
+pub use lean::CrownLean;
 pub use leaves::{LeafParams, LeafSway};
 pub use params::{CROWN_DRAG_SPEED, NEEDLE_LEAF_DRAG, SwayParamError, SwayParams};
 pub use species::{JointSpring, SwaySpecies};

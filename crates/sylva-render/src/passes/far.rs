@@ -19,7 +19,7 @@ use sylva_forest::{Instance, Lighting, PaletteSlot};
 use sylva_tree::mesh::TreeModel;
 
 use crate::gpu::{Gpu, RenderError};
-use crate::layout::{FarSpecies, Globals, instance_layout};
+use crate::layout::{FarSpecies, Globals, far_instance_layout};
 use crate::shared::{
     GlobalsBinding, Mesh, PipelineSpec, buffer, globals_group, palette_buffer, pipeline,
     texture_entry, upload_mips,
@@ -115,7 +115,7 @@ impl FarPass {
         });
         let layout =
             crate::shared::pipeline_layout(dev, "impostors", &[globals_layout, &species_layout]);
-        let buffers = [Some(instance_layout())];
+        let buffers = [Some(far_instance_layout())];
         let spec = PipelineSpec {
             shader: "far.wgsl",
             fragment: "fs_main",

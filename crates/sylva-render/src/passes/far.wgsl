@@ -8,7 +8,9 @@
 // are cross-faded per pixel by a screen-space dither, so a tree seen from a turning
 // direction never jumps from one view to the next. Lit per pixel from the baked tree-space
 // normals like the near trees, swayed by its trunk-top joint: the quad shears with the
-// trunk top's displacement, in proportion to height. Into the sun's shadow map (SHADOW) the
+// trunk top's displacement, in proportion to height, and with the crown's lean beyond it
+// (the static bend of the limbs and twigs in the instance's wind, which the trunk-top
+// joint does not carry: `Instance::lean`). Into the sun's shadow map (SHADOW) the
 // quad stands upright and faces the sun's azimuth, casting the shadow of the horizontal
 // view nearest it.
 
@@ -85,8 +87,14 @@ fn band(s: f32) -> f32 {
     return clamp((fract(s) - 0.5) / VIEW_BAND + 0.5, 0.0, 1.0);
 }
 
+// The crown's lean: the shear at the trunk top's height beyond the trunk's own sway (tree
+// space, m).
+struct LeanIn {
+    @location(11) shear: vec2<f32>,
+};
+
 @vertex
-fn vs_main(@builtin(vertex_index) vi: u32, inst: InstanceIn) -> FarOut {
+fn vs_main(@builtin(vertex_index) vi: u32, inst: InstanceIn, lean: LeanIn) -> FarOut {
     // A quad as one triangle strip per instance: corners (0,0) (1,0) (0,1) (1,1).
     let corner = vec2<f32>(f32(vi & 1u), f32(vi >> 1u));
     let base = inst.base.xyz;
@@ -127,10 +135,12 @@ fn vs_main(@builtin(vertex_index) vi: u32, inst: InstanceIn) -> FarOut {
     let half = 0.52 * min(vec2<f32>(2.0 * far.radius, span), vec2<f32>(far.extent));
     let q = (corner - 0.5) * 2.0 * half;
     let offset = (right * q.x + up * q.y) * inst.scale;
-    // Sway: the trunk top's displacement, sheared in with height above the ground.
+    // Sway: the trunk top's displacement and the crown's lean, sheared in with height above
+    // the ground.
     let z = far.center + offset.z / inst.scale;
     let m = palette(inst.palette, far.joint);
-    let shift = rotate_z(palette_apply(m, far.tip) - far.tip, yaw) * inst.scale;
+    let top = palette_apply(m, far.tip) - far.tip + vec3<f32>(lean.shear, 0.0);
+    let shift = rotate_z(top, yaw) * inst.scale;
     let p = mid - base + offset + shift * clamp(z / max(far.tip.z, 0.1), 0.0, 1.5);
     let world = base + p;
     var out: FarOut;
