@@ -793,6 +793,11 @@ pub struct SpeciesRuntime {
 }
 
 impl SpeciesRuntime {
+    /// The crown's static lean in wind that its impostors are sheared with.
+    pub fn lean(&self) -> &CrownLean {
+        &self.lean
+    }
+
     /// Simulated instances (instance groups) of this species.
     pub fn simulated(&self) -> usize {
         self.groups.len()

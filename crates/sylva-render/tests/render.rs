@@ -828,77 +828,95 @@ fn an_impostor_keeps_the_outline_of_full_detail_seen_level_and_from_above() {
 }
 
 #[test]
-fn an_impostor_leans_downwind_with_its_crown_as_full_detail_does() {
-    // One weeping willow 70 m off, seen across a steady 8 m/s wind once its sway has died
-    // down: how far the tree's pixels move from the rest pose, at full detail and as an
-    // impostor. The willow's hanging twigs stream out about 0.7 m while its thick trunk's
-    // top moves 4 cm, so an impostor swayed by the trunk top alone stood still while full
-    // detail leaned (the crown's lean, `Instance::lean`, moves it with them).
-    let scene = |wind: &str| {
-        let text = format!(
-            r#"
-            name = "willow"
-            seed = 3
-            trees = 1
-            terrain_amplitude = 0.0
-            wind = "{wind}"
-            wind_direction_deg = 90.0
-            species = [ {{ name = "weeping_willow" }} ]
-            [lighting]
-            shadows = false
-        "#
-        );
-        SceneSpec::from_toml("willow.toml", &text).expect("scene")
-    };
+fn an_impostor_leans_downwind_by_its_crowns_lean() {
+    // A weeping willow seen across a steady 8 m/s wind once its sway has died down, drawn
+    // as an impostor: its hanging twigs stream out about 0.7 m (leaf-weighted mean) while
+    // its thick trunk's top moves 4 cm, so swayed by the trunk top alone its picture stood
+    // all but still. The same frame drawn with the crown's lean (`Instance::lean`) and with
+    // it taken off: the picture's foot stays where it stands, its upper half moves
+    // downwind, by about the crown's mean displacement (`CrownLean`) at that distance.
+    let text = r#"
+        name = "willow"
+        seed = 3
+        trees = 1
+        terrain_amplitude = 0.0
+        wind = "8"
+        wind_direction_deg = 90.0
+        species = [ { name = "weeping_willow" } ]
+        [lod]
+        fraction = 100.0
+        [lighting]
+        shadows = false
+    "#;
+    let spec = SceneSpec::from_toml("willow.toml", text).expect("scene");
+    let mut forest = Forest::new(&spec).expect("forest");
+    let (base, height) = (
+        forest.placement(0).expect("a tree").position,
+        forest.tree_info(0).expect("a tree").height,
+    );
+    // Seen level, the tree 60 % of the image tall.
+    let fov_deg = 10.0f32;
+    let view = 2.0 * (0.5 * fov_deg).to_radians().tan();
+    let distance = height / (0.6 * view);
+    let mid = base[2] + 0.5 * height;
     let camera = Camera {
-        eye: [-70.0, 0.0, 4.5],
-        target: [0.0, 0.0, 4.5],
-        fov_deg: 12.0,
+        eye: [base[0] - distance, base[1], mid],
+        target: [base[0], base[1], mid],
+        fov_deg,
         near: 0.5,
         far: 8000.0,
     };
-    // Centroid (pixels) of what the tree changes in the image, against the frame without it.
-    let centroid = |wind: &str, impostor: bool| {
-        let mut spec = scene(wind);
-        if impostor {
-            spec.lod.fraction = 100.0;
-        } else {
-            spec.lod.geometry = false;
-        }
-        let mut forest = Forest::new(&spec).expect("forest");
-        let mut gpu = Headless::new(&forest, W, H).unwrap_or_else(|e| panic!("{e}"));
-        let mut frame = FrameData::default();
-        forest.frame(&camera, W as f32 / H as f32, &mut frame);
-        // 40 s (the step is exact for any dt): the trunk, the slowest joint, has settled.
-        for _ in 0..400 {
-            forest.step(0.1);
-        }
-        forest.frame(&camera, W as f32 / H as f32, &mut frame);
-        let drawn_as_impostor = frame.instances.iter().all(|i| i.tag & 15 == 15);
-        assert_eq!(drawn_as_impostor, impostor);
-        let img = gpu.render(&frame, &camera).expect("render");
-        frame.instances.clear();
-        frame.buckets.clear();
-        let empty = gpu.render(&frame, &camera).expect("render");
-        let (mut sx, mut sy, mut n) = (0.0f64, 0.0f64, 0usize);
-        for (k, (a, b)) in img.chunks(4).zip(empty.chunks(4)).enumerate() {
-            if (0..3).map(|c| a[c].abs_diff(b[c]) as u32).sum::<u32>() > 24 {
-                sx += (k as u32 % W) as f64;
-                sy += (k as u32 / W) as f64;
-                n += 1;
-            }
-        }
-        assert!(n > 2000, "the tree fills too little of the image: {n} px");
-        [sx / n as f64, sy / n as f64]
+    let mut gpu = Headless::new(&forest, W, H).unwrap_or_else(|e| panic!("{e}"));
+    let mut frame = FrameData::default();
+    forest.frame(&camera, W as f32 / H as f32, &mut frame);
+    // 40 s (the step is exact for any dt): the trunk, the slowest joint, has settled.
+    for _ in 0..400 {
+        forest.step(0.1);
+    }
+    forest.frame(&camera, W as f32 / H as f32, &mut frame);
+    assert!(frame.instances.len() == 1 && frame.instances[0].tag & 15 == 15, "one impostor");
+    let yaw = frame.instances[0].yaw;
+    let leaning = gpu.render(&frame, &camera).expect("render");
+    frame.instances[0].lean = [0; 2];
+    let upright = gpu.render(&frame, &camera).expect("render");
+    // The crown's mean displacement: tree space, turned into the world by the tree's yaw;
+    // across the image (the camera looks along +x, its right is −y) in pixels.
+    let w = forest.wind_sample([base[0] as f64, base[1] as f64, mid as f64]);
+    let (sn, cs) = yaw.sin_cos();
+    let tree_wind = [cs * w[0] + sn * w[1], -sn * w[0] + cs * w[1], w[2]];
+    let m = forest.species[0].lean().mean(tree_wind);
+    let world_y = sn * m[0] + cs * m[1];
+    let expected = -world_y * H as f32 / (distance * view);
+    // The best horizontal shift of the upright picture onto the leaning one over rows
+    // `rows` (least mean |Δ luma|, to a tenth of a pixel by a parabola through the best
+    // three).
+    let luma = |img: &[u8], x: u32, y: u32| px(img, x, y).iter().sum::<i32>() as f64;
+    let shift = |rows: std::ops::Range<u32>| {
+        let cost = |dx: i32| {
+            rows.clone()
+                .flat_map(|y| (20..W - 20).map(move |x| (x, y)))
+                .map(|(x, y)| {
+                    (luma(&leaning, x, y) - luma(&upright, (x as i32 - dx) as u32, y)).abs()
+                })
+                .sum::<f64>()
+        };
+        let costs: Vec<f64> = (-15..=15).map(cost).collect();
+        let best =
+            (1..costs.len() - 1).min_by(|&a, &b| costs[a].total_cmp(&costs[b])).expect("a shift");
+        let (l, c, r) = (costs[best - 1], costs[best], costs[best + 1]);
+        let sub = if l + r - 2.0 * c > 0.0 { 0.5 * (l - r) / (l + r - 2.0 * c) } else { 0.0 };
+        (best as f64 - 15.0 + sub) as f32
     };
-    let shift = |impostor: bool| {
-        let (at_rest, in_wind) = (centroid("0", impostor), centroid("8", impostor));
-        [in_wind[0] - at_rest[0], in_wind[1] - at_rest[1]]
-    };
-    let (full, far) = (shift(false), shift(true));
-    let size = |v: [f64; 2]| v[0].hypot(v[1]);
-    let off = size([far[0] - full[0], far[1] - full[1]]);
-    eprintln!("full detail moves {full:.2?} px, the impostor {far:.2?} px: off by {off:.2} px");
-    assert!(size(full) > 3.0, "full detail leans {full:?} px");
-    assert!(off < 0.3 * size(full), "the impostor moves {far:?} px, full detail {full:?} px");
+    let foot = pixel_of(&camera, base).expect("the foot in view").1;
+    let top = pixel_of(&camera, [base[0], base[1], base[2] + height]).expect("the top in view").1;
+    let (at_foot, upper) = (shift(foot - 6..foot), shift(top..(top + foot) / 2));
+    eprintln!(
+        "mean displacement {m:.2?} m (tree space), {expected:.2} px across the image; \
+         the picture moves {at_foot:.2} px at its foot, {upper:.2} px over its upper half"
+    );
+    assert!(expected.abs() > 3.0, "the crown leans {expected} px");
+    assert!(at_foot.abs() < 0.5, "the foot moves {at_foot} px");
+    // The shear grows with height: the upper half moves more than the crown's mean.
+    let ratio = upper / expected;
+    assert!((1.0..2.0).contains(&ratio), "the upper half moves {upper} px, the crown {expected}");
 }

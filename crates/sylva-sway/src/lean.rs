@@ -43,9 +43,8 @@ pub struct CrownLean {
     /// Horizontal lean (m, tree space), direction-major: `table[d · SPEEDS.len() + s]` for
     /// the wind blowing towards azimuth d · π / DIRECTIONS (from the x axis) at `SPEEDS[s]`.
     table: Vec<[f32; 2]>,
-    /// Leaf-weighted mean of the impostor's shear profile, clamp(z / z_top, 0, 1.5) with
-    /// z_top the trunk top's height: the shear at the trunk top that moves the leaves by
-    /// the lean on average.
+    /// Leaf-weighted mean of the impostor's shear profile (see [`CrownLean::shear`]): the
+    /// shear at the trunk top that moves the leaves by the lean on average.
     profile: f32,
 }
 
@@ -69,7 +68,12 @@ impl CrownLean {
             trunk[a as usize] = true;
             a = sp.parent[a as usize];
         }
-        let top = skeleton.joints().get(skeleton.trunk_top()).map_or(1.0, |j| j.tip()[2]).max(0.1);
+        // The impostor's shear at height z, per unit of shear at the trunk top (z_top): in
+        // proportion to the height, z / z_top, but at most 1.5 at the tree's top (h).
+        let joints = skeleton.joints();
+        let top = joints.get(skeleton.trunk_top()).map_or(1.0, |j| j.tip()[2]).max(0.1);
+        let h = joints.iter().map(|j| j.tip()[2].max(j.origin[2])).fold(top, f32::max);
+        let corner = (h / top).min(1.5) as f64;
         // Subtree sums, tips inwards: Σ d and Σ d x for wood and leaves, the drag and the
         // leaves sitting mid segment; the leaves' weight is their still-air drag,
         // proportional to their area.
@@ -86,7 +90,7 @@ impl CrownLean {
                 s[5 + c] += dl * x[c];
             }
             total += dl;
-            profile += dl * (x[2] / top as f64).clamp(0.0, 1.5);
+            profile += dl * corner * (x[2] / h as f64).clamp(0.0, 1.0);
             let p = sp.parent[i];
             if p != NO_PARENT {
                 let s = sums[i];
@@ -184,7 +188,8 @@ impl CrownLean {
 
     /// The shear at the trunk top's height (m, tree space, horizontal) that moves the leaves
     /// by [`mean`](Self::mean) on average, sheared in with height as an impostor's trunk
-    /// sway is (clamp(z / z_top, 0, 1.5)).
+    /// sway is: by z · min(1 / z_top, 1.5 / h) of it at height z (z_top the trunk top's
+    /// height, h the tree's).
     pub fn shear(&self, u: [f32; 3]) -> [f32; 2] {
         let m = self.mean(u);
         [m[0] / self.profile, m[1] / self.profile]

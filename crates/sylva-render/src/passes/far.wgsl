@@ -136,12 +136,17 @@ fn vs_main(@builtin(vertex_index) vi: u32, inst: InstanceIn, lean: LeanIn) -> Fa
     let q = (corner - 0.5) * 2.0 * half;
     let offset = (right * q.x + up * q.y) * inst.scale;
     // Sway: the trunk top's displacement and the crown's lean, sheared in with height above
-    // the ground.
+    // the ground: in proportion to it, the trunk top's height moving by the shift (at most
+    // 1.5 times it at the quad's top, for a tree whose trunk ends low in its crown). The
+    // factor is linear in height through the ground (the quad's bottom corners, below it,
+    // move a little the other way), so the foot stays where it stands.
     let z = far.center + offset.z / inst.scale;
+    let z_top = far.center + half.y * up.z;
+    let per_m = min(1.0 / max(far.tip.z, 0.1), 1.5 / max(z_top, 0.1));
     let m = palette(inst.palette, far.joint);
     let top = palette_apply(m, far.tip) - far.tip + vec3<f32>(lean.shear, 0.0);
     let shift = rotate_z(top, yaw) * inst.scale;
-    let p = mid - base + offset + shift * clamp(z / max(far.tip.z, 0.1), 0.0, 1.5);
+    let p = mid - base + offset + shift * (z * per_m);
     let world = base + p;
     var out: FarOut;
     out.clip = project(world);
