@@ -121,6 +121,20 @@ fn a_tree_past_its_lod_cap_is_drawn_and_simulated_as_without_the_cap() {
     }
 }
 
+/// Three steps of `forest` seen from [`far_camera`], after a frame before the first step
+/// (so that the first step follows the animation LOD: a forest never drawn simulates every
+/// joint): the camera and the last frame.
+fn far_frames(forest: &mut Forest) -> (Camera, FrameData) {
+    let cam = far_camera(forest);
+    let mut f = FrameData::default();
+    forest.frame(&cam, 4.0 / 3.0, &mut f);
+    for _ in 0..3 {
+        forest.step(1.0 / 30.0);
+        forest.frame(&cam, 4.0 / 3.0, &mut f);
+    }
+    (cam, f)
+}
+
 fn far_camera(forest: &Forest) -> Camera {
     let mut c = forest.default_camera();
     // Far enough that every tree is a few pixels tall: all impostors.
@@ -135,15 +149,7 @@ fn far_camera(forest: &Forest) -> Camera {
 fn joints_not_drawn_are_neither_uploaded_nor_stepped() {
     let spec = SceneSpec::builtin("small").expect("small");
     let mut forest = Forest::new(&spec).expect("forest");
-    let cam = far_camera(&forest);
-    let mut f = FrameData::default();
-    // A frame before the first step, so that the first step follows the animation LOD (a
-    // forest never drawn simulates every joint).
-    forest.frame(&cam, 4.0 / 3.0, &mut f);
-    for _ in 0..3 {
-        forest.step(1.0 / 30.0);
-        forest.frame(&cam, 4.0 / 3.0, &mut f);
-    }
+    let (cam, mut f) = far_frames(&mut forest);
     assert_eq!(f.stats.impostors, f.stats.drawn, "all trees far away");
     assert!(f.stats.drawn > 0);
     // Uploaded: the trunk joints of each drawn instance, nothing else.
@@ -875,13 +881,7 @@ fn impostors_lean_downwind_with_their_limbs_and_not_in_still_air() {
             ..SceneSpec::builtin("small").expect("small")
         };
         let mut forest = Forest::new(&spec).expect("forest");
-        let cam = far_camera(&forest);
-        let mut f = FrameData::default();
-        forest.frame(&cam, 4.0 / 3.0, &mut f);
-        for _ in 0..3 {
-            forest.step(1.0 / 30.0);
-            forest.frame(&cam, 4.0 / 3.0, &mut f);
-        }
+        let (_, f) = far_frames(&mut forest);
         assert!(f.stats.impostors > 0 && f.stats.impostors == f.stats.drawn);
         let mut by_group = std::collections::BTreeMap::new();
         for inst in &f.instances {
