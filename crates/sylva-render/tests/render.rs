@@ -830,8 +830,8 @@ fn an_impostor_keeps_the_outline_of_full_detail_seen_level_and_from_above() {
 #[test]
 fn an_impostor_leans_downwind_by_its_crowns_lean() {
     // A weeping willow seen across a steady 8 m/s wind once its sway has died down, drawn
-    // as an impostor: its hanging twigs stream out about 0.7 m (leaf-weighted mean) while
-    // its thick trunk's top moves 4 cm, so swayed by the trunk top alone its picture stood
+    // as an impostor: its hanging twigs stream out about a metre (leaf-weighted mean) while
+    // its thick trunk's top moves 2 cm, so swayed by the trunk top alone its picture stood
     // all but still. The same frame drawn with the crown's lean (`Instance::lean`) and with
     // it taken off: the picture's foot stays where it stands, its upper half moves
     // downwind, by about the crown's mean displacement (`CrownLean`) at that distance.
