@@ -9,7 +9,7 @@ use anyhow::{Context, bail};
 use clap::{Args, Subcommand};
 use sylva_forest::WindSource;
 use sylva_sway::probe::{bend_and_release, free_decay};
-use sylva_sway::{SwayBatch, SwayParams, SwaySpecies, transform};
+use sylva_sway::{CrownLean, SwayBatch, SwayParams, SwaySpecies, transform};
 use sylva_tree::{PARAMS, PRESETS, Species, species::Scope};
 
 #[derive(Debug, Subcommand)]
@@ -475,6 +475,7 @@ pub fn run_sway(cmd: SwayCommand) -> anyhow::Result<()> {
     let wind: Vec<[f32; 3]> = (0..steps).map(|k| point.at(k as f64 * dt)).collect();
     let sp =
         SwaySpecies::new(sk, SwayParams::for_leaves(sylva_tree::texture::is_needle(&species)))?;
+    let lean = CrownLean::new(&sp, sk);
     let mut batch = SwayBatch::new(sp, 1);
     let top = sk.trunk_top();
     // Named branches: the three heaviest stems that start on the trunk.
@@ -537,12 +538,40 @@ pub fn run_sway(cmd: SwayCommand) -> anyhow::Result<()> {
         a.csv.display(),
         steps + hold
     );
+    // The crown's static lean in the steady part of the wind (the mean over the run, or the
+    // load held before the release): what the limbs off the trunk line add to the trunk's
+    // own bend, and what an impostor of this tree is sheared with.
+    let steady = match &decay {
+        Some(_) => [wind[0][0].max(1.0) + 4.0, 0.0, 0.0],
+        None => {
+            let n = wind.len().max(1) as f32;
+            std::array::from_fn(|c| wind.iter().map(|w| w[c]).sum::<f32>() / n)
+        }
+    };
+    let [lx, ly] = lean.mean(steady);
+    println!(
+        "crown lean in a steady {:.1} m/s: {:.3} m (x {lx:.3}, y {ly:.3}; the leaves' mean, from the limbs off the trunk line)",
+        steady[0].hypot(steady[1]),
+        lx.hypot(ly)
+    );
     if let Some((xs, ys)) = decay {
         let (f, zeta) = free_decay(&xs, &ys, dt);
-        println!(
-            "trunk free decay: frequency {f:.3} Hz, damping ratio {zeta:.3} (structural ζ = {:.3} plus aerodynamic)",
-            SwayParams::default().damping_ratio
-        );
+        let structural = SwayParams::default().damping_ratio;
+        if zeta.is_finite() {
+            println!(
+                "trunk free decay: frequency {f:.3} Hz, damping ratio {zeta:.3} (structural ζ = {structural:.3} plus aerodynamic)"
+            );
+        } else {
+            // Too few swings after the release to read a decay from.
+            let need = if f > 0.0 {
+                format!(" (about {:.0} s here)", (3.0 / f).ceil())
+            } else {
+                String::new()
+            };
+            println!(
+                "trunk free decay: frequency {f:.3} Hz; damping ratio not measured: --seconds of free decay must span three swings or more{need}"
+            );
+        }
     }
     Ok(())
 }

@@ -176,6 +176,18 @@ fn wind_flags_take_a_preset_a_speed_or_a_file() {
         let rows = std::fs::read_to_string(&csv).expect("csv");
         let first = rows.lines().nth(1).unwrap_or_default().to_string();
         assert_eq!(wind == "7.5", first.contains(",7.5000,0.0000,0.0000,"), "{wind}: {first}");
+        // The crown's static lean in the steady part of the wind: downwind, some centimetres
+        // for an aspen in 7.5 m/s.
+        if wind == "7.5" {
+            let line = text.lines().find(|l| l.starts_with("crown lean")).unwrap_or_default();
+            let metres: f64 = line
+                .split(": ")
+                .nth(1)
+                .and_then(|r| r.split(' ').next())
+                .and_then(|v| v.parse().ok())
+                .unwrap_or(0.0);
+            assert!(line.contains("steady 7.5 m/s") && (0.02..0.3).contains(&metres), "{text}");
+        }
     }
     for cmd in
         [vec!["sway", "probe", "--species", "quaking_aspen"], vec!["render", "--scene", "small"]]
@@ -214,6 +226,19 @@ fn tree_and_sway_commands_work_and_refuse_bad_species_files() {
         c,
     ]);
     assert!(ok && text.contains("frequency") && text.contains("damping ratio"), "{text}");
+    // Two seconds of free decay are about one swing: the ratio is not read from it.
+    let (ok, short) = sylva(&[
+        "sway",
+        "probe",
+        "--species",
+        "quaking_aspen",
+        "--release",
+        "--seconds",
+        "2",
+        "--csv",
+        c,
+    ]);
+    assert!(ok && short.contains("not measured") && !short.contains("NaN"), "{short}");
     let rows = std::fs::read_to_string(&csv).expect("csv");
     assert!(
         rows.starts_with("time_s,wind_u") && rows.lines().count() > 900,
