@@ -444,10 +444,22 @@ pub struct SwayBatch {
 
 /// Rotation matrix of the rotation vector φ (axis × angle), Rodrigues' formula. Small
 /// angles use Taylor series of sin a/a and (1 − cos a)/a² (error < 1e-9 below 0.5 rad).
-pub(crate) fn rotation(phi: [f32; 3]) -> [[f32; 3]; 3] {
-    let a2 = dot(phi, phi);
-    let (s, c) = if a2 < 0.25 { small_angle(a2) } else { large_angle(a2) };
+#[cfg(test)]
+fn rotation(phi: [f32; 3]) -> [[f32; 3]; 3] {
+    let (s, c) = sin_cos_ratios(dot(phi, phi));
     rodrigues(phi, s, c)
+}
+
+/// (sin a / a, (1 − cos a) / a²) from a², by series below a = 0.5 rad.
+fn sin_cos_ratios(a2: f32) -> (f32, f32) {
+    if a2 < 0.25 { small_angle(a2) } else { large_angle(a2) }
+}
+
+/// A joint's palette for the rotation vector `phi` about its rest position `o` (one joint
+/// at a time, off the step's lanes: `CrownLean`'s settled crowns).
+pub(crate) fn joint_palette(phi: [f32; 3], o: [f32; 3]) -> Palette {
+    let (s, c) = sin_cos_ratios(dot(phi, phi));
+    local_palette(phi, o, s, c)
 }
 
 /// Below this e² (e = 0.1 rad) `lever_bend`'s factor is taken from its series, 1 − e²/2.
@@ -1575,7 +1587,6 @@ fn palette_lanes<const W: usize>(
 
 /// A joint's rotation about its rest position `o`, T(o) R T(−o), for the rotation vector
 /// `ph` with (sin a / a, (1 − cos a) / a²) = (`s`, `c`).
-#[cfg(not(feature = "glam"))]
 #[inline(always)]
 fn local_palette(ph: [f32; 3], o: [f32; 3], s: f32, c: f32) -> Palette {
     let r = rodrigues(ph, s, c);
@@ -1628,8 +1639,7 @@ fn palette_lanes<const W: usize>(
 }
 
 /// a · b for 3×4 affine matrices.
-#[cfg_attr(feature = "glam", allow(dead_code))]
-fn compose(a: &Palette, b: &Palette) -> Palette {
+pub(crate) fn compose(a: &Palette, b: &Palette) -> Palette {
     let mut o = [0.0; 12];
     for r in 0..3 {
         for c in 0..4 {

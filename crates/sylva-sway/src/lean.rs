@@ -28,7 +28,7 @@ use sylva_core::v3::{add, cross, dot, scale, sub};
 use sylva_tree::{NO_PARENT, Skeleton};
 
 use crate::SwaySpecies;
-use crate::batch::{MAX_BEND, lever_bend, rotation};
+use crate::batch::{IDENTITY, MAX_BEND, Palette, compose, joint_palette, lever_bend, transform};
 
 /// Wind directions tabulated over half a turn (the lean is odd in the wind: the other half
 /// is its negative).
@@ -129,23 +129,17 @@ impl CrownLean {
                 let ql = scale(qw, 1.0 / (1.0 + s * inv_ur));
                 // Each joint's settled bend, then the palettes composed root outwards (the
                 // trunk line at rest) and the leaves moved by them.
-                let mut pose = vec![([[0.0f32; 3]; 3], [0.0f32; 3]); n];
+                let mut pose = vec![IDENTITY; n];
                 let mut sum = [0.0f64; 2];
                 for j in (0..n).filter(|&j| leafy[j]) {
-                    let r = bends[j].as_ref().map_or(IDENTITY3, |b| b.settled(qw, ql));
-                    // M_j(x) = M_p(o_j + R_j (x − o_j)): rotation R_p R_j, translation
-                    // M_p(o_j − R_j o_j).
-                    let o = sp.origin[j];
-                    let local = (r, sub(o, mul(&r, o)));
-                    let m = match sp.parent[j] {
+                    let phi = bends[j].as_ref().map_or([0.0; 3], |b| b.settled(qw, ql));
+                    let local = joint_palette(phi, sp.origin[j]);
+                    let m: Palette = match sp.parent[j] {
                         NO_PARENT => local,
-                        p => {
-                            let (rp, tp) = &pose[p as usize];
-                            (matmul(rp, &local.0), add(mul(rp, local.1), *tp))
-                        }
+                        p => compose(&pose[p as usize], &local),
                     };
                     let x = leaf_at[j];
-                    let moved = sub(add(mul(&m.0, x), m.1), x);
+                    let moved = sub(transform(&m, x), x);
                     let w = sp.leaf_drag[j] as f64;
                     sum[0] += w * moved[0] as f64;
                     sum[1] += w * moved[1] as f64;
@@ -197,10 +191,10 @@ impl CrownLean {
 }
 
 impl Bend {
-    /// The rotation this joint settles at in the wind (q_w = |u| u on the wood, q_l the
-    /// reconfigured one on the leaves), as the step's springs do: the linear bend e (moment
-    /// over stiffness on each axis), lever-corrected, never past `MAX_BEND`.
-    fn settled(&self, qw: [f32; 3], ql: [f32; 3]) -> [[f32; 3]; 3] {
+    /// The rotation vector this joint settles at in the wind (q_w = |u| u on the wood, q_l
+    /// the reconfigured one on the leaves), as the step's springs do: the linear bend e
+    /// (moment over stiffness on each axis), lever-corrected, never past `MAX_BEND`.
+    fn settled(&self, qw: [f32; 3], ql: [f32; 3]) -> [f32; 3] {
         let m = add(cross(self.wood, qw), cross(self.leaves, ql));
         let e = [dot(m, self.axes[0]) * self.inv_k, dot(m, self.axes[1]) * self.inv_k];
         let e2 = e[0] * e[0] + e[1] * e[1];
@@ -209,18 +203,8 @@ impl Bend {
         if bend > MAX_BEND {
             f *= MAX_BEND / bend;
         }
-        rotation(add(scale(self.axes[0], f * e[0]), scale(self.axes[1], f * e[1])))
+        add(scale(self.axes[0], f * e[0]), scale(self.axes[1], f * e[1]))
     }
-}
-
-const IDENTITY3: [[f32; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
-
-fn mul(m: &[[f32; 3]; 3], x: [f32; 3]) -> [f32; 3] {
-    std::array::from_fn(|r| dot(m[r], x))
-}
-
-fn matmul(a: &[[f32; 3]; 3], b: &[[f32; 3]; 3]) -> [[f32; 3]; 3] {
-    std::array::from_fn(|r| std::array::from_fn(|c| (0..3).map(|k| a[r][k] * b[k][c]).sum()))
 }
 
 /// `a + t (b − a)`.
