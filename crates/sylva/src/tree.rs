@@ -516,8 +516,8 @@ pub fn run_sway(cmd: SwayCommand) -> anyhow::Result<()> {
     };
     // With --release: 20 s bent under a steady wind 4 m/s above the wind given, then free.
     let hold = if a.release { (20.0 * a.fps) as usize } else { 0 };
+    let load = [wind[0][0].max(1.0) + 4.0, 0.0, 0.0];
     let decay = if a.release {
-        let load = [wind[0][0].max(1.0) + 4.0, 0.0, 0.0];
         Some(bend_and_release(&mut batch, sk, load, hold, steps, dt as f32, &mut row))
     } else {
         for (k, w) in wind.iter().enumerate() {
@@ -542,7 +542,7 @@ pub fn run_sway(cmd: SwayCommand) -> anyhow::Result<()> {
     // load held before the release): what the limbs off the trunk line add to the trunk's
     // own bend, and what an impostor of this tree is sheared with.
     let steady = match &decay {
-        Some(_) => [wind[0][0].max(1.0) + 4.0, 0.0, 0.0],
+        Some(_) => load,
         None => {
             let n = wind.len().max(1) as f32;
             std::array::from_fn(|c| wind.iter().map(|w| w[c]).sum::<f32>() / n)
