@@ -967,10 +967,11 @@ impl Forest {
         let members_of = |si: usize| trees.iter().filter(|t| t.0.species == si as u32).count();
         let simulations = |trees_here: usize, joints: usize| {
             let share = spec.sim_joint_budget as f64 * trees_here as f64 / total as f64;
+            // A species the layout gave no tree simulates nothing.
             if spec.lod.wind {
-                ((share / joints as f64) as usize).clamp(1, trees_here.max(1))
+                ((share / joints as f64) as usize).clamp(trees_here.min(1), trees_here)
             } else {
-                trees_here.max(1)
+                trees_here
             }
         };
         // The whole forest's animation state (68 bytes per joint and lane stored), per
@@ -2142,6 +2143,37 @@ fn coarse_wind_field(spec: &SceneSpec, radius: f32) -> Result<WindField, ForestE
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_species_the_layout_gave_no_tree_simulates_nothing() {
+        // The small scene's five trees, and a fourth species of so small a share that none
+        // of them draws it: every tree is simulated on its own (wind-field LOD off), so each
+        // species simulates exactly its own trees, and the one without trees none.
+        let mut spec = SceneSpec::builtin("small").expect("small");
+        spec.species.push(crate::SpeciesShare { name: "black_tupelo".into(), weight: 1e-6 });
+        for wind in [false, true] {
+            spec.lod.wind = wind;
+            let mut forest = Forest::new(&spec).expect("forest");
+            let mut planted = vec![0; forest.species.len()];
+            for (p, _) in &forest.trees {
+                planted[p.species as usize] += 1;
+            }
+            assert_eq!(planted[3], 0, "the fourth species drew no tree");
+            assert_eq!(forest.species[3].simulated(), 0, "wind LOD {wind}");
+            let simulated: Vec<usize> = forest.species.iter().map(|s| s.simulated()).collect();
+            if !wind {
+                assert_eq!(simulated, planted, "each tree its own simulation");
+            }
+            assert!(simulated.iter().zip(&planted).all(|(&s, &p)| s <= p && (s > 0) == (p > 0)));
+            // It still steps and builds frames.
+            let cam = forest.default_camera();
+            let mut f = FrameData::default();
+            forest.step(1.0 / 30.0);
+            forest.frame(&cam, 4.0 / 3.0, &mut f);
+            assert_eq!(f.stats.simulated, simulated.iter().sum::<usize>());
+            assert!(f.stats.drawn > 0);
+        }
+    }
 
     #[test]
     fn simulations_that_need_the_same_joints_are_stepped_together() {
