@@ -123,7 +123,7 @@ pub enum ForestError {
 /// `max_state_mb`.
 pub const MAX_STATE_BYTES: usize = 6_000_000_000;
 
-/// One tree drawn this frame, as the vertex shaders read it (52 bytes; sylva-render maps
+/// One tree drawn this frame, as the vertex shaders read it (56 bytes; sylva-render maps
 /// each field to a vertex attribute by its offset).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, PartialEq, Pod, Zeroable)]
@@ -159,6 +159,12 @@ pub struct Instance {
     /// static bend of every joint off the trunk line in the instance's wind). Mesh levels
     /// simulate those joints and do not read it.
     pub lean: [u16; 2],
+    /// How the same bend turns an impostor's leaves (as half-precision bits): the
+    /// leaf-weighted mean of where it takes the vertical ([`sylva_sway::CrownLean::tilt`]),
+    /// as its horizontal part along the lean's direction and one minus its vertical part
+    /// (the mean cosine of the leaves' tilt); zero in still air. The impostor turns its
+    /// baked leaf normals by it, so a crown bent in the wind darkens as full detail does.
+    pub tilt: [u16; 2],
 }
 
 /// The geometry-LOD switch and thresholds (see the module documentation).
@@ -819,8 +825,10 @@ struct Group {
     yaw: f32,
     leaf: LeafSway,
     /// The crown's static lean in the group's wind, as an impostor's shear at the trunk
-    /// top (tree space, m; see [`Instance::lean`]).
+    /// top (tree space, m; see [`Instance::lean`]), and how it turns the leaves (see
+    /// [`Instance::tilt`]).
     lean: [f32; 2],
+    tilt: [f32; 2],
 }
 
 /// A forest in wind.
@@ -1041,6 +1049,7 @@ impl Forest {
                     yaw,
                     leaf: LeafSway::default(),
                     lean: [0.0; 2],
+                    tilt: [0.0; 2],
                 });
             }
             let slots: Vec<u32> = (0..runs.len() as u32).collect();
@@ -1513,6 +1522,7 @@ impl Forest {
                 let (sn, cs) = g.yaw.sin_cos();
                 s.winds[lane] = [cs * w[0] + sn * w[1], -sn * w[0] + cs * w[1], w[2]];
                 g.lean = s.lean.shear(s.winds[lane]);
+                g.tilt = tilt_along(g.lean, s.lean.tilt(s.winds[lane]));
                 let speed = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
                 leaf.step(&mut g.leaf, speed, dt);
             }
@@ -1954,6 +1964,7 @@ impl Forest {
                         leaf_amplitude: group.leaf.amplitude,
                         fade,
                         lean: group.lean.map(|v| half::f16::from_f32(v).to_bits()),
+                        tilt: group.tilt.map(|v| half::f16::from_f32(v).to_bits()),
                         tag: if far { 15 } else { level.min(14) }
                             | (species.min(15) << 4)
                             | (g << 8),
@@ -1975,6 +1986,14 @@ impl Forest {
 fn start_camera(spec: &SceneSpec, radius: f32) -> Camera {
     let base = default_camera(spec, radius);
     if spec.camera_path.is_empty() { base } else { camera_on_path(&spec.camera_path, 0.0, &base) }
+}
+
+/// [`Instance::tilt`] from the crown's shear and its turned vertical `t` (tree space): the
+/// horizontal part along the shear, and one minus the vertical part.
+fn tilt_along(shear: [f32; 2], t: [f32; 3]) -> [f32; 2] {
+    let len = (shear[0] * shear[0] + shear[1] * shear[1]).sqrt();
+    let along = if len > 1e-6 { (t[0] * shear[0] + t[1] * shear[1]) / len } else { 0.0 };
+    [along, 1.0 - t[2]]
 }
 
 /// Wind at world point `p` and time `t` from the full-resolution `view`, blended with the

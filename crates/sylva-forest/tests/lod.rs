@@ -873,7 +873,7 @@ fn lean_of(i: &sylva_forest::Instance) -> [f32; 2] {
 }
 
 #[test]
-fn impostors_lean_downwind_with_their_limbs_and_not_in_still_air() {
+fn impostors_lean_downwind_and_turn_their_leaves_with_their_limbs_not_in_still_air() {
     for speed in ["10", "0"] {
         let spec = SceneSpec {
             wind: speed.into(),
@@ -890,10 +890,15 @@ fn impostors_lean_downwind_with_their_limbs_and_not_in_still_air() {
             let key = (inst.tag >> 4 & 15, inst.tag >> 8);
             assert_eq!(*by_group.entry(key).or_insert(l), l, "group {key:?}");
             let size = l[0].hypot(l[1]);
+            let t = inst.tilt.map(|b| half::f16::from_bits(b).to_f32());
             if speed == "0" {
                 assert_eq!(size, 0.0, "a lean in still air");
+                assert_eq!(t, [0.0; 2], "leaves turned in still air");
                 continue;
             }
+            // The leaves turned from the sky: the mean cosine of their tilt below one
+            // (`Instance::tilt` holds one minus it), and at most a right angle.
+            assert!(t[1] > 0.005 && t[1] < 1.0, "leaves' tilt {t:?} in 10 m/s");
             // In world space, downwind: the tree-space lean turned by the instance's yaw,
             // against the wind at its crown.
             let (s, c) = inst.yaw.sin_cos();

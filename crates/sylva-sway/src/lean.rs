@@ -17,6 +17,12 @@
 //! and averaged over the leaves (weighted by leaf area, each at its segment's middle), the
 //! leaves' displacement is the lean.
 //!
+//! The same rotations turn the leaves: [`CrownLean::tilt`] is the leaf-weighted mean of
+//! where they take the vertical, R ẑ. A crown bent in the wind turns its leaves away from
+//! the sky on average (the mean's vertical part falls below one: 0.86 for the quaking aspen
+//! at 12 m/s, 0.41 for the weeping willow), which is why full detail darkens in a strong
+//! wind; an impostor turns its baked normals by it to follow.
+//!
 //! It depends on the wind's horizontal direction and speed (the vertical component, a
 //! tenth of the speed or so, is left out); it is tabulated once per species over
 //! [`DIRECTIONS`] directions and the speeds of [`SPEEDS`] (held beyond the last) and read
@@ -30,9 +36,11 @@ use sylva_tree::{NO_PARENT, Skeleton};
 use crate::SwaySpecies;
 use crate::batch::{IDENTITY, MAX_BEND, Palette, compose, joint_palette, lever_bend, transform};
 
-/// Wind directions tabulated over half a turn (the lean is odd in the wind: the other half
-/// is its negative).
-pub const DIRECTIONS: usize = 8;
+/// Wind directions tabulated over the whole turn, 30° apart. Not half a turn and its
+/// negative: the bends are odd in the wind, but their composition is not (a crown that
+/// leans a little across a wind from the east does not lean the other way across a wind
+/// from the west), which read as a crosswind lean of the wrong sign.
+pub const DIRECTIONS: usize = 12;
 
 /// Horizontal wind speeds tabulated, m/s (calm to a violent storm).
 pub const SPEEDS: [f32; 12] = [0.0, 2.0, 4.0, 6.0, 8.0, 10.0, 12.0, 15.0, 18.0, 22.0, 27.0, 32.0];
@@ -40,9 +48,10 @@ pub const SPEEDS: [f32; 12] = [0.0, 2.0, 4.0, 6.0, 8.0, 10.0, 12.0, 15.0, 18.0, 
 /// A species' static crown lean: see the module documentation.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CrownLean {
-    /// Horizontal lean (m, tree space), direction-major: `table[d · SPEEDS.len() + s]` for
-    /// the wind blowing towards azimuth d · π / DIRECTIONS (from the x axis) at `SPEEDS[s]`.
-    table: Vec<[f32; 2]>,
+    /// Horizontal lean (m, tree space) and the leaves' mean turned vertical (x, y, z; see
+    /// [`CrownLean::tilt`]), direction-major: `table[d · SPEEDS.len() + s]` for the wind
+    /// blowing towards azimuth d · 2π / DIRECTIONS (from the x axis) at `SPEEDS[s]`.
+    table: Vec<[f32; 5]>,
     /// Leaf-weighted mean of the impostor's shear profile (see [`CrownLean::shear`]): the
     /// shear at the trunk top that moves the leaves by the lean on average.
     profile: f32,
@@ -122,15 +131,15 @@ impl CrownLean {
             .map(|k| {
                 let (d, s) = (k / SPEEDS.len(), SPEEDS[k % SPEEDS.len()]);
                 if total <= 0.0 || s == 0.0 {
-                    return [0.0; 2];
+                    return REST;
                 }
-                let a = d as f32 * std::f32::consts::PI / DIRECTIONS as f32;
+                let a = d as f32 * std::f32::consts::TAU / DIRECTIONS as f32;
                 let qw = [s * s * a.cos(), s * s * a.sin(), 0.0];
                 let ql = scale(qw, 1.0 / (1.0 + s * inv_ur));
                 // Each joint's settled bend, then the palettes composed root outwards (the
                 // trunk line at rest) and the leaves moved by them.
                 let mut pose = vec![IDENTITY; n];
-                let mut sum = [0.0f64; 2];
+                let mut sum = [0.0f64; 5];
                 for j in (0..n).filter(|&j| leafy[j]) {
                     let phi = bends[j].as_ref().map_or([0.0; 3], |b| b.settled(qw, ql));
                     let local = joint_palette(phi, sp.origin[j]);
@@ -141,8 +150,11 @@ impl CrownLean {
                     let x = leaf_at[j];
                     let moved = sub(transform(&m, x), x);
                     let w = sp.leaf_drag[j] as f64;
-                    sum[0] += w * moved[0] as f64;
-                    sum[1] += w * moved[1] as f64;
+                    // R ẑ: the rotation's third column (the palette is row-major 3 × 4).
+                    let turned = [moved[0], moved[1], m[2], m[6], m[10]];
+                    for (a, v) in sum.iter_mut().zip(turned) {
+                        *a += w * v as f64;
+                    }
                     pose[j] = m;
                 }
                 sum.map(|v| (v / total) as f32)
@@ -156,28 +168,39 @@ impl CrownLean {
     /// settled bend of the joints off the trunk line in the steady wind `u` (m/s, tree
     /// space; its vertical component is left out; none for a wind that is not finite).
     pub fn mean(&self, u: [f32; 3]) -> [f32; 2] {
+        let v = self.lookup(u);
+        [v[0], v[1]]
+    }
+
+    /// Leaf-weighted mean of where the settled bend of the joints off the trunk line takes
+    /// the vertical (tree space, a vector of length at most one): ẑ in still air; in wind
+    /// its horizontal part leans with the bend and its vertical part, the mean cosine of
+    /// the leaves' tilt, falls.
+    pub fn tilt(&self, u: [f32; 3]) -> [f32; 3] {
+        let v = self.lookup(u);
+        [v[2], v[3], v[4]]
+    }
+
+    /// The table read bilinearly in speed and direction (the rest pose for a wind that is
+    /// not finite).
+    fn lookup(&self, u: [f32; 3]) -> [f32; 5] {
         let speed = (u[0] * u[0] + u[1] * u[1]).sqrt();
         if !speed.is_finite() || speed <= 0.0 || self.table.is_empty() {
-            return [0.0; 2];
+            return REST;
         }
         let last = SPEEDS.len() - 1;
         let s = SPEEDS.partition_point(|&v| v <= speed).clamp(1, last);
         let t = ((speed - SPEEDS[s - 1]) / (SPEEDS[s] - SPEEDS[s - 1])).min(1.0);
-        // Direction in steps of π / DIRECTIONS over the whole turn: the second half reads
-        // the first, negated.
-        let turns = u[1].atan2(u[0]) / std::f32::consts::PI * DIRECTIONS as f32;
-        let x = turns.rem_euclid(2.0 * DIRECTIONS as f32);
-        let d0 = (x.floor() as usize).min(2 * DIRECTIONS - 1);
+        // Direction in steps of 2π / DIRECTIONS over the whole turn.
+        let turns = u[1].atan2(u[0]) / std::f32::consts::TAU * DIRECTIONS as f32;
+        let x = turns.rem_euclid(DIRECTIONS as f32);
+        let d0 = (x.floor() as usize).min(DIRECTIONS - 1);
         let w = x - d0 as f32;
         let at = |d: usize| {
-            let (half, d) = (d / DIRECTIONS % 2, d % DIRECTIONS);
-            let sign = if half == 0 { 1.0 } else { -1.0 };
-            let row = &self.table[d * SPEEDS.len()..][..SPEEDS.len()];
-            let v = lerp(row[s - 1], t, row[s]);
-            [sign * v[0], sign * v[1]]
+            let row = &self.table[d % DIRECTIONS * SPEEDS.len()..][..SPEEDS.len()];
+            lerp(row[s - 1], t, row[s])
         };
-        let (a, b) = (at(d0), at(d0 + 1));
-        [a[0] + w * (b[0] - a[0]), a[1] + w * (b[1] - a[1])]
+        lerp(at(d0), w, at(d0 + 1))
     }
 
     /// The shear at the trunk top's height (m, tree space, horizontal) that moves the leaves
@@ -207,7 +230,10 @@ impl Bend {
     }
 }
 
+/// A table entry in still air: no lean, the vertical where it was.
+const REST: [f32; 5] = [0.0, 0.0, 0.0, 0.0, 1.0];
+
 /// `a + t (b − a)`.
-fn lerp(a: [f32; 2], t: f32, b: [f32; 2]) -> [f32; 2] {
-    [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])]
+fn lerp(a: [f32; 5], t: f32, b: [f32; 5]) -> [f32; 5] {
+    std::array::from_fn(|i| a[i] + t * (b[i] - a[i]))
 }

@@ -35,6 +35,37 @@ fn measured_lean(b: &SwayBatch, sk: &Skeleton) -> [f32; 3] {
     sum.map(|s| (s / total) as f32)
 }
 
+/// Leaf-weighted mean of R_c⁻¹ R_i ẑ over the leaves (c as in [`measured_lean`]): where
+/// the joints off the trunk line turn the vertical, the trunk's own bend taken out.
+fn measured_tilt(b: &SwayBatch, sk: &Skeleton) -> [f32; 3] {
+    let joints = sk.joints();
+    let mut trunk = vec![false; joints.len()];
+    let mut a = sk.trunk_top() as u32;
+    while a != NO_PARENT {
+        trunk[a as usize] = true;
+        a = joints[a as usize].parent;
+    }
+    let (mut sum, mut total) = ([0.0f64; 3], 0.0f64);
+    for (i, j) in joints.iter().enumerate() {
+        if j.leaf_area <= 0.0 {
+            continue;
+        }
+        let mut c = i;
+        while !trunk[c] {
+            c = joints[c].parent as usize;
+        }
+        // Palettes are row-major 3 × 4: R ẑ is the third column, Rᵀ v the columns' dots.
+        let (p, q) = (b.palette(0, i), b.palette(0, c));
+        let z = [p[2], p[6], p[10]];
+        for k in 0..3 {
+            let column = [q[k], q[4 + k], q[8 + k]];
+            sum[k] += (j.leaf_area * (0..3).map(|r| column[r] * z[r]).sum::<f32>()) as f64;
+        }
+        total += j.leaf_area as f64;
+    }
+    sum.map(|s| (s / total) as f32)
+}
+
 fn norm(v: [f32; 3]) -> f32 {
     (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
 }
@@ -48,21 +79,27 @@ fn the_predicted_lean_is_where_the_springs_settle_in_a_steady_wind() {
         let params = SwayParams::for_leaves(sylva_tree::texture::is_needle(&species));
         let sp = SwaySpecies::new(sk, params).expect("valid params");
         let lean = CrownLean::new(&sp, sk);
-        for wind in [[5.0f32, 0.0, 0.0], [0.0, 8.0, 0.0], [-12.0, 0.0, 0.0]] {
+        for wind in [[5.0f32, 0.0, 0.0], [0.0, 8.0, 0.0], [-12.0, 0.0, 0.0], [-4.6, -6.5, 0.0]] {
             let mut b = SwayBatch::new(sp.clone(), 1);
             // 40 s of steady wind at 30 Hz: the trunk (the slowest joint, a fraction of a
             // hertz at a damping ratio of several per cent) has settled to millimetres.
-            let mut mean = [0.0f32; 3];
+            let (mut mean, mut tilt) = ([0.0f32; 3], [0.0f32; 3]);
             let steps = 1200;
             for k in 0..steps {
                 b.step(1.0 / 30.0, &[wind]);
                 if k >= steps - 150 {
-                    let last = measured_lean(&b, sk);
+                    let (last, turned) = (measured_lean(&b, sk), measured_tilt(&b, sk));
                     for c in 0..3 {
                         mean[c] += last[c] / 150.0;
+                        tilt[c] += turned[c] / 150.0;
                     }
                 }
             }
+            let t = lean.tilt(wind);
+            let tilt_err = norm(std::array::from_fn(|c| t[c] - tilt[c]));
+            println!(
+                "{name} {wind:?}: vertical turned to {tilt:.3?}, predicted {t:.3?}, off by {tilt_err:.3}"
+            );
             let p = lean.mean(wind);
             let predicted = [p[0], p[1], 0.0];
             let horizontal = [mean[0], mean[1], 0.0];
@@ -71,15 +108,20 @@ fn the_predicted_lean_is_where_the_springs_settle_in_a_steady_wind() {
                 "{name} {wind:?}: settled {mean:.3?}, predicted {predicted:.3?}, off by {err:.3} m"
             );
             // Downwind; up to a fresh breeze within 5 % (and 5 mm) of the lean the springs
-            // settle at. In a strong breeze (12 m/s) within a third and a centimetre: the
-            // trunk's own bend, held at rest in the prediction, turns the crown of the
-            // short, spreading oak by then.
+            // settle at, in a strong breeze (12 m/s) within 10 % and a centimetre, also
+            // across the wind (measured: 0.1–4 %; tabulated over half a turn and negated
+            // for the other half, the oak's crosswind lean came out of the wrong sign).
             let downwind = (0..3).map(|c| predicted[c] * wind[c]).sum::<f32>();
             assert!(downwind > 0.0, "{name}: the lean is not downwind");
             let speed = norm(wind);
-            let share = if speed <= 8.0 { 0.05 } else { 0.35 };
+            let share = if speed <= 8.0 { 0.05 } else { 0.10 };
             let slack = if speed <= 8.0 { 0.005 } else { 0.01 };
             assert!(err <= share * norm(horizontal) + slack, "{name} {wind:?}: off by {err} m");
+            // The leaves' turned vertical within 0.015 of where the springs take it
+            // (measured: at most 0.009, the willow in a light breeze), and turned away from
+            // the sky: by a strong breeze its mean cosine is below 0.9 for every species.
+            assert!(tilt_err <= 0.015, "{name} {wind:?}: tilt off by {tilt_err}");
+            assert!(t[2] < 1.0 && (speed < 12.0 || t[2] < 0.9), "{name} {wind:?}: {t:?}");
         }
     }
 }
@@ -91,9 +133,12 @@ fn still_air_leans_nothing_and_the_lean_turns_with_the_wind() {
     let sp = SwaySpecies::new(&tree.skeleton, SwayParams::for_leaves(false)).expect("valid");
     let lean = CrownLean::new(&sp, &tree.skeleton);
     assert_eq!(lean.mean([0.0; 3]), [0.0; 2]);
-    // Reversing the wind reverses the lean (|u| u is odd in u).
+    assert_eq!(lean.tilt([0.0; 3]), [0.0, 0.0, 1.0], "the vertical where it was");
+    // Reversing the wind reverses the lean, to first order (|u| u is odd in u; the bends'
+    // composition is not).
     let (a, b) = (lean.shear([6.0, -2.0, 0.0]), lean.shear([-6.0, 2.0, 0.0]));
-    assert!((a[0] + b[0]).abs() < 1e-6 && (a[1] + b[1]).abs() < 1e-6, "{a:?} {b:?}");
+    let odd = ((a[0] + b[0]).powi(2) + (a[1] + b[1]).powi(2)).sqrt();
+    assert!(odd < 0.05 * (a[0] * a[0] + a[1] * a[1]).sqrt(), "{a:?} {b:?}");
     // Stronger wind, more lean; less than quadratically (the leaves reconfigure).
     let (s6, s12) = (lean.mean([6.0, 0.0, 0.0])[0], lean.mean([12.0, 0.0, 0.0])[0]);
     assert!(s12 > s6 && s12 < 4.0 * s6, "{s6} {s12}");

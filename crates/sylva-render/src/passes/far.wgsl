@@ -63,6 +63,9 @@ struct FarOut {
     @location(10) @interpolate(flat) blend: f32,
     @location(11) @interpolate(flat) rows: vec2<u32>,
     @location(12) @interpolate(flat) row_blend: f32,
+    // The leaves' mean turn (`turn_leaves`): the shear's direction (tree space) and the
+    // tilt.
+    @location(13) @interpolate(flat) tilt: vec4<f32>,
 };
 
 const TAU: f32 = 6.28318530718;
@@ -88,9 +91,11 @@ fn band(s: f32) -> f32 {
 }
 
 // The crown's lean: the shear at the trunk top's height beyond the trunk's own sway (tree
-// space, m).
+// space, m); and how the same bend turns the leaves: where it takes the vertical on
+// average, as its horizontal part along the shear and one minus its vertical part.
 struct LeanIn {
     @location(11) shear: vec2<f32>,
+    @location(12) tilt: vec2<f32>,
 };
 
 @vertex
@@ -156,10 +161,12 @@ fn vs_main(@builtin(vertex_index) vi: u32, inst: InstanceIn, lean: LeanIn) -> Fa
         // Shadows are looked up on the upright plane through the trunk facing the camera,
         // the point moved back to it horizontally: the quad leans back as the camera rises,
         // and the leaning part would lie behind the upright quad the tree casts its shadow
-        // from, in its own shadow. Offset towards the sun against self-shadowing (the baked
-        // normals vary per pixel).
+        // from, in its own shadow. The plane sways as the quad does (moved back by the
+        // quad's own offset, not to the resting trunk), so a crown leaning along the line
+        // of sight stays in its own shadow as its caster leans with it. Offset towards the
+        // sun against self-shadowing (the baked normals vary per pixel).
         let across = vec3<f32>(d, 0.0);
-        let upright = world - across * dot(world - mid, across);
+        let upright = world - across * dot(offset, across);
         out.shadow_near = shadow_near(upright, globals.sun_dir);
         out.shadow_far = shadow_far(upright, globals.sun_dir);
     }
@@ -172,7 +179,29 @@ fn vs_main(@builtin(vertex_index) vi: u32, inst: InstanceIn, lean: LeanIn) -> Fa
     out.fade = inst.fade;
     out.tint = tree_tint(inst.base);
     out.tag = inst.tag;
+    let lean_len = length(lean.shear);
+    var w = vec2<f32>(1.0, 0.0);
+    if (lean_len > 1e-6) {
+        w = lean.shear / lean_len;
+    }
+    out.tilt = vec4<f32>(w, lean.tilt);
     return out;
+}
+
+// A baked leaf normal `n` (tree space) turned as the crown's bend turns its leaves on
+// average: the mean of the leaves' rotations, which takes the vertical to s w + c z (w
+// the horizontal unit vector along the lean, `tilt` = (s, 1 - c)), taken as a turn in the
+// vertical plane through w that also shrinks it (c = the mean cosine) and leaves the
+// horizontal across it alone. The light is linear in the normal (as for the coarse mips'
+// mean normals), so this lights a texel with the mean of its bent leaves' light: a crown
+// in a strong wind darkens as full detail does, its leaves turned from the sky.
+fn turn_leaves(n: vec3<f32>, tilt: vec4<f32>) -> vec3<f32> {
+    let w = vec3<f32>(tilt.xy, 0.0);
+    let a = vec3<f32>(-tilt.y, tilt.x, 0.0);
+    let s = tilt.z;
+    let c = 1.0 - tilt.w;
+    let nw = dot(n, w);
+    return a * dot(n, a) + c * (w * nw + vec3<f32>(0.0, 0.0, n.z)) + s * (w * n.z - vec3<f32>(0.0, 0.0, nw));
 }
 
 // Into the shadow map: where the view nearest the sun's azimuth shows the tree.
@@ -212,7 +241,8 @@ fn fs_main(in: FarOut) -> @location(0) vec4<f32> {
     // the light is linear in the normal and the sun's nearly so, so this lights a coarse
     // texel with the mean of its leaves' light, as full detail's pixels average it (made
     // unit, a distant crown of leaves facing every way came out 5-9 % too bright).
-    let n = rotate_z(baked.xyz * 2.0 - 1.0, in.yaw);
+    let n_tree = baked.xyz * 2.0 - 1.0;
+    let n = rotate_z(mix(n_tree, turn_leaves(n_tree, in.tilt), baked.a), in.yaw);
     // Leaf pixels (normal alpha 1) take the tree's colour variation, as near trees do.
     let tint = mix(vec3<f32>(1.0), in.tint, baked.a);
     let sun = cascades_visibility(in.shadow_near, in.shadow_far, true);
