@@ -554,6 +554,12 @@ pub fn run_sway(cmd: SwayCommand) -> anyhow::Result<()> {
         steady[0].hypot(steady[1]),
         lx.hypot(ly)
     );
+    // The same bends turn the leaves from the sky (what darkens a crown in wind).
+    let [tx, ty, tz] = lean.tilt(steady);
+    println!(
+        "leaves turned by the same bends: their vertical on average {tz:.3} up, {:.3} across (x {tx:.3}, y {ty:.3}; below 1 up, turned from the sky)",
+        tx.hypot(ty)
+    );
     if let Some((xs, ys)) = decay {
         let (f, zeta) = free_decay(&xs, &ys, dt);
         let structural = SwayParams::default().damping_ratio;

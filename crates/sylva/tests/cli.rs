@@ -187,6 +187,16 @@ fn wind_flags_take_a_preset_a_speed_or_a_file() {
                 .and_then(|v| v.parse().ok())
                 .unwrap_or(0.0);
             assert!(line.contains("steady 7.5 m/s") && (0.02..0.3).contains(&metres), "{text}");
+            // And the leaves turned from the sky by the same bends: the mean of their
+            // vertical's vertical part a little below one.
+            let line = text.lines().find(|l| l.starts_with("leaves turned")).unwrap_or_default();
+            let up: f64 = line
+                .split("on average ")
+                .nth(1)
+                .and_then(|r| r.split(' ').next())
+                .and_then(|v| v.parse().ok())
+                .unwrap_or(1.0);
+            assert!((0.85..0.995).contains(&up), "{text}");
         }
     }
     for cmd in
