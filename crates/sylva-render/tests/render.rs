@@ -717,13 +717,13 @@ fn a_stand_drawn_as_impostors_keeps_the_brightness_of_full_detail() {
 
 #[test]
 fn impostors_darken_in_a_strong_wind_as_full_detail_does() {
-    // A stand of 100 trees seen from 60 m without shadows, at rest and after 3 s of a
-    // steady 12 m/s wind. Full detail darkens (measured 3–4 %): the bent limbs and twigs
-    // turn the leaves from the sky, the mean cosine of their tilt falling to 0.85–0.89 for
-    // the aspen, maple and fir (`CrownLean::tilt`). The impostors, which bend at the trunk
-    // alone, turn their baked leaf normals by that mean and darken too (measured here
-    // 3.1 % against 3.5 %; 1.9 % against 3.8 % in a 512×384 render); without it they
-    // came out 0.3 % brighter.
+    // A stand of 100 trees (about 80 m across) seen from 60 m off its centre, without
+    // shadows, at rest and after 3 s of a steady 12 m/s wind. Full detail darkens
+    // (measured 3–4 %): the bent limbs and twigs turn the leaves from the sky, the mean
+    // cosine of their tilt falling to 0.85–0.89 for the aspen, maple and fir
+    // (`CrownLean::tilt`). The impostors, which bend at the trunk alone, turn their baked
+    // leaf normals by that mean and darken too (measured here 3.1 % against 3.5 %; 1.9 %
+    // against 3.8 % in a 512×384 render); without it they came out 0.3 % brighter.
     let mut spec = SceneSpec::builtin("small").expect("small scene");
     spec.trees = 100;
     spec.spacing = 7.0;
