@@ -666,6 +666,25 @@ fn an_impostor_rises_from_one_baked_elevation_to_the_next_without_a_jump() {
     assert_no_jump(impostor_steps(path), "elevation steps");
 }
 
+/// The small scene's mix as a stand of `trees` at 7 m spacing in `wind`, without shadows:
+/// at full detail, and every tree an impostor.
+fn stand(trees: usize, wind: &str) -> (SceneSpec, SceneSpec) {
+    let mut spec = SceneSpec::builtin("small").expect("small scene");
+    spec.trees = trees;
+    spec.spacing = 7.0;
+    spec.wind = wind.into();
+    spec.lighting.shadows = false;
+    let mut full = spec.clone();
+    full.lod.geometry = false;
+    spec.lod.fraction = 100.0;
+    (full, spec)
+}
+
+/// Sum of the Rec. 709 luma of an RGBA image's pixels.
+fn luma(img: &[u8]) -> f64 {
+    img.chunks(4).map(|p| 0.2126 * p[0] as f64 + 0.7152 * p[1] as f64 + 0.0722 * p[2] as f64).sum()
+}
+
 #[test]
 fn a_stand_drawn_as_impostors_keeps_the_brightness_of_full_detail() {
     // 200 trees in calm air without shadows, seen from 60 and 120 m (crowns 30–70 pixels
@@ -673,19 +692,7 @@ fn a_stand_drawn_as_impostors_keeps_the_brightness_of_full_detail() {
     // tree an impostor stays within 3 % of full detail's. Lit from renormalised averaged
     // normals, the impostors read about 9 % brighter at 60 m (the mean of a crown's leaves'
     // light is below the light of their mean normal made unit).
-    let mut spec = SceneSpec::builtin("small").expect("small scene");
-    spec.trees = 200;
-    spec.spacing = 7.0;
-    spec.wind = "calm".into();
-    spec.lighting.shadows = false;
-    let mut full = spec.clone();
-    full.lod.geometry = false;
-    spec.lod.fraction = 100.0;
-    let luma = |img: &[u8]| {
-        img.chunks(4)
-            .map(|p| 0.2126 * p[0] as f64 + 0.7152 * p[1] as f64 + 0.0722 * p[2] as f64)
-            .sum::<f64>()
-    };
+    let (full, spec) = stand(200, "calm");
     let mut sums = Vec::new();
     for s in [&full, &spec] {
         let mut forest = Forest::new(s).expect("forest");
@@ -724,19 +731,7 @@ fn impostors_darken_in_a_strong_wind_as_full_detail_does() {
     // (`CrownLean::tilt`). The impostors, which bend at the trunk alone, turn their baked
     // leaf normals by that mean and darken too (measured here 3.1 % against 3.5 %; 1.9 %
     // against 3.8 % in a 512×384 render); without it they came out 0.3 % brighter.
-    let mut spec = SceneSpec::builtin("small").expect("small scene");
-    spec.trees = 100;
-    spec.spacing = 7.0;
-    spec.wind = "12".into();
-    spec.lighting.shadows = false;
-    let mut full = spec.clone();
-    full.lod.geometry = false;
-    spec.lod.fraction = 100.0;
-    let luma = |img: &[u8]| {
-        img.chunks(4)
-            .map(|p| 0.2126 * p[0] as f64 + 0.7152 * p[1] as f64 + 0.0722 * p[2] as f64)
-            .sum::<f64>()
-    };
+    let (full, spec) = stand(100, "12");
     let camera = Camera {
         eye: [-60.0, -18.0, 28.0],
         target: [0.0, 0.0, 5.0],

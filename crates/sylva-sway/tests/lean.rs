@@ -2,13 +2,16 @@
 //! steady wind until its sway has died down, the leaves' mean displacement from the bending
 //! of the joints off the trunk line measured from the step's palettes.
 
-use sylva_sway::{CrownLean, SwayBatch, SwayParams, SwaySpecies, transform};
-use sylva_tree::{NO_PARENT, PRESETS, Skeleton, Species};
+use sylva_sway::{CrownLean, Palette, SwayBatch, SwayParams, SwaySpecies, transform};
+use sylva_tree::{Joint, NO_PARENT, PRESETS, Skeleton, Species};
 
-/// Leaf-weighted mean of M_i x_i − M_c x_i over the leaves, x_i mid segment, c the nearest
-/// joint on the trunk line at or above i (tree space): how far the joints off the trunk
-/// line carry the leaves, the trunk's own bend taken out.
-fn measured_lean(b: &SwayBatch, sk: &Skeleton) -> [f32; 3] {
+/// Leaf-weighted mean over the leaves of `f(joint i, M_i, M_c)`, c the nearest joint on
+/// the trunk line at or above i.
+fn leaf_mean(
+    b: &SwayBatch,
+    sk: &Skeleton,
+    f: impl Fn(&Joint, Palette, Palette) -> [f32; 3],
+) -> [f32; 3] {
     let joints = sk.joints();
     let mut trunk = vec![false; joints.len()];
     let mut a = sk.trunk_top() as u32;
@@ -25,45 +28,33 @@ fn measured_lean(b: &SwayBatch, sk: &Skeleton) -> [f32; 3] {
         while !trunk[c] {
             c = joints[c].parent as usize;
         }
-        let x = std::array::from_fn(|k| j.origin[k] + 0.5 * j.length * j.axis[k]);
-        let (p, q) = (transform(&b.palette(0, i), x), transform(&b.palette(0, c), x));
+        let v = f(j, b.palette(0, i), b.palette(0, c));
         for k in 0..3 {
-            sum[k] += (j.leaf_area * (p[k] - q[k])) as f64;
+            sum[k] += (j.leaf_area * v[k]) as f64;
         }
         total += j.leaf_area as f64;
     }
     sum.map(|s| (s / total) as f32)
 }
 
-/// Leaf-weighted mean of R_c⁻¹ R_i ẑ over the leaves (c as in [`measured_lean`]): where
-/// the joints off the trunk line turn the vertical, the trunk's own bend taken out.
+/// Leaf-weighted mean of M_i x_i − M_c x_i over the leaves, x_i mid segment (tree space):
+/// how far the joints off the trunk line carry the leaves, the trunk's own bend taken out.
+fn measured_lean(b: &SwayBatch, sk: &Skeleton) -> [f32; 3] {
+    leaf_mean(b, sk, |j, p, q| {
+        let x = std::array::from_fn(|k| j.origin[k] + 0.5 * j.length * j.axis[k]);
+        let (p, q) = (transform(&p, x), transform(&q, x));
+        std::array::from_fn(|k| p[k] - q[k])
+    })
+}
+
+/// Leaf-weighted mean of R_c⁻¹ R_i ẑ over the leaves: where the joints off the trunk line
+/// turn the vertical, the trunk's own bend taken out. Palettes are row-major 3 × 4: R ẑ is
+/// the third column, Rᵀ v the columns' dot products with v.
 fn measured_tilt(b: &SwayBatch, sk: &Skeleton) -> [f32; 3] {
-    let joints = sk.joints();
-    let mut trunk = vec![false; joints.len()];
-    let mut a = sk.trunk_top() as u32;
-    while a != NO_PARENT {
-        trunk[a as usize] = true;
-        a = joints[a as usize].parent;
-    }
-    let (mut sum, mut total) = ([0.0f64; 3], 0.0f64);
-    for (i, j) in joints.iter().enumerate() {
-        if j.leaf_area <= 0.0 {
-            continue;
-        }
-        let mut c = i;
-        while !trunk[c] {
-            c = joints[c].parent as usize;
-        }
-        // Palettes are row-major 3 × 4: R ẑ is the third column, Rᵀ v the columns' dots.
-        let (p, q) = (b.palette(0, i), b.palette(0, c));
+    leaf_mean(b, sk, |_, p, q| {
         let z = [p[2], p[6], p[10]];
-        for k in 0..3 {
-            let column = [q[k], q[4 + k], q[8 + k]];
-            sum[k] += (j.leaf_area * (0..3).map(|r| column[r] * z[r]).sum::<f32>()) as f64;
-        }
-        total += j.leaf_area as f64;
-    }
-    sum.map(|s| (s / total) as f32)
+        std::array::from_fn(|k| (0..3).map(|r| q[4 * r + k] * z[r]).sum::<f32>())
+    })
 }
 
 fn norm(v: [f32; 3]) -> f32 {

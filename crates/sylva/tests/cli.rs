@@ -180,22 +180,12 @@ fn wind_flags_take_a_preset_a_speed_or_a_file() {
         // for an aspen in 7.5 m/s.
         if wind == "7.5" {
             let line = text.lines().find(|l| l.starts_with("crown lean")).unwrap_or_default();
-            let metres: f64 = line
-                .split(": ")
-                .nth(1)
-                .and_then(|r| r.split(' ').next())
-                .and_then(|v| v.parse().ok())
-                .unwrap_or(0.0);
+            let metres = number_after(line, ": ").unwrap_or(0.0);
             assert!(line.contains("steady 7.5 m/s") && (0.02..0.3).contains(&metres), "{text}");
             // And the leaves turned from the sky by the same bends: the mean of their
             // vertical's vertical part a little below one.
             let line = text.lines().find(|l| l.starts_with("leaves turned")).unwrap_or_default();
-            let up: f64 = line
-                .split("on average ")
-                .nth(1)
-                .and_then(|r| r.split(' ').next())
-                .and_then(|v| v.parse().ok())
-                .unwrap_or(1.0);
+            let up = number_after(line, "on average ").unwrap_or(1.0);
             assert!((0.85..0.995).contains(&up), "{text}");
         }
     }
@@ -500,4 +490,9 @@ fn table3_with_all_lods_only_runs_that_configuration_and_its_image_error() {
     assert_eq!(md.matches("not run (--all-lods-only)").count(), 3, "{md}");
     assert!(dir.join("small-with-all-LODs.png").exists());
     assert!(dir.join("small-full-detail.png").exists());
+}
+
+/// The number that follows the first `key` in `line`, up to the next space.
+fn number_after(line: &str, key: &str) -> Option<f64> {
+    line.split(key).nth(1)?.split(' ').next()?.parse().ok()
 }
