@@ -152,6 +152,22 @@ fn enter_crown(o: vec3<f32>, d: vec3<f32>, c: Crown) -> f32 {
     return select(-1.0, 0.0, k <= 0.0);
 }
 
+// Farthest the march walks across the ground, spacings; past it, the canopy's mean.
+const MARCH_REACH: f32 = 32.0;
+// Most cell boundaries the march's track crosses within MARCH_REACH: 32 √2 ≈ 45.3 at
+// worst (a diagonal track), rounded up.
+const MARCH_CELLS: i32 = 48;
+
+// The crown of cell `id`, if the ray `o + v d` enters it before `nearest`: kept as `hit`.
+fn meet(id: vec2<f32>, o: vec3<f32>, d: vec3<f32>, edge: Edge, nearest: ptr<function, f32>, hit: ptr<function, Crown>) {
+    let c = crown_of(id, edge);
+    let t = enter_crown(o, d, c);
+    if (t >= 0.0 && t < *nearest) {
+        *nearest = t;
+        *hit = c;
+    }
+}
+
 // Canopy of the painted woodland seen along the ray from the eye to ground point `world`:
 // crowns `s` m apart (see `Crown`) whose leaves have the mean albedo `leaves` (the forest's
 // own impostors'),
@@ -209,45 +225,47 @@ fn canopy(
     let clearing = mix(1.0, ratio, past_middle);
     let o = vec3<f32>(q0, 0.0) + back * start;
     let d = -back;
-    // Every crown the ray can meet has its centre in a cell next to the cell of a point
-    // of the ray within half a spacing across of where it enters the crown: visit the
-    // ray's points half a spacing apart across the ground, and the nine cells about
-    // each, until past the nearest crown met.
+    // Every crown the ray can meet has its centre in a cell next to the cell where the
+    // ray's track on the ground enters it (a centre lies 0.2–0.8 into its cell, a crown
+    // reaches at most 0.75 from it). Walk the cells the track crosses, one boundary at a
+    // time, with the nine cells about the first and the three new ones each step brings
+    // (the far row or column), until the track enters a cell past the nearest crown met,
+    // the ground point, or MARCH_REACH spacings. Each step meets three crowns in every
+    // pixel alike, so neighbouring pixels run it together.
     let across = max(length(d.xy), 1e-6);
-    let count = min(i32(ceil(start * across / 0.5)), 64);
+    let reach = min(start, MARCH_REACH / across);
     var nearest = 1e9;
     var hit: Crown;
-    var last = vec2<f32>(1e9);
-    for (var k = 0; k <= count; k++) {
-        let v = min(f32(k) * 0.5 / across, start);
-        if (v > nearest + 0.5 / across) {
+    var cell = floor(o.xy);
+    for (var j = -1; j <= 1; j++) {
+        for (var i = -1; i <= 1; i++) {
+            meet(cell + vec2<f32>(f32(i), f32(j)), o, d, edge, &nearest, &hit);
+        }
+    }
+    let toward = select(vec2<f32>(-1.0), vec2<f32>(1.0), d.xy >= vec2<f32>(0.0));
+    // Ray parameter per cell crossed, and to the track's next boundary on each axis.
+    let moving = abs(d.xy) > vec2<f32>(1e-9);
+    let per_cell = select(vec2<f32>(1e9), 1.0 / abs(d.xy), moving);
+    let boundary = cell + max(toward, vec2<f32>(0.0));
+    var next = select(vec2<f32>(1e9), (boundary - o.xy) / d.xy, moving);
+    for (var n = 0; n < MARCH_CELLS; n++) {
+        let entered = min(next.x, next.y);
+        if (entered > reach || entered > nearest) {
             break;
         }
-        let cell = floor(o.xy + d.xy * v);
-        if (all(cell == last)) {
-            continue;
-        }
-        for (var j = -1; j <= 1; j++) {
-            for (var i = -1; i <= 1; i++) {
-                // Consecutive points' cells are neighbours: the cells about the last one
-                // have been met already.
-                let id = cell + vec2<f32>(f32(i), f32(j));
-                if (all(abs(id - last) <= vec2<f32>(1.0))) {
-                    continue;
-                }
-                let c = crown_of(id, edge);
-                let t = enter_crown(o, d, c);
-                if (t >= 0.0 && t < nearest) {
-                    nearest = t;
-                    hit = c;
-                }
-            }
-        }
-        last = cell;
+        let by_x = next.x < next.y;
+        let step = select(vec2<f32>(0.0, toward.y), vec2<f32>(toward.x, 0.0), by_x);
+        cell += step;
+        next += select(vec2<f32>(0.0, per_cell.y), vec2<f32>(per_cell.x, 0.0), by_x);
+        let ahead = cell + step;
+        let side = abs(step.yx);
+        meet(ahead - side, o, d, edge, &nearest, &hit);
+        meet(ahead, o, d, edge, &nearest, &hit);
+        meet(ahead + side, o, d, edge, &nearest, &hit);
     }
     if (nearest > start) {
         // No crown met; past the points visited, the mean.
-        let covered = f32(count) * 0.5 / across >= start;
+        let covered = start * across <= MARCH_REACH;
         return vec4<f32>(mix(mean, gap, select(0.0, floor_detail, covered)), 1.0);
     }
     // Lit by the spheroid's normal there; w from -1 (its base) to 1 (its top): the
