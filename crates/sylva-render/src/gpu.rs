@@ -26,6 +26,25 @@ pub enum RenderError {
     Size(u32, u32, u32),
 }
 
+/// Where the NVIDIA driver installs its Vulkan driver manifest (ICD file) on Linux.
+const NVIDIA_ICD_FILES: [&str; 2] =
+    ["/usr/share/vulkan/icd.d/nvidia_icd.json", "/etc/vulkan/icd.d/nvidia_icd.json"];
+
+/// What to add to the no-adapter message where an NVIDIA Vulkan driver is installed
+/// (`nvidia`) and gave no adapter, and the loader was not pointed at a driver by hand
+/// (`chosen`: `VK_ICD_FILENAMES` or `VK_DRIVER_FILES` set). The manifest names the
+/// driver's GLX library, which does not start on a machine without a display (the loader
+/// then says it "could not get 'vkCreateInstance'"); the driver's EGL library carries the
+/// same Vulkan driver and does.
+fn nvidia_hint(nvidia: bool, chosen: bool) -> Option<&'static str> {
+    (nvidia && !chosen).then_some(
+        "; an NVIDIA driver is installed: on a machine without a display, point the Vulkan \
+         loader at its EGL library instead of its GLX one, with a file holding \
+         {\"file_format_version\":\"1.0.0\",\"ICD\":{\"library_path\":\"libEGL_nvidia.so.0\",\"api_version\":\"1.3\"}} \
+         named in VK_ICD_FILENAMES",
+    )
+}
+
 /// An adapter, its device and queue.
 #[derive(Debug)]
 pub struct Gpu {
@@ -65,7 +84,12 @@ impl Gpu {
             compatible_surface: surface,
             apply_limit_buckets: false,
         }))
-        .map_err(|e| RenderError::NoAdapter(e.to_string()))?;
+        .map_err(|e| {
+            let nvidia = NVIDIA_ICD_FILES.iter().any(|f| std::path::Path::new(f).exists());
+            let chosen = std::env::var_os("VK_ICD_FILENAMES").is_some()
+                || std::env::var_os("VK_DRIVER_FILES").is_some();
+            RenderError::NoAdapter(format!("{e}{}", nvidia_hint(nvidia, chosen).unwrap_or("")))
+        })?;
         let mut limits = adapter.limits();
         if let Some(m) = max_binding {
             let m = m.min(limits.max_storage_buffer_binding_size);
@@ -97,5 +121,19 @@ impl Gpu {
     pub fn describe(&self) -> String {
         let i = self.adapter.get_info();
         format!("{} ({:?}, {:?})", i.name, i.backend, i.device_type)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::nvidia_hint;
+
+    #[test]
+    fn an_installed_nvidia_driver_that_gave_no_adapter_is_pointed_at_its_egl_library() {
+        let hint = nvidia_hint(true, false).expect("a hint where NVIDIA's driver is installed");
+        assert!(hint.contains("libEGL_nvidia.so.0") && hint.contains("VK_ICD_FILENAMES"));
+        // Without NVIDIA's driver, or with a driver already chosen by hand, no hint.
+        assert_eq!(nvidia_hint(false, false), None);
+        assert_eq!(nvidia_hint(true, true), None);
     }
 }
