@@ -282,8 +282,8 @@ pub enum Surround {
     /// Woodland beyond a meadow around the forest: from [`Surround::woodland_start`] out to
     /// the horizon the ground is shaded as a forest canopy seen from afar (crowns at the
     /// scene's spacing, spheroids lit by the sun that stand up from the ground and hide one
-    /// another and the floor between them, the mix's darker species as darker, narrower
-    /// crowns, near ones in leaf clumps, broken by clearings a few hundred metres across).
+    /// another and the floor between them, the mix's darker species as darker cones,
+    /// near crowns in leaf clumps, broken by clearings a few hundred metres across).
     /// The ground's shader draws it, not trees: no sway, no shadows, no trunks, and it
     /// costs no triangles. It is meant for what lies a hundred metres and more beyond the
     /// camera, so the forest does not end as an island; closer, its crowns read as balls

@@ -3,9 +3,9 @@
 //! CPU, for every joint of every drawn tree of a frame (lane groups of several widths).
 //! The simulation side is checked in sylva-sway's `tests/lanes.rs`.
 
+mod probe;
+
 use sylva_forest::{Forest, FrameData, PaletteSlot, SceneSpec};
-use sylva_render::Gpu;
-use wgpu::util::DeviceExt;
 
 /// The shader under test: common.wgsl's reader, called once per (slot, joint) probe.
 const PROBE: &str = r#"
@@ -29,85 +29,16 @@ fn cs_main(@builtin(global_invocation_id) id: vec3<u32>) {
 
 /// Palettes read on the adapter for each `(slot, joint)`.
 fn read_on_gpu(palettes: &[f32], probes: &[(PaletteSlot, u32)]) -> Vec<[f32; 12]> {
-    let gpu = Gpu::headless().unwrap_or_else(|e| panic!("{e}"));
-    let dev = &gpu.device;
-    let src = format!("{}\n{PROBE}", sylva_render::shader_source("common.wgsl").expect("common"));
-    let module = dev.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("palette probe"),
-        source: wgpu::ShaderSource::Wgsl(src.into()),
-    });
-    let pipeline = dev.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some("palette probe"),
-        layout: None,
-        module: &module,
-        entry_point: Some("cs_main"),
-        compilation_options: Default::default(),
-        cache: None,
-    });
-    let storage = |label: &str, bytes: &[u8], usage: wgpu::BufferUsages| {
-        dev.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some(label),
-            contents: bytes,
-            usage: wgpu::BufferUsages::STORAGE | usage,
-        })
-    };
-    let pal = storage("palettes", bytemuck::cast_slice(palettes), wgpu::BufferUsages::empty());
     let packed: Vec<[u32; 4]> = probes.iter().map(|(s, j)| [s.base, s.stride, *j, 0]).collect();
-    let probe_buf = storage("probes", bytemuck::cast_slice(&packed), wgpu::BufferUsages::empty());
-    let size = (probes.len() * 48) as u64;
-    let out = dev.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("out"),
-        size,
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        mapped_at_creation: false,
-    });
-    let readback = dev.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("readback"),
-        size,
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    let group0 = dev.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: None,
-        layout: &pipeline.get_bind_group_layout(0),
-        entries: &[wgpu::BindGroupEntry { binding: 1, resource: pal.as_entire_binding() }],
-    });
-    let group2 = dev.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: None,
-        layout: &pipeline.get_bind_group_layout(2),
-        entries: &[
-            wgpu::BindGroupEntry { binding: 0, resource: probe_buf.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 1, resource: out.as_entire_binding() },
-        ],
-    });
-    let empty = dev.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: None,
-        layout: &pipeline.get_bind_group_layout(1),
-        entries: &[],
-    });
-    let mut enc = dev.create_command_encoder(&Default::default());
-    {
-        let mut pass = enc.begin_compute_pass(&Default::default());
-        pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &group0, &[]);
-        pass.set_bind_group(1, &empty, &[]);
-        pass.set_bind_group(2, &group2, &[]);
-        pass.dispatch_workgroups(probes.len().div_ceil(64) as u32, 1, 1);
-    }
-    enc.copy_buffer_to_buffer(&out, 0, &readback, 0, size);
-    gpu.queue.submit([enc.finish()]);
-    let slice = readback.slice(..);
-    let (tx, rx) = std::sync::mpsc::channel();
-    slice.map_async(wgpu::MapMode::Read, move |r| {
-        let _ = tx.send(r);
-    });
-    dev.poll(wgpu::PollType::Wait { submission_index: None, timeout: None }).expect("poll");
-    rx.recv().expect("map").expect("map");
-    let data = slice.get_mapped_range().expect("mapped");
-    bytemuck::cast_slice::<u8, f32>(&data)
-        .chunks(12)
-        .map(|c| std::array::from_fn(|e| c[e]))
-        .collect()
+    let out = probe::run(
+        "common.wgsl",
+        PROBE,
+        &[(1, bytemuck::cast_slice(palettes))],
+        bytemuck::cast_slice(&packed),
+        probes.len(),
+        probes.len() * 12,
+    );
+    out.chunks(12).map(|c| std::array::from_fn(|e| c[e])).collect()
 }
 
 #[test]

@@ -2,7 +2,7 @@
 // the shadow map, the sky it sees past the crowns above) and fogged into the sky at the
 // horizon. Around a forest with a woodland surround, distant woodland is painted on it:
 // crowns on a jittered grid at the given spacing, each a spheroid lit by the sun (the
-// forest's darker species as darker, narrower crowns; near ones in leaf clumps), with
+// forest's darker species as darker cones, as conifers stand; near ones in leaf clumps), with
 // shaded gaps between them, met along the view ray so that they stand up from the ground
 // and hide one another.
 
@@ -72,7 +72,8 @@ struct Crown {
     up: f32,
     radius: f32,
     half_height: f32,
-    // One of the darker crowns (the forest's darker species), narrower than the others.
+    // One of the darker crowns (the forest's darker species): a cone (`enter_cone`),
+    // narrower than the others.
     dark: bool,
 };
 
@@ -133,6 +134,9 @@ fn enter_crown(o: vec3<f32>, d: vec3<f32>, c: Crown) -> f32 {
     if (c.radius <= 0.0) {
         return -1.0;
     }
+    if (c.dark) {
+        return enter_cone(o, d, c);
+    }
     // In the crown's frame scaled to a unit sphere.
     let scale = vec3<f32>(c.radius, c.radius, c.half_height);
     let p = (o - vec3<f32>(c.across, c.up)) / scale;
@@ -150,6 +154,53 @@ fn enter_crown(o: vec3<f32>, d: vec3<f32>, c: Crown) -> f32 {
     }
     // Starting inside the crown.
     return select(-1.0, 0.0, k <= 0.0);
+}
+
+// A darker crown is a cone: its apex at the top of the crown's span (up + half_height),
+// widening to CONE_BASE times its radius at the bottom (up - half_height), as a
+// conifer's crown does; a spheroid reads as a broadleaf's. At most 1.5 · 0.65 · 0.75 =
+// 0.73 spacings, within the 0.75 the march's cells assume.
+const CONE_BASE: f32 = 1.5;
+// What a cone shows of itself in a canopy seen at a glancing angle (its upper side)
+// against a spheroid of the same radius; ground.rs's CONE_SHOWN, the same value.
+const CONE_SHOWN: f32 = 0.6;
+
+// The cone's slope: its radius per unit of depth below the apex.
+fn cone_slope(c: Crown) -> f32 {
+    return CONE_BASE * c.radius / (2.0 * c.half_height);
+}
+
+// Where the ray `o + v d` (v ≥ 0) enters the cone of darker crown `c`: v, or a negative
+// number if it misses. The base, facing down, is never met by the descending rays the
+// canopy traces, so only the mantle is.
+fn enter_cone(o: vec3<f32>, d: vec3<f32>, c: Crown) -> f32 {
+    let q = o - vec3<f32>(c.across, c.up + c.half_height);
+    let k2 = cone_slope(c) * cone_slope(c);
+    let depth = 2.0 * c.half_height;
+    // On the mantle: q.x² + q.y² = k² q.z², with -depth ≤ q.z ≤ 0.
+    let a = d.x * d.x + d.y * d.y - k2 * d.z * d.z;
+    let b = q.x * d.x + q.y * d.y - k2 * q.z * d.z;
+    let f = q.x * q.x + q.y * q.y - k2 * q.z * q.z;
+    if (f <= 0.0 && q.z <= 0.0 && q.z >= -depth) {
+        // Starting inside the crown.
+        return 0.0;
+    }
+    let disc = b * b - a * f;
+    if (disc < 0.0 || abs(a) < 1e-9) {
+        return -1.0;
+    }
+    let root = sqrt(disc);
+    let v0 = (-b - root) / a;
+    let v1 = (-b + root) / a;
+    var v = 1e9;
+    for (var i = 0; i < 2; i++) {
+        let t = select(v1, v0, i == 0);
+        let z = q.z + t * d.z;
+        if (t >= 0.0 && z <= 0.0 && z >= -depth) {
+            v = min(v, t);
+        }
+    }
+    return select(-1.0, v, v < 1e9);
 }
 
 // Farthest the march walks across the ground, spacings; past it, the canopy's mean.
@@ -273,14 +324,22 @@ fn canopy(
     let p = o + d * nearest - vec3<f32>(hit.across, hit.up);
     let w = clamp(p.z / hit.half_height, -1.0, 1.0);
     let axes = vec3<f32>(hit.radius, hit.radius, hit.half_height);
-    let n = normalize(p / (axes * axes));
+    var n = normalize(p / (axes * axes));
+    if (hit.dark) {
+        // The cone's mantle: the gradient of x² + y² - k² z² about its apex.
+        let k = cone_slope(hit);
+        n = normalize(vec3<f32>(p.xy, k * k * (hit.half_height - p.z)));
+    }
     let h = hash2(hit.id + vec2<f32>(11.0, 7.0));
     let tint = vec3<f32>(0.8 + 0.4 * h, 0.85 + 0.3 * hash2(hit.id + vec2<f32>(2.0, 9.0)), 0.9 + 0.2 * h);
     let open = select(0.55 + 0.3 * w, 0.55 + 0.45 * w, w >= 0.0);
     let r = length_to_eye - start + nearest;
     let clumps = leaf_clumps(p / axes, n, hit.id, per_spacing * r);
-    // The darker crowns take their own albedo; the others the one that keeps the mean.
-    let light = (leaves - dark.w * dark.rgb) / max(1.0 - dark.w, 1e-3);
+    // The darker crowns take their own albedo; the others the one that keeps the mean
+    // over what the crowns show of themselves (a cone's upper side, all a canopy seen
+    // at a glancing angle shows, is about CONE_SHOWN of a spheroid's).
+    let shown = dark.w * CONE_SHOWN;
+    let light = (leaves - shown * dark.rgb) / max(1.0 - shown, 1e-3);
     let own = SHADED_CROWN * select(light, dark.rgb, hit.dark);
     let lit = mix(gap, own * tint * lighting(clumps.xyz, 1.0) * open * clumps.w, clearing);
     let detail = 1.0 - smoothstep(0.12, 0.4, per_spacing * r);

@@ -1,0 +1,201 @@
+//! The painted woodland's crowns, on the adapter: `enter_crown` in ground.wgsl meets a ray
+//! where it first enters the crown's solid — a spheroid for a broadleaf, a cone standing
+//! on its base for one of the darker (conifer) crowns — as found on the CPU by walking
+//! the ray in small steps and testing each point against the solid.
+
+mod probe;
+
+/// Calls ground.wgsl's `enter_crown` once per ray.
+const PROBE: &str = r#"
+struct RayProbe { o: vec4<f32>, d: vec4<f32>, crown: vec4<f32>, shape: vec4<f32> };
+@group(2) @binding(0) var<storage, read> rays: array<RayProbe>;
+@group(2) @binding(1) var<storage, read_write> out: array<f32>;
+
+@compute @workgroup_size(64)
+fn cs_main(@builtin(global_invocation_id) id: vec3<u32>) {
+    if (id.x >= arrayLength(&rays)) { return; }
+    let r = rays[id.x];
+    var c: Crown;
+    c.id = vec2<f32>(0.0);
+    c.across = r.crown.xy;
+    c.up = r.crown.z;
+    c.radius = r.crown.w;
+    c.half_height = r.shape.x;
+    c.dark = r.shape.y > 0.5;
+    out[id.x] = enter_crown(r.o.xyz, r.d.xyz, c);
+}
+"#;
+
+/// A crown: centre across the ground and height, radius, vertical half-axis, conifer.
+#[derive(Clone, Copy, Debug)]
+struct Crown {
+    across: [f32; 2],
+    up: f32,
+    radius: f32,
+    half_height: f32,
+    cone: bool,
+}
+
+/// A cone's base radius against the crown's radius (ground.wgsl's CONE_BASE).
+const CONE_BASE: f32 = 1.5;
+
+impl Crown {
+    /// Whether point `p` lies in the crown's solid.
+    fn contains(&self, p: [f32; 3]) -> bool {
+        let (x, y) = (p[0] - self.across[0], p[1] - self.across[1]);
+        if self.cone {
+            // The apex at the top of the span, the base (CONE_BASE · radius) at its
+            // bottom.
+            let below = self.up + self.half_height - p[2];
+            let depth = 2.0 * self.half_height;
+            let r = CONE_BASE * self.radius * below / depth;
+            (0.0..=depth).contains(&below) && x * x + y * y <= r * r
+        } else {
+            let z = (p[2] - self.up) / self.half_height;
+            (x * x + y * y) / (self.radius * self.radius) + z * z <= 1.0
+        }
+    }
+
+    /// Where the ray `o + v d` first enters the solid within `reach`, walked in steps of
+    /// `step` (v, or none).
+    fn walk(&self, o: [f32; 3], d: [f32; 3], reach: f32, step: f32) -> Option<f32> {
+        (0..=(reach / step) as usize)
+            .map(|i| i as f32 * step)
+            .find(|v| self.contains(std::array::from_fn(|k| o[k] + v * d[k])))
+    }
+}
+
+/// A small deterministic generator (xorshift), seeded.
+fn uniform(state: &mut u64) -> f32 {
+    *state ^= *state << 13;
+    *state ^= *state >> 7;
+    *state ^= *state << 17;
+    (*state >> 40) as f32 / (1u64 << 24) as f32
+}
+
+#[test]
+fn a_ray_enters_a_painted_crown_where_it_first_meets_its_spheroid_or_cone() {
+    // Crowns in spacings, as the shader has them: radius 0.6–0.75 (a conifer's 0.65 of
+    // it), centre about 1 up, half-height about 0.85 (a conifer's 1.15 of it).
+    let crowns = [
+        Crown { across: [0.4, 0.5], up: 1.05, radius: 0.7, half_height: 0.85, cone: false },
+        Crown { across: [0.6, 0.3], up: 1.1, radius: 0.45, half_height: 1.0, cone: true },
+    ];
+    let mut state = 0x5eed_c0de_u64;
+    let mut rays = Vec::new();
+    let mut cases = Vec::new();
+    for crown in crowns {
+        for _ in 0..400 {
+            // Descending rays from points around and above the crown, aimed at points
+            // about it (as the canopy's march traces them, from above the crowns' tops
+            // down to the ground), some starting inside.
+            let o = [
+                crown.across[0] + 4.0 * (uniform(&mut state) - 0.5),
+                crown.across[1] + 4.0 * (uniform(&mut state) - 0.5),
+                0.3 + 2.5 * uniform(&mut state),
+            ];
+            let aim = [
+                crown.across[0] + 1.6 * (uniform(&mut state) - 0.5),
+                crown.across[1] + 1.6 * (uniform(&mut state) - 0.5),
+                crown.up + 2.0 * (uniform(&mut state) - 0.5) - 0.6,
+            ];
+            let mut d: [f32; 3] = std::array::from_fn(|k| aim[k] - o[k]);
+            if d[2] >= -0.05 {
+                d[2] = -0.05 - 0.5 * uniform(&mut state);
+            }
+            let len = d.iter().map(|x| x * x).sum::<f32>().sqrt();
+            let d = d.map(|x| x / len);
+            rays.push([
+                o[0],
+                o[1],
+                o[2],
+                0.0,
+                d[0],
+                d[1],
+                d[2],
+                0.0,
+                crown.across[0],
+                crown.across[1],
+                crown.up,
+                crown.radius,
+                crown.half_height,
+                if crown.cone { 1.0 } else { 0.0 },
+                0.0,
+                0.0,
+            ]);
+            cases.push((crown, o, d));
+        }
+    }
+    let gpu =
+        probe::run("ground.wgsl", PROBE, &[], bytemuck::cast_slice(&rays), rays.len(), rays.len());
+    let step = 1e-3;
+    let (mut met, mut missed) = ([0; 2], [0; 2]);
+    for ((crown, o, d), v) in cases.iter().zip(&gpu) {
+        let walked = crown.walk(*o, *d, 8.0, step);
+        let kind = crown.cone as usize;
+        match walked {
+            Some(w) => {
+                met[kind] += 1;
+                // Within a step or two of the walk (grazing rays may meet the solid over
+                // a stretch shorter than a step: allow those to be missed by the walk).
+                assert!(
+                    (v - w).abs() < 3.0 * step,
+                    "{crown:?}: ray from {o:?} along {d:?} enters at {v}, the walk at {w}"
+                );
+            }
+            None => {
+                missed[kind] += 1;
+                assert!(
+                    *v < 0.0,
+                    "{crown:?}: ray from {o:?} along {d:?} enters at {v}, the walk never"
+                );
+            }
+        }
+    }
+    // Both kinds of crown met and missed, so the comparison covers both answers.
+    for kind in 0..2 {
+        assert!(met[kind] > 50 && missed[kind] > 50, "kind {kind}: met {met:?}, missed {missed:?}");
+    }
+}
+
+#[test]
+fn a_painted_conifer_narrows_to_its_apex_where_a_broadleaf_stays_round() {
+    // Level rays across the crown at heights through its span, offset sideways by
+    // `x`: the widest offset met at each height is the crown's half-width there. A cone
+    // of base CONE_BASE · radius narrows linearly to nothing at its top; the spheroid is
+    // widest at its middle, round above and below.
+    let (up, half) = (1.0f32, 1.0f32);
+    let width_at = |cone: bool, z: f32| {
+        let xs: Vec<f32> = (0..400).map(|i| i as f32 * 0.002).collect();
+        let rays: Vec<[f32; 16]> = xs
+            .iter()
+            .map(|&x| {
+                let flag = if cone { 1.0 } else { 0.0 };
+                [x, -3.0, z, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, up, 0.5, half, flag, 0.0, 0.0]
+            })
+            .collect();
+        let v = probe::run(
+            "ground.wgsl",
+            PROBE,
+            &[],
+            bytemuck::cast_slice(&rays),
+            rays.len(),
+            rays.len(),
+        );
+        xs.iter().zip(&v).filter(|(_, v)| **v >= 0.0).map(|(x, _)| *x).fold(0.0f32, f32::max)
+    };
+    for frac in [0.1f32, 0.5, 0.9, 1.5] {
+        // Height below the apex, as a share of the span (2 · half).
+        let z = up + half - frac * 2.0 * half;
+        let cone = width_at(true, z);
+        let want = if frac <= 1.0 { CONE_BASE * 0.5 * frac } else { 0.0 };
+        assert!((cone - want).abs() < 0.005, "{frac} of the way down: cone {cone}, want {want}");
+        let round = width_at(false, z);
+        let t = (z - up) / half;
+        let want = if t.abs() <= 1.0 { 0.5 * (1.0 - t * t).sqrt() } else { 0.0 };
+        assert!(
+            (round - want).abs() < 0.005,
+            "{frac} of the way down: spheroid {round}, want {want}"
+        );
+    }
+}
