@@ -136,8 +136,8 @@ fn a_ray_enters_a_painted_crown_where_it_first_meets_its_spheroid_or_cone() {
         match walked {
             Some(w) => {
                 met[kind] += 1;
-                // Within a step or two of the walk (grazing rays may meet the solid over
-                // a stretch shorter than a step: allow those to be missed by the walk).
+                // Within three steps of the walk (the walk lands up to a step past the
+                // surface; a grazing ray's entry moves more with rounding).
                 assert!(
                     (v - w).abs() < 3.0 * step,
                     "{crown:?}: ray from {o:?} along {d:?} enters at {v}, the walk at {w}"

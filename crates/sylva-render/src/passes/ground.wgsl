@@ -1,10 +1,10 @@
 // Ground: the terrain mesh, grass and soil mixed by value noise, lit (trees' shadows from
 // the shadow map, the sky it sees past the crowns above) and fogged into the sky at the
 // horizon. Around a forest with a woodland surround, distant woodland is painted on it:
-// crowns on a jittered grid at the given spacing, each a spheroid lit by the sun (the
-// forest's darker species as darker cones, as conifers stand; near ones in leaf clumps), with
-// shaded gaps between them, met along the view ray so that they stand up from the ground
-// and hide one another.
+// crowns on a jittered grid at the given spacing, lit by the sun: spheroids, and the
+// forest's darker species as darker cones, as conifers stand (near crowns in leaf
+// clumps), with shaded gaps between them, met along the view ray so that they stand up
+// from the ground and hide one another.
 
 struct GroundIn {
     @location(0) position: vec3<f32>,
@@ -326,9 +326,10 @@ fn canopy(
     let axes = vec3<f32>(hit.radius, hit.radius, hit.half_height);
     var n = normalize(p / (axes * axes));
     if (hit.dark) {
-        // The cone's mantle: the gradient of x² + y² - k² z² about its apex.
+        // The cone's mantle: the gradient of x² + y² - k² z² about its apex (up at the
+        // apex itself, where the gradient vanishes).
         let k = cone_slope(hit);
-        n = normalize(vec3<f32>(p.xy, k * k * (hit.half_height - p.z)));
+        n = normalize(vec3<f32>(p.xy, k * k * (hit.half_height - p.z) + 1e-6));
     }
     let h = hash2(hit.id + vec2<f32>(11.0, 7.0));
     let tint = vec3<f32>(0.8 + 0.4 * h, 0.85 + 0.3 * hash2(hit.id + vec2<f32>(2.0, 9.0)), 0.9 + 0.2 * h);
