@@ -5,6 +5,8 @@
 
 mod probe;
 
+use sylva_core::SplitMix64;
+
 /// Calls ground.wgsl's `enter_crown` once per ray.
 const PROBE: &str = r#"
 struct RayProbe { o: vec4<f32>, d: vec4<f32>, crown: vec4<f32>, shape: vec4<f32> };
@@ -36,8 +38,18 @@ struct Crown {
     cone: bool,
 }
 
-/// A cone's base radius against the crown's radius (ground.wgsl's CONE_BASE).
+/// A cone's base radius against the crown's radius (ground.wgsl's CONE_BASE, checked by
+/// `the_cone_is_the_shaders`).
 const CONE_BASE: f32 = 1.5;
+
+#[test]
+fn the_cone_is_the_shaders() {
+    let src = sylva_render::shader_source("ground.wgsl").expect("ground.wgsl");
+    assert!(
+        src.contains(&format!("const CONE_BASE: f32 = {CONE_BASE:?};")),
+        "ground.wgsl's CONE_BASE differs from this test's {CONE_BASE}"
+    );
+}
 
 impl Crown {
     /// Whether point `p` lies in the crown's solid.
@@ -65,14 +77,6 @@ impl Crown {
     }
 }
 
-/// A small deterministic generator (xorshift), seeded.
-fn uniform(state: &mut u64) -> f32 {
-    *state ^= *state << 13;
-    *state ^= *state >> 7;
-    *state ^= *state << 17;
-    (*state >> 40) as f32 / (1u64 << 24) as f32
-}
-
 #[test]
 fn a_ray_enters_a_painted_crown_where_it_first_meets_its_spheroid_or_cone() {
     // Crowns in spacings, as the shader has them: radius 0.6–0.75 (a conifer's 0.65 of
@@ -81,7 +85,7 @@ fn a_ray_enters_a_painted_crown_where_it_first_meets_its_spheroid_or_cone() {
         Crown { across: [0.4, 0.5], up: 1.05, radius: 0.7, half_height: 0.85, cone: false },
         Crown { across: [0.6, 0.3], up: 1.1, radius: 0.45, half_height: 1.0, cone: true },
     ];
-    let mut state = 0x5eed_c0de_u64;
+    let mut rng = SplitMix64::new(0x5eed_c0de);
     let mut rays = Vec::new();
     let mut cases = Vec::new();
     for crown in crowns {
@@ -90,18 +94,18 @@ fn a_ray_enters_a_painted_crown_where_it_first_meets_its_spheroid_or_cone() {
             // about it (as the canopy's march traces them, from above the crowns' tops
             // down to the ground), some starting inside.
             let o = [
-                crown.across[0] + 4.0 * (uniform(&mut state) - 0.5),
-                crown.across[1] + 4.0 * (uniform(&mut state) - 0.5),
-                0.3 + 2.5 * uniform(&mut state),
+                crown.across[0] + 4.0 * (rng.unit() - 0.5),
+                crown.across[1] + 4.0 * (rng.unit() - 0.5),
+                0.3 + 2.5 * rng.unit(),
             ];
             let aim = [
-                crown.across[0] + 1.6 * (uniform(&mut state) - 0.5),
-                crown.across[1] + 1.6 * (uniform(&mut state) - 0.5),
-                crown.up + 2.0 * (uniform(&mut state) - 0.5) - 0.6,
+                crown.across[0] + 1.6 * (rng.unit() - 0.5),
+                crown.across[1] + 1.6 * (rng.unit() - 0.5),
+                crown.up + 2.0 * (rng.unit() - 0.5) - 0.6,
             ];
             let mut d: [f32; 3] = std::array::from_fn(|k| aim[k] - o[k]);
             if d[2] >= -0.05 {
-                d[2] = -0.05 - 0.5 * uniform(&mut state);
+                d[2] = -0.05 - 0.5 * rng.unit();
             }
             let len = d.iter().map(|x| x * x).sum::<f32>().sqrt();
             let d = d.map(|x| x / len);

@@ -324,12 +324,14 @@ fn canopy(
     let p = o + d * nearest - vec3<f32>(hit.across, hit.up);
     let w = clamp(p.z / hit.half_height, -1.0, 1.0);
     let axes = vec3<f32>(hit.radius, hit.radius, hit.half_height);
-    var n = normalize(p / (axes * axes));
+    var n: vec3<f32>;
     if (hit.dark) {
         // The cone's mantle: the gradient of x² + y² - k² z² about its apex (up at the
         // apex itself, where the gradient vanishes).
         let k = cone_slope(hit);
         n = normalize(vec3<f32>(p.xy, k * k * (hit.half_height - p.z) + 1e-6));
+    } else {
+        n = normalize(p / (axes * axes));
     }
     let h = hash2(hit.id + vec2<f32>(11.0, 7.0));
     let tint = vec3<f32>(0.8 + 0.4 * h, 0.85 + 0.3 * hash2(hit.id + vec2<f32>(2.0, 9.0)), 0.9 + 0.2 * h);
