@@ -1,10 +1,12 @@
 //! The per-frame step allocates nothing once running (DESIGN: "the per-frame step does not
-//! allocate in steady state"). A counting global allocator watches a single-threaded step.
+//! allocate in steady state"). A counting global allocator watches a single-threaded step:
+//! the allocations made on the one thread of its pool, where the step and all its parallel
+//! work run (the harness's other threads may allocate meanwhile).
 
 use sylva_sway::{SwayBatch, SwayParams, SwaySpecies};
 use sylva_tree::{Joint, NO_PARENT, Skeleton};
 
-use sylva_testkit::{CountingAllocator, allocations, exclusive};
+use sylva_testkit::{CountingAllocator, exclusive, thread_allocations};
 
 #[global_allocator]
 static GLOBAL: CountingAllocator = CountingAllocator;
@@ -32,11 +34,11 @@ fn steady_state_steps_do_not_allocate() {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().expect("pool");
     pool.install(|| {
         b.step(1.0 / 60.0, &wind); // first step at this dt builds the transition table
-        let before = allocations();
+        let before = thread_allocations();
         for _ in 0..100 {
             b.step(1.0 / 60.0, &wind);
         }
-        let after = allocations();
+        let after = thread_allocations();
         assert_eq!(after - before, 0, "{} allocations in 100 steps", after - before);
     });
 }

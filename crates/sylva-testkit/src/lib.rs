@@ -22,6 +22,12 @@ static CALLS: AtomicUsize = AtomicUsize::new(0);
 static LIVE: AtomicUsize = AtomicUsize::new(0);
 static PEAK: AtomicUsize = AtomicUsize::new(0);
 
+thread_local! {
+    // Allocation calls made on this thread (const-initialised, no destructor: reading or
+    // bumping it never allocates).
+    static THREAD_CALLS: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
+}
+
 /// The system allocator, counting calls, live bytes and the peak of live bytes.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct CountingAllocator;
@@ -31,6 +37,8 @@ pub struct CountingAllocator;
 unsafe impl GlobalAlloc for CountingAllocator {
     unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
         CALLS.fetch_add(1, Ordering::Relaxed);
+        // Not there while the thread is being torn down: then only the process counts.
+        let _ = THREAD_CALLS.try_with(|c| c.set(c.get() + 1));
         let live = LIVE.fetch_add(layout.size(), Ordering::Relaxed) + layout.size();
         PEAK.fetch_max(live, Ordering::Relaxed);
         // SAFETY: the caller upholds `GlobalAlloc::alloc`'s contract, which is System's.
@@ -47,6 +55,13 @@ unsafe impl GlobalAlloc for CountingAllocator {
 /// Allocation calls so far (all threads) while [`CountingAllocator`] is the global allocator.
 pub fn allocations() -> usize {
     CALLS.load(Ordering::Relaxed)
+}
+
+/// Allocation calls so far made on the calling thread: for code that runs on one thread,
+/// what it allocates, whatever the test harness's or a thread pool's other threads do
+/// meanwhile.
+pub fn thread_allocations() -> usize {
+    THREAD_CALLS.with(|c| c.get())
 }
 
 /// Bytes allocated and not yet freed.
