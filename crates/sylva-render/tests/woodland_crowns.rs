@@ -203,3 +203,150 @@ fn a_painted_conifer_narrows_to_its_apex_where_a_broadleaf_stays_round() {
         );
     }
 }
+
+/// Calls ground.wgsl's `past_lobes` once per ray: 1 where the ray passes the crown by its
+/// lobed outline, 0 where it meets it.
+const LOBE_PROBE: &str = r#"
+struct LobeProbe { o: vec4<f32>, d: vec4<f32>, crown: vec4<f32>, shape: vec4<f32> };
+@group(2) @binding(0) var<storage, read> rays: array<LobeProbe>;
+@group(2) @binding(1) var<storage, read_write> out: array<f32>;
+
+@compute @workgroup_size(64)
+fn cs_main(@builtin(global_invocation_id) id: vec3<u32>) {
+    if (id.x >= arrayLength(&rays)) { return; }
+    let r = rays[id.x];
+    var c: Crown;
+    c.id = vec2<f32>(3.0, 5.0);
+    c.across = r.crown.xy;
+    c.up = r.crown.z;
+    c.radius = r.crown.w;
+    c.half_height = r.shape.x;
+    c.dark = r.shape.y > 0.5;
+    out[id.x] = select(0.0, 1.0, past_lobes(r.o.xyz, r.d.xyz, c, r.shape.z));
+}
+"#;
+
+/// How far in a broadleaf's lobes cut its rim, as a share of the radius (ground.wgsl's
+/// LOBE_DEPTH), and the pixel size (spacings) from which its outline is round (the end of
+/// LOBE_FADE).
+const LOBE_DEPTH: f32 = 0.3;
+const LOBE_ROUND: f32 = 0.3;
+
+#[test]
+fn the_lobes_are_the_shaders() {
+    let src = sylva_render::shader_source("ground.wgsl").expect("ground.wgsl");
+    assert!(src.contains(&format!("const LOBE_DEPTH: f32 = {LOBE_DEPTH:?};")), "LOBE_DEPTH");
+    assert!(
+        src.contains(&format!("const LOBE_FADE: vec2<f32> = vec2<f32>(0.15, {LOBE_ROUND:?});")),
+        "LOBE_FADE"
+    );
+}
+
+/// A ray passing `crown`'s centre at `m` (in the crown's frame scaled to a unit sphere)
+/// in direction `u` (unit), running along `e` (unit, perpendicular to `u`): origin and
+/// direction in spacings, as the probe takes them.
+fn passing(crown: &Crown, m: f32, u: [f32; 3], e: [f32; 3]) -> ([f32; 3], [f32; 3]) {
+    let scale = [crown.radius, crown.radius, crown.half_height];
+    let centre = [crown.across[0], crown.across[1], crown.up];
+    let o = std::array::from_fn(|k| centre[k] + scale[k] * (m * u[k] - 3.0 * e[k]));
+    let d: [f32; 3] = std::array::from_fn(|k| scale[k] * e[k]);
+    let len = d.iter().map(|x| x * x).sum::<f32>().sqrt();
+    (o, d.map(|x| x / len))
+}
+
+fn unit_vector(rng: &mut SplitMix64) -> [f32; 3] {
+    loop {
+        let v = [rng.sym(), rng.sym(), rng.sym()];
+        let len = v.iter().map(|x| x * x).sum::<f32>().sqrt();
+        if (0.1..=1.0).contains(&len) {
+            return v.map(|x| x / len);
+        }
+    }
+}
+
+/// A unit vector perpendicular to the unit `u`, turned by `angle` about it.
+fn across(u: [f32; 3], angle: f32) -> [f32; 3] {
+    let a = if u[0].abs() < 0.9 { [1.0, 0.0, 0.0] } else { [0.0, 1.0, 0.0] };
+    let dot = a[0] * u[0] + a[1] * u[1] + a[2] * u[2];
+    let p: [f32; 3] = std::array::from_fn(|k| a[k] - dot * u[k]);
+    let len = p.iter().map(|x| x * x).sum::<f32>().sqrt();
+    let p = p.map(|x| x / len);
+    let q = [u[1] * p[2] - u[2] * p[1], u[2] * p[0] - u[0] * p[2], u[0] * p[1] - u[1] * p[0]];
+    std::array::from_fn(|k| angle.cos() * p[k] + angle.sin() * q[k])
+}
+
+#[test]
+fn a_near_broadleaf_has_a_lobed_outline_and_a_far_one_or_a_conifer_a_round_one() {
+    let broadleaf =
+        Crown { across: [0.3, 0.4], up: 1.0, radius: 0.7, half_height: 0.85, cone: false };
+    let conifer = Crown { cone: true, ..broadleaf };
+    let mut rng = SplitMix64::new(0x10be_5eed);
+    // Rays passing the centre at every distance up to the rim, in every direction, each
+    // once along two different lines through the same nearest point.
+    let mut cases = Vec::new();
+    for _ in 0..600 {
+        let m = rng.unit();
+        let u = unit_vector(&mut rng);
+        let turn = std::f32::consts::TAU * rng.unit();
+        cases.push((m, u, turn, turn + 1.0 + 2.0 * rng.unit()));
+    }
+    let run = |crown: &Crown, pixel: f32, second_line: bool| -> Vec<f32> {
+        let rays: Vec<[f32; 16]> = cases
+            .iter()
+            .map(|&(m, u, a, b)| {
+                let (o, d) = passing(crown, m, u, across(u, if second_line { b } else { a }));
+                let flag = if crown.cone { 1.0 } else { 0.0 };
+                [
+                    o[0],
+                    o[1],
+                    o[2],
+                    0.0,
+                    d[0],
+                    d[1],
+                    d[2],
+                    0.0,
+                    crown.across[0],
+                    crown.across[1],
+                    crown.up,
+                    crown.radius,
+                    crown.half_height,
+                    flag,
+                    pixel,
+                    0.0,
+                ]
+            })
+            .collect();
+        probe::run(
+            "ground.wgsl",
+            LOBE_PROBE,
+            &[],
+            bytemuck::cast_slice(&rays),
+            rays.len(),
+            rays.len(),
+        )
+    };
+    let near = run(&broadleaf, 0.01, false);
+    let mut rim = (0, 0);
+    for ((m, ..), past) in cases.iter().zip(&near) {
+        if *m <= 1.0 - LOBE_DEPTH {
+            assert_eq!(*past, 0.0, "a ray {m} from the centre passes by the lobes");
+        } else {
+            rim.0 += (*past > 0.5) as usize;
+            rim.1 += 1;
+        }
+    }
+    // In the rim's band the lobes reach out in some directions and not in others.
+    let share = rim.0 as f32 / rim.1 as f32;
+    assert!(
+        (0.2..=0.8).contains(&share),
+        "{} of {} rays in the rim's band pass: {share}",
+        rim.0,
+        rim.1
+    );
+    // The outline is the crown's: another line through the same nearest point agrees.
+    assert_eq!(near, run(&broadleaf, 0.01, true), "the outline depends on the ray's direction");
+    // Far off, the outline is round again (what a pixel spans could not show the lobes),
+    // and a conifer keeps its cone.
+    assert!(run(&broadleaf, LOBE_ROUND, false).iter().all(|p| *p == 0.0), "far crown lobed");
+    assert!(run(&conifer, 0.01, false).iter().all(|p| *p == 0.0), "conifer lobed");
+}

@@ -1,10 +1,10 @@
 // Ground: the terrain mesh, grass and soil mixed by value noise, lit (trees' shadows from
 // the shadow map, the sky it sees past the crowns above) and fogged into the sky at the
 // horizon. Around a forest with a woodland surround, distant woodland is painted on it:
-// crowns on a jittered grid at the given spacing, lit by the sun: spheroids, and the
-// forest's darker species as darker cones, as conifers stand (near crowns in leaf
-// clumps), with shaded gaps between them, met along the view ray so that they stand up
-// from the ground and hide one another.
+// crowns on a jittered grid at the given spacing, lit by the sun: spheroids with lobed
+// outlines, and the forest's darker species as darker cones, as conifers stand (near
+// crowns in boughs and leaf clumps), with shaded gaps between them, met along the view
+// ray so that they stand up from the ground and hide one another.
 
 struct GroundIn {
     @location(0) position: vec3<f32>,
@@ -57,6 +57,21 @@ fn noise2(p: vec2<f32>) -> f32 {
     let a = mix(hash2(i), hash2(i + vec2<f32>(1.0, 0.0)), u.x);
     let b = mix(hash2(i + vec2<f32>(0.0, 1.0)), hash2(i + vec2<f32>(1.0, 1.0)), u.x);
     return mix(a, b, u.y);
+}
+
+// The same value noise with its gradient: (value, ∂/∂x, ∂/∂y), from the four hashes one
+// value takes.
+fn noise2_grad(p: vec2<f32>) -> vec3<f32> {
+    let i = floor(p);
+    let f = fract(p);
+    let u = f * f * (3.0 - 2.0 * f);
+    let du = 6.0 * f * (1.0 - f);
+    let a = hash2(i);
+    let b = hash2(i + vec2<f32>(1.0, 0.0));
+    let c = hash2(i + vec2<f32>(0.0, 1.0));
+    let k = a - b - c + hash2(i + vec2<f32>(1.0, 1.0));
+    let v = a + (b - a) * u.x + (c - a) * u.y + k * u.x * u.y;
+    return vec3<f32>(v, du.x * (b - a + k * u.y), du.y * (c - a + k * u.x));
 }
 
 // The painted woodland's crowns, in spacings: a jittered grid of cells one spacing wide,
@@ -203,19 +218,80 @@ fn enter_cone(o: vec3<f32>, d: vec3<f32>, c: Crown) -> f32 {
     return select(-1.0, v, v < 1e9);
 }
 
+// A broadleaf's crown is not a ball: boughs stand out past the hollows between them, so
+// its outline is lobed. In the crown's frame scaled to a unit sphere, a ray that passes
+// the centre closer than 1 - LOBE_DEPTH meets the crown; one that passes nearer the rim
+// meets it only where the lobe there reaches out that far. The lobes are value noise over
+// the direction from the centre (LOBE_FREQ cells per unit of its projection: some ten
+// lobes around the rim), cutting the rim in by up to LOBE_DEPTH. A ray that passes a lobe
+// goes on to whatever lies behind. They fade out, the outline round again, where a pixel
+// spans LOBE_FADE spacings: a crown there is about ten to five pixels across, a lobe two
+// or three.
+const LOBE_DEPTH: f32 = 0.3;
+const LOBE_FREQ: f32 = 2.0;
+const LOBE_FADE: vec2<f32> = vec2<f32>(0.15, 0.3);
+// How much a bough's slope bends a crown's normal, and how much darker its hollows are
+// (and lighter its tops).
+const BOUGH_BEND: f32 = 0.1;
+const BOUGH_SHADE: f32 = 0.2;
+
+// Whether the ray `o + v d`, which enters the spheroid of broadleaf crown `c`, passes
+// outside its lobed outline (a pixel spanning `pixel` spacings there). Conifers' cones
+// keep their outline.
+fn past_lobes(o: vec3<f32>, d: vec3<f32>, c: Crown, pixel: f32) -> bool {
+    let fade = 1.0 - smoothstep(LOBE_FADE.x, LOBE_FADE.y, pixel);
+    if (c.dark || fade <= 0.0) {
+        return false;
+    }
+    let scale = vec3<f32>(c.radius, c.radius, c.half_height);
+    let p = (o - vec3<f32>(c.across, c.up)) / scale;
+    let e = d / scale;
+    // The ray's point nearest the centre, and how near.
+    let closest = p - e * (dot(p, e) / max(dot(e, e), 1e-12));
+    let m = length(closest);
+    let inner = 1.0 - LOBE_DEPTH * fade;
+    if (m <= inner) {
+        return false;
+    }
+    let lobe = bough_height(bough_coords(closest / max(m, 1e-6), c.id)).x;
+    return m > mix(inner, 1.0, lobe);
+}
+
+// Where direction `u` from a crown's centre (unit, crown space) falls on the boughs'
+// noise: projected along a slanted axis, so the lobes vary with height as well as around.
+fn bough_coords(u: vec3<f32>, id: vec2<f32>) -> vec2<f32> {
+    return LOBE_FREQ * vec2<f32>(u.x + 0.6 * u.z, u.y - 0.6 * u.z) + 5.3 * id;
+}
+
+// How far the bough at `q` stands out, 0 (a hollow) to 1, and its gradient: two octaves
+// of value noise, its contrast raised so that boughs and hollows are distinct.
+fn bough_height(q: vec2<f32>) -> vec3<f32> {
+    let x = 0.7 * noise2_grad(q) + 0.3 * noise2_grad(2.7 * q + vec2<f32>(3.0, 11.0)) * vec3<f32>(1.0, 2.7, 2.7);
+    let t = clamp((x.x - 0.2) / 0.6, 0.0, 1.0);
+    return vec3<f32>(t * t * (3.0 - 2.0 * t), x.yz * (6.0 * t * (1.0 - t) / 0.6));
+}
+
 // Farthest the march walks across the ground, spacings; past it, the canopy's mean.
 const MARCH_REACH: f32 = 32.0;
 // Most cell boundaries the march's track crosses within MARCH_REACH: 32 √2 ≈ 45.3 at
 // worst (a diagonal track), rounded up.
 const MARCH_CELLS: i32 = 48;
 
-// The crown of cell `id`, if the ray `o + v d` enters it before `nearest`: kept as `hit`.
-fn meet(id: vec2<f32>, o: vec3<f32>, d: vec3<f32>, edge: Edge, nearest: ptr<function, f32>, hit: ptr<function, Crown>) {
+// The crown of cell `id`, if the ray `o + v d` enters it before `nearest` (kept as `hit`,
+// the one before becoming `hit2`) or before `second` (kept as `hit2`).
+fn meet(id: vec2<f32>, o: vec3<f32>, d: vec3<f32>, edge: Edge, nearest: ptr<function, f32>, second: ptr<function, f32>, hit: ptr<function, Crown>, hit2: ptr<function, Crown>) {
     let c = crown_of(id, edge);
     let t = enter_crown(o, d, c);
-    if (t >= 0.0 && t < *nearest) {
-        *nearest = t;
-        *hit = c;
+    if (t >= 0.0 && t < *second) {
+        if (t < *nearest) {
+            *second = *nearest;
+            *hit2 = *hit;
+            *nearest = t;
+            *hit = c;
+        } else {
+            *second = t;
+            *hit2 = c;
+        }
     }
 }
 
@@ -285,34 +361,52 @@ fn canopy(
     // pixel alike, so neighbouring pixels run it together.
     let across = max(length(d.xy), 1e-6);
     let reach = min(start, MARCH_REACH / across);
-    var nearest = 1e9;
-    var hit: Crown;
-    var cell = floor(o.xy);
-    for (var j = -1; j <= 1; j++) {
-        for (var i = -1; i <= 1; i++) {
-            meet(cell + vec2<f32>(f32(i), f32(j)), o, d, edge, &nearest, &hit);
-        }
-    }
     let toward = select(vec2<f32>(-1.0), vec2<f32>(1.0), d.xy >= vec2<f32>(0.0));
     // Ray parameter per cell crossed, and to the track's next boundary on each axis.
     let moving = abs(d.xy) > vec2<f32>(1e-9);
     let per_cell = select(vec2<f32>(1e9), 1.0 / abs(d.xy), moving);
-    let boundary = cell + max(toward, vec2<f32>(0.0));
+    let boundary = floor(o.xy) + max(toward, vec2<f32>(0.0));
+    // The march keeps the two nearest crowns the ray enters. A crown it passes by its lobes
+    // (`past_lobes`) is not a hit: the march then walks on until the second is sure to be
+    // the nearest after it, and that one is kept (whatever its lobes). The lobes are
+    // tested once per pixel, not in `meet`, which keeps the march's loop small.
+    var nearest = 1e9;
+    var second = 1e9;
+    var hit: Crown;
+    var hit2: Crown;
+    var cell = floor(o.xy);
+    for (var j = -1; j <= 1; j++) {
+        for (var i = -1; i <= 1; i++) {
+            meet(cell + vec2<f32>(f32(i), f32(j)), o, d, edge, &nearest, &second, &hit, &hit2);
+        }
+    }
     var next = select(vec2<f32>(1e9), (boundary - o.xy) / d.xy, moving);
-    for (var n = 0; n < MARCH_CELLS; n++) {
+    var passed = false;
+    var walked = 0;
+    loop {
         let entered = min(next.x, next.y);
-        if (entered > reach || entered > nearest) {
+        if (walked >= MARCH_CELLS || entered > reach || entered > select(nearest, second, passed)) {
+            let pixel = per_spacing * (length_to_eye - start + nearest);
+            if (!passed && nearest <= start && past_lobes(o, d, hit, pixel)) {
+                passed = true;
+                continue;
+            }
             break;
         }
+        walked++;
         let by_x = next.x < next.y;
         let step = select(vec2<f32>(0.0, toward.y), vec2<f32>(toward.x, 0.0), by_x);
         cell += step;
         next += select(vec2<f32>(0.0, per_cell.y), vec2<f32>(per_cell.x, 0.0), by_x);
         let ahead = cell + step;
         let side = abs(step.yx);
-        meet(ahead - side, o, d, edge, &nearest, &hit);
-        meet(ahead, o, d, edge, &nearest, &hit);
-        meet(ahead + side, o, d, edge, &nearest, &hit);
+        meet(ahead - side, o, d, edge, &nearest, &second, &hit, &hit2);
+        meet(ahead, o, d, edge, &nearest, &second, &hit, &hit2);
+        meet(ahead + side, o, d, edge, &nearest, &second, &hit, &hit2);
+    }
+    if (passed) {
+        nearest = second;
+        hit = hit2;
     }
     if (nearest > start) {
         // No crown met; past the points visited, the mean.
@@ -337,7 +431,7 @@ fn canopy(
     let tint = vec3<f32>(0.8 + 0.4 * h, 0.85 + 0.3 * hash2(hit.id + vec2<f32>(2.0, 9.0)), 0.9 + 0.2 * h);
     let open = select(0.55 + 0.3 * w, 0.55 + 0.45 * w, w >= 0.0);
     let r = length_to_eye - start + nearest;
-    let clumps = leaf_clumps(p / axes, n, hit.id, per_spacing * r);
+    let clumps = leaf_clumps(p / axes, n, hit.id, hit.dark, per_spacing * r);
     // The darker crowns take their own albedo; the others the one that keeps the mean
     // over what the crowns show of themselves (a cone's upper side, all a canopy seen
     // at a glancing angle shows, is about CONE_SHOWN of a spheroid's).
@@ -353,30 +447,44 @@ fn canopy(
 // crown, each lit on its sunward side, with shaded hollows between them. The clumps are a
 // height field over the crown's unit sphere (`u`, projected along a slanted axis so its
 // sides vary with height too), about an eighth of the crown across; it bends the normal
-// `n` (crown space, unit) and darkens the hollows. Returns the bent normal and the
-// hollows' shade (about 1 on average); both fade to the smooth crown where a pixel spans
-// more than a sixth of a spacing (`pixel`, spacings).
-fn leaf_clumps(u: vec3<f32>, n: vec3<f32>, id: vec2<f32>, pixel: f32) -> vec4<f32> {
+// `n0` (crown space, unit) and darkens the hollows. Under them, a broadleaf's (not a
+// `dark` conifer's) boughs do the same at the scale of its lobes. Returns the bent normal
+// and the hollows' shade (about 1 on average); both fade to the smooth crown where a pixel
+// spans more than a sixth of a spacing (`pixel`, spacings), the boughs where it spans
+// LOBE_FADE.
+fn leaf_clumps(u: vec3<f32>, n0: vec3<f32>, id: vec2<f32>, dark: bool, pixel: f32) -> vec4<f32> {
+    var n = n0;
+    var shade = 1.0;
+    // A broadleaf's boughs, the lobes of its outline (`past_lobes`), each lit on its
+    // sunward side with a shaded hollow between: they still show where the clumps are
+    // too small to.
+    let boughs = select(1.0 - smoothstep(LOBE_FADE.x, LOBE_FADE.y, pixel), 0.0, dark);
+    if (boughs > 0.0) {
+        let hb = bough_height(bough_coords(normalize(u), id));
+        // The height's gradient on the sphere (through the coordinates' dependence on u).
+        let grad = LOBE_FREQ * vec3<f32>(hb.y, hb.z, 0.6 * (hb.y - hb.z));
+        n = normalize(n - BOUGH_BEND * boughs * (grad - dot(grad, n) * n));
+        shade = 1.0 + boughs * BOUGH_SHADE * (2.0 * hb.x - 1.0);
+    }
     let fade = 1.0 - smoothstep(0.08, 0.17, pixel);
     if (fade <= 0.0) {
-        return vec4<f32>(n, 1.0);
+        return vec4<f32>(n, shade);
     }
     let k = 4.0;
     let q = k * vec2<f32>(u.x + 0.6 * u.z, u.y - 0.6 * u.z) + 7.3 * id;
-    let e = 0.1;
-    let h = clump_height(q);
-    let g = vec2<f32>(clump_height(q + vec2<f32>(e, 0.0)) - h, clump_height(q + vec2<f32>(0.0, e)) - h) / e;
+    let hg = clump_height(q);
+    let h = hg.x;
+    let g = hg.yz;
     // The height's gradient on the sphere (through q's dependence on u), in the tangent plane.
     let grad = k * vec3<f32>(g.x, g.y, 0.6 * (g.x - g.y));
     let tangent = grad - dot(grad, n) * n;
     let bent = normalize(n - 0.12 * fade * tangent);
-    let shade = 1.0 + fade * 0.25 * (2.0 * smoothstep(0.25, 0.75, h) - 1.0);
-    return vec4<f32>(bent, shade);
+    return vec4<f32>(bent, shade * (1.0 + fade * 0.25 * (2.0 * smoothstep(0.25, 0.75, h) - 1.0)));
 }
 
-// The clumps' height, 0 to 1: two octaves of value noise.
-fn clump_height(q: vec2<f32>) -> f32 {
-    return 0.65 * noise2(q) + 0.35 * noise2(2.3 * q + vec2<f32>(19.0, 7.0));
+// The clumps' height, 0 to 1, and its gradient: two octaves of value noise.
+fn clump_height(q: vec2<f32>) -> vec3<f32> {
+    return 0.65 * noise2_grad(q) + 0.35 * noise2_grad(2.3 * q + vec2<f32>(19.0, 7.0)) * vec3<f32>(1.0, 2.3, 2.3);
 }
 
 @fragment
