@@ -1,7 +1,9 @@
 //! The painted woodland's crowns, on the adapter: `enter_crown` in ground.wgsl meets a ray
 //! where it first enters the crown's solid — a spheroid for a broadleaf, a cone standing
 //! on its base for one of the darker (conifer) crowns — as found on the CPU by walking
-//! the ray in small steps and testing each point against the solid.
+//! the ray in small steps and testing each point against the solid; and `past_outline`
+//! cuts a near crown's outline, a broadleaf's in lobes and a conifer's in tiers, and
+//! leaves a far one's whole.
 
 mod probe;
 
@@ -204,7 +206,7 @@ fn a_painted_conifer_narrows_to_its_apex_where_a_broadleaf_stays_round() {
     }
 }
 
-/// Calls ground.wgsl's `past_lobes` once per ray: 1 where the ray passes the crown by its
+/// Calls ground.wgsl's `past_outline` once per ray: 1 where the ray passes the crown by its
 /// lobed outline, 0 where it meets it.
 const LOBE_PROBE: &str = r#"
 struct LobeProbe { o: vec4<f32>, d: vec4<f32>, crown: vec4<f32>, shape: vec4<f32> };
@@ -222,7 +224,7 @@ fn cs_main(@builtin(global_invocation_id) id: vec3<u32>) {
     c.radius = r.crown.w;
     c.half_height = r.shape.x;
     c.dark = r.shape.y > 0.5;
-    out[id.x] = select(0.0, 1.0, past_lobes(r.o.xyz, r.d.xyz, c, r.shape.z));
+    out[id.x] = select(0.0, 1.0, past_outline(r.o.xyz, r.d.xyz, c, r.shape.z));
 }
 "#;
 
@@ -276,7 +278,7 @@ fn across(u: [f32; 3], angle: f32) -> [f32; 3] {
 }
 
 #[test]
-fn a_near_broadleaf_has_a_lobed_outline_and_a_far_one_or_a_conifer_a_round_one() {
+fn a_near_broadleaf_has_a_lobed_outline_and_a_far_one_a_round_one() {
     let broadleaf =
         Crown { across: [0.3, 0.4], up: 1.0, radius: 0.7, half_height: 0.85, cone: false };
     let conifer = Crown { cone: true, ..broadleaf };
@@ -346,7 +348,78 @@ fn a_near_broadleaf_has_a_lobed_outline_and_a_far_one_or_a_conifer_a_round_one()
     // The outline is the crown's: another line through the same nearest point agrees.
     assert_eq!(near, run(&broadleaf, 0.01, true), "the outline depends on the ray's direction");
     // Far off, the outline is round again (what a pixel spans could not show the lobes),
-    // and a conifer keeps its cone.
+    // and a conifer's a plain cone.
     assert!(run(&broadleaf, LOBE_ROUND, false).iter().all(|p| *p == 0.0), "far crown lobed");
-    assert!(run(&conifer, 0.01, false).iter().all(|p| *p == 0.0), "conifer lobed");
+    assert!(run(&conifer, LOBE_ROUND, false).iter().all(|p| *p == 0.0), "far conifer in tiers");
+}
+
+/// Calls ground.wgsl's `enter_crown` and `past_outline` once per ray: 1 where the ray
+/// meets the crown within its outline, 0 where it does not.
+const OUTLINE_PROBE: &str = r#"
+struct OutlineProbe { o: vec4<f32>, d: vec4<f32>, crown: vec4<f32>, shape: vec4<f32> };
+@group(2) @binding(0) var<storage, read> rays: array<OutlineProbe>;
+@group(2) @binding(1) var<storage, read_write> out: array<f32>;
+
+@compute @workgroup_size(64)
+fn cs_main(@builtin(global_invocation_id) id: vec3<u32>) {
+    if (id.x >= arrayLength(&rays)) { return; }
+    let r = rays[id.x];
+    var c: Crown;
+    c.id = vec2<f32>(3.0, 5.0);
+    c.across = r.crown.xy;
+    c.up = r.crown.z;
+    c.radius = r.crown.w;
+    c.half_height = r.shape.x;
+    c.dark = r.shape.y > 0.5;
+    let met = enter_crown(r.o.xyz, r.d.xyz, c) >= 0.0 && !past_outline(r.o.xyz, r.d.xyz, c, r.shape.z);
+    out[id.x] = select(0.0, 1.0, met);
+}
+"#;
+
+/// How far in a conifer's tiers cut its cone at their tops, at most, as a share of its
+/// radius (ground.wgsl's TIER_DEPTH times the 1.5 its variation about the axis reaches).
+const TIER_CUT: f32 = 0.3 * 1.5;
+
+#[test]
+fn a_near_conifer_steps_in_tiers_and_a_far_one_is_a_cone() {
+    let src = sylva_render::shader_source("ground.wgsl").expect("ground.wgsl");
+    assert!(src.contains("const TIER_DEPTH: f32 = 0.3;"), "TIER_DEPTH");
+    // Level rays across the conifer at heights through its span, offset sideways by `x`:
+    // the widest offset met at each height is its half-width there.
+    let (up, half, radius) = (1.0f32, 1.0f32, 0.45f32);
+    let widths = |pixel: f32, z: f32| {
+        let xs: Vec<f32> = (0..400).map(|i| i as f32 * 0.002).collect();
+        let rays: Vec<[f32; 16]> = xs
+            .iter()
+            .map(|&x| {
+                [x, -3.0, z, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, up, radius, half, 1.0, pixel, 0.0]
+            })
+            .collect();
+        let met = probe::run(
+            "ground.wgsl",
+            OUTLINE_PROBE,
+            &[],
+            bytemuck::cast_slice(&rays),
+            rays.len(),
+            rays.len(),
+        );
+        xs.iter().zip(&met).filter(|(_, m)| **m > 0.5).map(|(x, _)| *x).fold(0.0f32, f32::max)
+    };
+    let mut shares = Vec::new();
+    for i in 1..60 {
+        // Down from the apex, a share of the span.
+        let frac = i as f32 / 60.0;
+        let z = up + half - frac * 2.0 * half;
+        let cone = CONE_BASE * radius * frac;
+        let near = widths(0.01, z);
+        // Never wider than the cone, never cut in by more than a tier can.
+        assert!(near <= cone + 0.005, "{frac} down: {near} wider than the cone's {cone}");
+        assert!(near >= cone * (1.0 - TIER_CUT) - 0.005, "{frac} down: {near} of {cone}");
+        shares.push(near / cone);
+        let far = widths(LOBE_ROUND, z);
+        assert!((far - cone).abs() < 0.005, "{frac} down, far off: {far}, the cone {cone}");
+    }
+    // Near, the outline steps: full at the tiers' feet, cut in at their tops.
+    let (low, high) = shares.iter().fold((f32::MAX, 0.0f32), |(l, h), s| (l.min(*s), h.max(*s)));
+    assert!(high > 0.95 && low < 0.85, "tiers: half-width {low} to {high} of the cone's");
 }

@@ -235,13 +235,24 @@ const LOBE_FADE: vec2<f32> = vec2<f32>(0.15, 0.3);
 const BOUGH_BEND: f32 = 0.1;
 const BOUGH_SHADE: f32 = 0.2;
 
-// Whether the ray `o + v d`, which enters the spheroid of broadleaf crown `c`, passes
-// outside its lobed outline (a pixel spanning `pixel` spacings there). Conifers' cones
-// keep their outline.
-fn past_lobes(o: vec3<f32>, d: vec3<f32>, c: Crown, pixel: f32) -> bool {
+// A conifer's outline steps in tiers, as its whorls of branches droop: over its span
+// TIERS tiers (their phase per crown), each widest at its foot and TIER_DEPTH of the
+// cone's radius narrower at its top, half to one and a half times that about the axis
+// (value noise over the direction from it). A ray is tested where it passes the axis
+// closest across the ground, against the tier's radius at that height. They fade out
+// with the lobes.
+const TIERS: f32 = 6.0;
+const TIER_DEPTH: f32 = 0.3;
+
+// Whether the ray `o + v d`, which enters crown `c`'s spheroid or cone, passes outside
+// its outline, lobed or in tiers (a pixel spanning `pixel` spacings there).
+fn past_outline(o: vec3<f32>, d: vec3<f32>, c: Crown, pixel: f32) -> bool {
     let fade = 1.0 - smoothstep(LOBE_FADE.x, LOBE_FADE.y, pixel);
-    if (c.dark || fade <= 0.0) {
+    if (fade <= 0.0) {
         return false;
+    }
+    if (c.dark) {
+        return past_tiers(o, d, c, fade);
     }
     let scale = vec3<f32>(c.radius, c.radius, c.half_height);
     let p = (o - vec3<f32>(c.across, c.up)) / scale;
@@ -255,6 +266,24 @@ fn past_lobes(o: vec3<f32>, d: vec3<f32>, c: Crown, pixel: f32) -> bool {
     }
     let lobe = bough_height(bough_coords(closest / max(m, 1e-6), c.id)).x;
     return m > mix(inner, 1.0, lobe);
+}
+
+// Whether the ray `o + v d` passes conifer `c` outside its tiers, cut in by `fade` of
+// TIER_DEPTH.
+fn past_tiers(o: vec3<f32>, d: vec3<f32>, c: Crown, fade: f32) -> bool {
+    // From the apex: where the ray's track passes the axis closest.
+    let q = o - vec3<f32>(c.across, c.up + c.half_height);
+    let a = q + d * (-dot(q.xy, d.xy) / max(dot(d.xy, d.xy), 1e-12));
+    let below = -a.z;
+    let span = 2.0 * c.half_height;
+    if (below <= 0.0 || below >= span) {
+        return false;
+    }
+    let h = length(a.xy);
+    // Within the tier, 0 at its top to 1 at its foot.
+    let s = fract(TIERS * below / span + hash2(c.id + vec2<f32>(29.0, 3.0)));
+    let around = 0.5 + noise2(3.0 * a.xy / max(h, 1e-6) + 5.3 * c.id);
+    return h > cone_slope(c) * below * (1.0 - TIER_DEPTH * fade * around * (1.0 - s));
 }
 
 // Where direction `u` from a crown's centre (unit, crown space) falls on the boughs'
@@ -367,7 +396,7 @@ fn canopy(
     let per_cell = select(vec2<f32>(1e9), 1.0 / abs(d.xy), moving);
     let boundary = floor(o.xy) + max(toward, vec2<f32>(0.0));
     // The march keeps the two nearest crowns the ray enters. A crown it passes by its lobes
-    // (`past_lobes`) is not a hit: the march then walks on until the second is sure to be
+    // (`past_outline`) is not a hit: the march then walks on until the second is sure to be
     // the nearest after it, and that one is kept (whatever its lobes). The lobes are
     // tested once per pixel, not in `meet`, which keeps the march's loop small.
     var nearest = 1e9;
@@ -387,7 +416,7 @@ fn canopy(
         let entered = min(next.x, next.y);
         if (walked >= MARCH_CELLS || entered > reach || entered > select(nearest, second, passed)) {
             let pixel = per_spacing * (length_to_eye - start + nearest);
-            if (!passed && nearest <= start && past_lobes(o, d, hit, pixel)) {
+            if (!passed && nearest <= start && past_outline(o, d, hit, pixel)) {
                 passed = true;
                 continue;
             }
@@ -455,7 +484,7 @@ fn canopy(
 fn leaf_clumps(u: vec3<f32>, n0: vec3<f32>, id: vec2<f32>, dark: bool, pixel: f32) -> vec4<f32> {
     var n = n0;
     var shade = 1.0;
-    // A broadleaf's boughs, the lobes of its outline (`past_lobes`), each lit on its
+    // A broadleaf's boughs, the lobes of its outline (`past_outline`), each lit on its
     // sunward side with a shaded hollow between: they still show where the clumps are
     // too small to.
     let boughs = select(1.0 - smoothstep(LOBE_FADE.x, LOBE_FADE.y, pixel), 0.0, dark);
