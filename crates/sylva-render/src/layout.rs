@@ -193,6 +193,9 @@ pub struct FarSpecies {
     pub row_step: f32,
     /// Padding.
     pub pad0: u32,
+    /// The crown as an ellipsoid about the trunk axis, tree space: its centre's height,
+    /// horizontal and vertical radii (m), and the light's extinction in it (1/m).
+    pub crown: [f32; 4],
 }
 
 macro_rules! attr {

@@ -38,6 +38,33 @@ pub const VIEW_SIZE: u32 = 256;
 /// (full detail for every preset but the willow, whose level 0 has 851 000).
 pub const BAKE_TRIANGLES: usize = 300_000;
 
+/// Sunlight's extinction in a crown per unit of leaf area density (m² of leaf per m³):
+/// 0.5 for leaves facing every way, times about 0.7 for their gathering on twigs, which
+/// leaves gaps. Matched against full detail's shadow map in a stand seen from several
+/// sides (`a_stand_drawn_as_impostors_keeps_the_brightness_of_full_detail_under_shadows`).
+pub const CROWN_EXTINCTION: f32 = 0.35;
+
+/// The crown of leaf `clusters` as an ellipsoid about the trunk axis: centre height,
+/// horizontal and vertical radii (those of a uniformly filled ellipsoid with the clusters'
+/// area-weighted second moments), and the sunlight's extinction through it,
+/// [`CROWN_EXTINCTION`] × leaf area / volume, 1/m; zeros without leaves.
+pub fn crown_ellipsoid(clusters: &[sylva_tree::mesh::LeafCluster]) -> [f32; 4] {
+    let total: f32 = clusters.iter().map(|c| c.leaf_area).sum();
+    if total <= 0.0 {
+        return [0.0; 4];
+    }
+    let z = clusters.iter().map(|c| c.leaf_area * c.center[2]).sum::<f32>() / total;
+    let (mut h2, mut v2) = (0.0f32, 0.0f32);
+    for c in clusters {
+        let w = c.leaf_area / total;
+        h2 += w * (c.center[0] * c.center[0] + c.center[1] * c.center[1]);
+        v2 += w * (c.center[2] - z) * (c.center[2] - z);
+    }
+    let (a, b) = ((2.5 * h2).sqrt().max(0.1), (5.0 * v2).sqrt().max(0.1));
+    let volume = 4.0 / 3.0 * std::f32::consts::PI * a * a * b;
+    [z, a, b, CROWN_EXTINCTION * total / volume]
+}
+
 /// The level of `model` its impostor is rendered from (see [`BAKE_TRIANGLES`]).
 pub fn bake_level(model: &TreeModel) -> usize {
     model
@@ -295,6 +322,7 @@ impl FarPass {
             height: z1 - z0,
             row_step: ROW_STEP_DEG.to_radians(),
             pad0: 0,
+            crown: crown_ellipsoid(&level.clusters),
         };
         let uniform =
             buffer(gpu, "impostor", bytemuck::bytes_of(&params), wgpu::BufferUsages::UNIFORM);
