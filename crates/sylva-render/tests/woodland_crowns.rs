@@ -9,7 +9,9 @@ mod probe;
 
 use sylva_core::SplitMix64;
 
-/// Calls ground.wgsl's `enter_crown` once per ray.
+/// Calls ground.wgsl's `enter_crown` and `past_outline` once per ray: where the ray
+/// enters the crown's solid, and 1 where it meets the crown within its outline (0 where
+/// not).
 const PROBE: &str = r#"
 struct RayProbe { o: vec4<f32>, d: vec4<f32>, crown: vec4<f32>, shape: vec4<f32> };
 @group(2) @binding(0) var<storage, read> rays: array<RayProbe>;
@@ -20,13 +22,15 @@ fn cs_main(@builtin(global_invocation_id) id: vec3<u32>) {
     if (id.x >= arrayLength(&rays)) { return; }
     let r = rays[id.x];
     var c: Crown;
-    c.id = vec2<f32>(0.0);
+    c.id = vec2<f32>(3.0, 5.0);
     c.across = r.crown.xy;
     c.up = r.crown.z;
     c.radius = r.crown.w;
     c.half_height = r.shape.x;
     c.dark = r.shape.y > 0.5;
-    out[id.x] = enter_crown(r.o.xyz, r.d.xyz, c);
+    let t = enter_crown(r.o.xyz, r.d.xyz, c);
+    out[2u * id.x] = t;
+    out[2u * id.x + 1u] = select(0.0, 1.0, t >= 0.0 && !past_outline(r.o.xyz, r.d.xyz, c, r.shape.z));
 }
 "#;
 
@@ -51,6 +55,15 @@ fn the_cone_is_the_shaders() {
         src.contains(&format!("const CONE_BASE: f32 = {CONE_BASE:?};")),
         "ground.wgsl's CONE_BASE differs from this test's {CONE_BASE}"
     );
+}
+
+/// One ray of the probes: origin, direction, the crown (centre across, height, radius;
+/// half-height, conifer) and the pixel's span there (spacings), as `vec4`s.
+fn probe_ray(o: [f32; 3], d: [f32; 3], crown: &Crown, pixel: f32) -> [f32; 16] {
+    let cone = if crown.cone { 1.0 } else { 0.0 };
+    let [ax, ay] = crown.across;
+    let (up, radius, half) = (crown.up, crown.radius, crown.half_height);
+    [o[0], o[1], o[2], 0.0, d[0], d[1], d[2], 0.0, ax, ay, up, radius, half, cone, pixel, 0.0]
 }
 
 impl Crown {
@@ -111,29 +124,11 @@ fn a_ray_enters_a_painted_crown_where_it_first_meets_its_spheroid_or_cone() {
             }
             let len = d.iter().map(|x| x * x).sum::<f32>().sqrt();
             let d = d.map(|x| x / len);
-            rays.push([
-                o[0],
-                o[1],
-                o[2],
-                0.0,
-                d[0],
-                d[1],
-                d[2],
-                0.0,
-                crown.across[0],
-                crown.across[1],
-                crown.up,
-                crown.radius,
-                crown.half_height,
-                if crown.cone { 1.0 } else { 0.0 },
-                0.0,
-                0.0,
-            ]);
+            rays.push(probe_ray(o, d, &crown, 0.0));
             cases.push((crown, o, d));
         }
     }
-    let gpu =
-        probe::run("ground.wgsl", PROBE, &[], bytemuck::cast_slice(&rays), rays.len(), rays.len());
+    let gpu = probe_crowns(&rays).0;
     let step = 1e-3;
     let (mut met, mut missed) = ([0; 2], [0; 2]);
     for ((crown, o, d), v) in cases.iter().zip(&gpu) {
@@ -180,14 +175,7 @@ fn a_painted_conifer_narrows_to_its_apex_where_a_broadleaf_stays_round() {
                 [x, -3.0, z, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, up, 0.5, half, flag, 0.0, 0.0]
             })
             .collect();
-        let v = probe::run(
-            "ground.wgsl",
-            PROBE,
-            &[],
-            bytemuck::cast_slice(&rays),
-            rays.len(),
-            rays.len(),
-        );
+        let v = probe_crowns(&rays).0;
         xs.iter().zip(&v).filter(|(_, v)| **v >= 0.0).map(|(x, _)| *x).fold(0.0f32, f32::max)
     };
     for frac in [0.1f32, 0.5, 0.9, 1.5] {
@@ -205,28 +193,6 @@ fn a_painted_conifer_narrows_to_its_apex_where_a_broadleaf_stays_round() {
         );
     }
 }
-
-/// Calls ground.wgsl's `past_outline` once per ray: 1 where the ray passes the crown by its
-/// lobed outline, 0 where it meets it.
-const LOBE_PROBE: &str = r#"
-struct LobeProbe { o: vec4<f32>, d: vec4<f32>, crown: vec4<f32>, shape: vec4<f32> };
-@group(2) @binding(0) var<storage, read> rays: array<LobeProbe>;
-@group(2) @binding(1) var<storage, read_write> out: array<f32>;
-
-@compute @workgroup_size(64)
-fn cs_main(@builtin(global_invocation_id) id: vec3<u32>) {
-    if (id.x >= arrayLength(&rays)) { return; }
-    let r = rays[id.x];
-    var c: Crown;
-    c.id = vec2<f32>(3.0, 5.0);
-    c.across = r.crown.xy;
-    c.up = r.crown.z;
-    c.radius = r.crown.w;
-    c.half_height = r.shape.x;
-    c.dark = r.shape.y > 0.5;
-    out[id.x] = select(0.0, 1.0, past_outline(r.o.xyz, r.d.xyz, c, r.shape.z));
-}
-"#;
 
 /// How far in a broadleaf's lobes cut its rim, as a share of the radius (ground.wgsl's
 /// LOBE_DEPTH), and the pixel size (spacings) from which its outline is round (the end of
@@ -281,7 +247,6 @@ fn across(u: [f32; 3], angle: f32) -> [f32; 3] {
 fn a_near_broadleaf_has_a_lobed_outline_and_a_far_one_a_round_one() {
     let broadleaf =
         Crown { across: [0.3, 0.4], up: 1.0, radius: 0.7, half_height: 0.85, cone: false };
-    let conifer = Crown { cone: true, ..broadleaf };
     let mut rng = SplitMix64::new(0x10be_5eed);
     // Rays passing the centre at every distance up to the rim, in every direction, each
     // once along two different lines through the same nearest point.
@@ -297,35 +262,13 @@ fn a_near_broadleaf_has_a_lobed_outline_and_a_far_one_a_round_one() {
             .iter()
             .map(|&(m, u, a, b)| {
                 let (o, d) = passing(crown, m, u, across(u, if second_line { b } else { a }));
-                let flag = if crown.cone { 1.0 } else { 0.0 };
-                [
-                    o[0],
-                    o[1],
-                    o[2],
-                    0.0,
-                    d[0],
-                    d[1],
-                    d[2],
-                    0.0,
-                    crown.across[0],
-                    crown.across[1],
-                    crown.up,
-                    crown.radius,
-                    crown.half_height,
-                    flag,
-                    pixel,
-                    0.0,
-                ]
+                probe_ray(o, d, crown, pixel)
             })
             .collect();
-        probe::run(
-            "ground.wgsl",
-            LOBE_PROBE,
-            &[],
-            bytemuck::cast_slice(&rays),
-            rays.len(),
-            rays.len(),
-        )
+        // Every one of these rays enters the crown's solid (it passes the centre nearer
+        // than the surface): where it does not meet the crown, it passes by the outline.
+        let met = probe_crowns(&rays).1;
+        met.iter().map(|m| 1.0 - m).collect::<Vec<f32>>()
     };
     let near = run(&broadleaf, 0.01, false);
     let mut rim = (0, 0);
@@ -347,34 +290,23 @@ fn a_near_broadleaf_has_a_lobed_outline_and_a_far_one_a_round_one() {
     );
     // The outline is the crown's: another line through the same nearest point agrees.
     assert_eq!(near, run(&broadleaf, 0.01, true), "the outline depends on the ray's direction");
-    // Far off, the outline is round again (what a pixel spans could not show the lobes),
-    // and a conifer's a plain cone.
+    // Far off, the outline is round again (what a pixel spans could not show the lobes).
     assert!(run(&broadleaf, LOBE_ROUND, false).iter().all(|p| *p == 0.0), "far crown lobed");
-    assert!(run(&conifer, LOBE_ROUND, false).iter().all(|p| *p == 0.0), "far conifer in tiers");
 }
 
-/// Calls ground.wgsl's `enter_crown` and `past_outline` once per ray: 1 where the ray
-/// meets the crown within its outline, 0 where it does not.
-const OUTLINE_PROBE: &str = r#"
-struct OutlineProbe { o: vec4<f32>, d: vec4<f32>, crown: vec4<f32>, shape: vec4<f32> };
-@group(2) @binding(0) var<storage, read> rays: array<OutlineProbe>;
-@group(2) @binding(1) var<storage, read_write> out: array<f32>;
-
-@compute @workgroup_size(64)
-fn cs_main(@builtin(global_invocation_id) id: vec3<u32>) {
-    if (id.x >= arrayLength(&rays)) { return; }
-    let r = rays[id.x];
-    var c: Crown;
-    c.id = vec2<f32>(3.0, 5.0);
-    c.across = r.crown.xy;
-    c.up = r.crown.z;
-    c.radius = r.crown.w;
-    c.half_height = r.shape.x;
-    c.dark = r.shape.y > 0.5;
-    let met = enter_crown(r.o.xyz, r.d.xyz, c) >= 0.0 && !past_outline(r.o.xyz, r.d.xyz, c, r.shape.z);
-    out[id.x] = select(0.0, 1.0, met);
+/// Runs `PROBE` over `rays` (see [`probe_ray`]): where each enters its crown's solid (or a
+/// negative number), and 1 where it meets the crown within its outline.
+fn probe_crowns(rays: &[[f32; 16]]) -> (Vec<f32>, Vec<f32>) {
+    let out = probe::run(
+        "ground.wgsl",
+        PROBE,
+        &[],
+        bytemuck::cast_slice(rays),
+        rays.len(),
+        2 * rays.len(),
+    );
+    (out.iter().step_by(2).copied().collect(), out.iter().skip(1).step_by(2).copied().collect())
 }
-"#;
 
 /// How far in a conifer's tiers cut its cone at their tops, at most, as a share of its
 /// radius (ground.wgsl's TIER_DEPTH times the 1.5 its variation about the axis reaches).
@@ -395,14 +327,7 @@ fn a_near_conifer_steps_in_tiers_and_a_far_one_is_a_cone() {
                 [x, -3.0, z, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, up, radius, half, 1.0, pixel, 0.0]
             })
             .collect();
-        let met = probe::run(
-            "ground.wgsl",
-            OUTLINE_PROBE,
-            &[],
-            bytemuck::cast_slice(&rays),
-            rays.len(),
-            rays.len(),
-        );
+        let met = probe_crowns(&rays).1;
         xs.iter().zip(&met).filter(|(_, m)| **m > 0.5).map(|(x, _)| *x).fold(0.0f32, f32::max)
     };
     let mut shares = Vec::new();
