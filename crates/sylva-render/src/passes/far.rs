@@ -562,6 +562,47 @@ mod tests {
     use super::*;
 
     #[test]
+    fn the_crown_ellipsoid_of_clusters_filling_one_gives_back_its_radii_and_leaf_density() {
+        // Clusters of 0.05 m² each on a 0.25 m lattice filling an ellipsoid of radii 3 m
+        // across and 4 m up about (0, 0, 8): leaf area density 0.05 / 0.25³
+        // = 3.2 m²/m³. The moments of a uniformly filled ellipsoid give its radii back (to
+        // the lattice's step), and the extinction is CROWN_EXTINCTION times the density.
+        let (a, b, z0, step, area) = (3.0f32, 4.0f32, 8.0f32, 0.25f32, 0.05f32);
+        let mut clusters = Vec::new();
+        let n = (b / step) as i32 + 1;
+        for i in -n..=n {
+            for j in -n..=n {
+                for k in -n..=n {
+                    let p = [i as f32 * step, j as f32 * step, k as f32 * step];
+                    if (p[0] * p[0] + p[1] * p[1]) / (a * a) + p[2] * p[2] / (b * b) <= 1.0 {
+                        clusters.push(sylva_tree::mesh::LeafCluster {
+                            joint: 0,
+                            hang: [0.0; 3],
+                            center: [p[0], p[1], p[2] + z0],
+                            size: 0.3,
+                            roll: 0.0,
+                            atlas: 0,
+                            phase: 0.0,
+                            leaf_area: area,
+                            normal: [0.0, 0.0, 1.0],
+                            exposure: 1.0,
+                        });
+                    }
+                }
+            }
+        }
+        let [z, ra, rb, extinction] = crown_ellipsoid(&clusters);
+        assert!((z - z0).abs() < 1e-3, "centre {z}");
+        assert!((ra - a).abs() < 0.1 && (rb - b).abs() < 0.1, "radii {ra}, {rb}");
+        let density = area / (step * step * step);
+        assert!(
+            (extinction / (CROWN_EXTINCTION * density) - 1.0).abs() < 0.05,
+            "extinction {extinction} for density {density}"
+        );
+        assert_eq!(crown_ellipsoid(&[]), [0.0; 4], "no leaves, no shade");
+    }
+
+    #[test]
     fn alpha_mips_keep_the_crown_from_thinning_out_and_within_its_silhouette() {
         // Left half: isolated opaque texels (thin leaves) at 25 % density; right half empty.
         // A plain box filter turns them into alpha 64: every texel fails the alpha test.
