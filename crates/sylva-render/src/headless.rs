@@ -99,10 +99,22 @@ impl Headless {
     /// it back: what an interactive frame costs before presentation (benchmarks time this;
     /// [`read_back`](Self::read_back) then fetches the image when one is wanted).
     pub fn draw(&mut self, frame: &FrameData, camera: &Camera) -> Result<(), RenderError> {
-        self.renderer.render(&self.gpu, frame, camera, &self.view);
+        let index = self.submit(frame, camera);
+        self.wait(index)
+    }
+
+    /// Start drawing `frame` from `camera` and return without waiting: the CPU may build
+    /// the next frame while the GPU draws this one, as an interactive loop does
+    /// ([`wait`](Self::wait) for it before reading anything back).
+    pub fn submit(&mut self, frame: &FrameData, camera: &Camera) -> wgpu::SubmissionIndex {
+        self.renderer.render(&self.gpu, frame, camera, &self.view)
+    }
+
+    /// Wait until the GPU has finished the submission `index` (and all before it).
+    pub fn wait(&self, index: wgpu::SubmissionIndex) -> Result<(), RenderError> {
         self.gpu
             .device
-            .poll(wgpu::PollType::Wait { submission_index: None, timeout: None })
+            .poll(wgpu::PollType::Wait { submission_index: Some(index), timeout: None })
             .map_err(|e| RenderError::Wait(e.to_string()))?;
         Ok(())
     }

@@ -364,13 +364,16 @@ impl Renderer {
     }
 
     /// Upload `frame` and draw it seen from `camera` into `target` (same format and size).
+    /// Returns at once, the GPU still drawing: the index names the submission, to wait for
+    /// it (the buffers it reads may be written again for the next frame meanwhile; the
+    /// queue orders the writes after it).
     pub fn render(
         &mut self,
         gpu: &Gpu,
         frame: &FrameData,
         camera: &Camera,
         target: &wgpu::TextureView,
-    ) {
+    ) -> wgpu::SubmissionIndex {
         let dev = &gpu.device;
         let aspect = self.width as f32 / self.height as f32;
         let mut g = Globals::for_camera(camera, aspect, frame.time as f32, &self.lighting);
@@ -439,7 +442,7 @@ impl Renderer {
             self.ground.draw(&mut pass);
             self.sky.draw(&mut pass);
         }
-        gpu.queue.submit([enc.finish()]);
+        gpu.queue.submit([enc.finish()])
     }
 }
 

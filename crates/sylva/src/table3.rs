@@ -13,6 +13,11 @@
 //! it off every tree turns to its own yaw, so images would differ by layout, not by LOD.
 //! A configuration whose frames exceed `--max-triangles` is timed on the CPU only and its
 //! last frame rendered once (when under `--max-image-triangles`) for the image error.
+//!
+//! Frames per second add simulation, frame building and rendering, each waited for: a
+//! bound from below. With `--overlapped` each rendered configuration also runs its timed
+//! frames as an interactive loop does, the CPU building a frame while the GPU draws the one
+//! before, and reports those frames per second beside them.
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -73,6 +78,12 @@ pub struct Table3Bench {
     /// rounds. Counts, images and errors are the last round's (the same in every round).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=100))]
     rounds: u32,
+    /// Also time the rendered configurations as an interactive loop runs: each frame's
+    /// simulation and frame building while the GPU still draws the frame before (one frame
+    /// in flight), the same timed frames again. Their frames per second are then set by the
+    /// slower of the CPU's and the GPU's work, not by their sum.
+    #[arg(long)]
+    overlapped: bool,
     /// Frames of the popping measurement (scene `small`, calm, along its fly-in; 0: skip).
     #[arg(long, default_value_t = POPPING_FRAMES)]
     popping_frames: usize,
@@ -104,6 +115,9 @@ struct Cell {
     /// a lane group's memory growing, say).
     cpu_max_ms: f64,
     render_ms: Option<f64>,
+    /// Frames per second with the CPU's work on a frame overlapping the GPU's on the one
+    /// before (`--overlapped`; each round's, the median reported).
+    overlapped: Vec<f64>,
     triangles: f64,
     draws: f64,
     joints: f64,
@@ -135,8 +149,9 @@ impl Cell {
     /// the slowest frame of any, each round's CPU median; the rest from the last round.
     fn pooled(cells: Vec<Cell>) -> Cell {
         let mut samples: [Vec<f64>; 3] = Default::default();
-        let (mut round_cpu, mut cpu_max) = (Vec::new(), 0.0f64);
+        let (mut round_cpu, mut cpu_max, mut overlapped) = (Vec::new(), 0.0f64, Vec::new());
         for c in &cells {
+            overlapped.extend_from_slice(&c.overlapped);
             for (all, one) in samples.iter_mut().zip(&c.samples) {
                 all.extend_from_slice(one);
             }
@@ -150,6 +165,7 @@ impl Cell {
         }
         cell.render_ms = (!samples[2].is_empty()).then(|| median(&mut samples[2].clone()));
         cell.cpu_max_ms = cpu_max;
+        cell.overlapped = overlapped;
         cell.samples = samples;
         cell.round_cpu = round_cpu;
         cell
@@ -159,6 +175,11 @@ impl Cell {
 impl Cell {
     fn fps(&self) -> Option<f64> {
         self.render_ms.map(|r| 1000.0 / (self.sim_ms + self.frame_ms + r))
+    }
+
+    /// The median over the rounds of the frames per second with CPU and GPU overlapped.
+    fn overlapped_fps(&self) -> Option<f64> {
+        (!self.overlapped.is_empty()).then(|| median(&mut self.overlapped.clone()))
     }
 }
 
@@ -213,6 +234,9 @@ fn command_line(a: &Table3Bench, (w, h): (u32, u32)) -> String {
     }
     if a.rounds != 1 {
         let _ = write!(c, " --rounds {}", a.rounds);
+    }
+    if a.overlapped {
+        c.push_str(" --overlapped");
     }
     c
 }
@@ -303,6 +327,9 @@ fn run_config(
             cell.previous = image;
         }
     }
+    if a.overlapped && render_all == Some(true) {
+        cell.overlapped.push(overlapped(&mut forest, gpu, &cameras[a.warmup..], dt, (w, h))?);
+    }
     let k = a.frames.max(1) as f64;
     for v in [&mut cell.triangles, &mut cell.draws, &mut cell.joints, &mut cell.upload_mb] {
         *v /= k;
@@ -331,6 +358,34 @@ fn run_config(
         cell.note = format!("{what}{sep}{why}");
     }
     Ok(cell)
+}
+
+/// Frames per second of `forest` stepped and drawn along `cameras` as an interactive loop
+/// runs them: the simulation and frame building of each frame while the GPU draws the one
+/// before, then a wait for that one before this one is submitted (one frame in flight). The
+/// clock runs from the first step to the last frame's end on the GPU.
+fn overlapped(
+    forest: &mut Forest,
+    gpu: &mut Headless,
+    cameras: &[Camera],
+    dt: f32,
+    (w, h): (u32, u32),
+) -> anyhow::Result<f64> {
+    let mut frame = FrameData::default();
+    let mut in_flight = None;
+    let start = Instant::now();
+    for camera in cameras {
+        forest.step(dt);
+        forest.frame(camera, w as f32 / h as f32, &mut frame);
+        if let Some(index) = in_flight.take() {
+            gpu.wait(index)?;
+        }
+        in_flight = Some(gpu.submit(&frame, camera));
+    }
+    if let Some(index) = in_flight {
+        gpu.wait(index)?;
+    }
+    Ok(cameras.len() as f64 / start.elapsed().as_secs_f64().max(1e-9))
 }
 
 /// Mean FLIP error (NVIDIA's perceptual difference, 0 same … 1; through the `nv-flip`
@@ -442,8 +497,10 @@ pub fn run(a: Table3Bench) -> anyhow::Result<()> {
                 }
                 let cell = run_config(&spec, &mut gpu, &a, (w, h), (g, an, wi), false)?;
                 println!(
-                    "  {label:<24} {:>7} fps  sim {:>6.1} ms  frame {:>6.1} ms  (slowest {:.1})  render {:>8} ms  {:>7.2} M tris  {:>6.0} draws  {:>9.0} joints  {:>7.2} MB up (max {:.2})  {:>8.1} MB state  {}",
+                    "  {label:<24} {:>7} fps{}  sim {:>6.1} ms  frame {:>6.1} ms  (slowest {:.1})  render {:>8} ms  {:>7.2} M tris  {:>6.0} draws  {:>9.0} joints  {:>7.2} MB up (max {:.2})  {:>8.1} MB state  {}",
                     cell.fps().map_or("—".into(), |f| format!("{f:.2}")),
+                    cell.overlapped_fps()
+                        .map_or(String::new(), |f| format!(" ({f:.2} overlapped)")),
                     cell.sim_ms,
                     cell.frame_ms,
                     cell.cpu_max_ms,
@@ -913,6 +970,23 @@ fn write_outputs(
             .collect();
         let _ = writeln!(md, "| {label} | {} |", cells.join(" | "));
     }
+    if results.iter().any(|(_, _, cells)| cells.iter().any(|c| !c.overlapped.is_empty())) {
+        let _ = writeln!(
+            md,
+            "\nFrames per second with the CPU's work on each frame overlapping the GPU's on the one before (`--overlapped`: one frame in flight, as an interactive loop runs; the figures above add the two):\n"
+        );
+        let _ = writeln!(md, "| | {} |", header.join(" | "));
+        let _ = writeln!(md, "|---|{}", "---|".repeat(results.len()));
+        for (row, (label, ..)) in CONFIGS.iter().enumerate() {
+            let cells: Vec<String> = results
+                .iter()
+                .map(|(_, _, cells)| {
+                    cells[row].overlapped_fps().map_or("—".into(), |f| format!("{f:.2}"))
+                })
+                .collect();
+            let _ = writeln!(md, "| {label} | {} |", cells.join(" | "));
+        }
+    }
     let _ = writeln!(
         md,
         "\nPer configuration (medians over the timed frames, and the slowest frame's simulation + frame building; means for counts):\n"
@@ -923,7 +997,7 @@ fn write_outputs(
     );
     let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     let mut csv = String::from(
-        "scene,trees,configuration,fps,sim_ms,frame_ms,render_ms,triangles,draws,joint_updates,uploaded_mb,uploaded_max_mb,state_mb,simulated,impostors,shadow_only,flip,ssim,cpu_max_ms\n",
+        "scene,trees,configuration,fps,sim_ms,frame_ms,render_ms,triangles,draws,joint_updates,uploaded_mb,uploaded_max_mb,state_mb,simulated,impostors,shadow_only,flip,ssim,cpu_max_ms,overlapped_fps\n",
     );
     for (name, trees, cells) in results {
         for (c, (label, ..)) in cells.iter().zip(CONFIGS) {
@@ -950,7 +1024,7 @@ fn write_outputs(
             );
             let _ = writeln!(
                 csv,
-                "{name},{trees},{label},{},{:.3},{:.3},{},{:.0},{:.0},{:.0},{:.3},{:.3},{:.3},{},{:.0},{:.0},{},{},{:.3}",
+                "{name},{trees},{label},{},{:.3},{:.3},{},{:.0},{:.0},{:.0},{:.3},{:.3},{:.3},{},{:.0},{:.0},{},{},{:.3},{}",
                 c.fps().map_or(String::new(), |f| format!("{f:.3}")),
                 c.sim_ms,
                 c.frame_ms,
@@ -966,7 +1040,8 @@ fn write_outputs(
                 c.shadow_only,
                 c.flip.map_or(String::new(), |s| format!("{s:.4}")),
                 c.ssim.map_or(String::new(), |s| format!("{s:.4}")),
-                c.cpu_max_ms
+                c.cpu_max_ms,
+                c.overlapped_fps().map_or(String::new(), |f| format!("{f:.3}"))
             );
         }
     }

@@ -453,6 +453,7 @@ fn table3_with_all_lods_only_runs_that_configuration_and_its_image_error() {
         "--popping-frames",
         "0",
         "--all-lods-only",
+        "--overlapped",
         "--out",
         d,
     ];
@@ -482,12 +483,18 @@ fn table3_with_all_lods_only_runs_that_configuration_and_its_image_error() {
     assert!(sim > 0.0 && (slowest - (sim + frame)).abs() < 0.002, "{csv}");
     // The animation state held: some, and far less than a GB for five trees.
     assert!(up("state_mb") > 0.0 && up("state_mb") < 1000.0, "{csv}");
+    // With CPU and GPU overlapped the rendered configuration ran again at some frame rate;
+    // a frame there costs at least its simulation and frame building.
+    let overlapped = up("overlapped_fps");
+    assert!(overlapped > 0.0 && overlapped < 1000.0 / sim, "{csv}");
     // The others did not run, and say so.
     for r in &rows[1..] {
         assert!(r[tris] == "0" && r[flip].is_empty(), "{csv}");
+        assert!(r[col("overlapped_fps")].is_empty(), "{csv}");
     }
     let md = std::fs::read_to_string(dir.join("table3.md")).expect("table3.md");
     assert_eq!(md.matches("not run (--all-lods-only)").count(), 3, "{md}");
+    assert!(md.contains("overlapping the GPU's on the one before"), "{md}");
     assert!(dir.join("small-with-all-LODs.png").exists());
     assert!(dir.join("small-full-detail.png").exists());
 }
