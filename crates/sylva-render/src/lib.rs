@@ -14,6 +14,7 @@ pub mod layout;
 pub mod passes;
 mod renderer;
 mod shared;
+mod timer;
 
 pub use egui;
 pub use gpu::{Gpu, RenderError};
@@ -21,4 +22,5 @@ pub use headless::Headless;
 pub use passes::panel::{PanelFrame, PanelPass};
 pub use renderer::{Overlay, Renderer, SceneAssets};
 pub use shared::{SHADERS, shader_source};
+pub use timer::GpuTimer;
 pub use wgpu;

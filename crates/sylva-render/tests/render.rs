@@ -95,6 +95,30 @@ fn small_scene_matches_its_golden_image() {
 }
 
 #[test]
+fn frames_submitted_without_waiting_are_each_timed_once_within_the_wall_time() {
+    let spec = SceneSpec::builtin("small").expect("small scene");
+    let mut forest = Forest::new(&spec).expect("forest");
+    let camera: Camera = forest.default_camera();
+    let mut gpu = Headless::new(&forest, W, H).unwrap_or_else(|e| panic!("{e}"));
+    let mut timer = sylva_render::GpuTimer::new(gpu.gpu.device.clone());
+    let mut frame = FrameData::default();
+    let start = std::time::Instant::now();
+    for _ in 0..3 {
+        forest.step(1.0 / 30.0);
+        forest.frame(&camera, W as f32 / H as f32, &mut frame);
+        timer.submitted(gpu.submit(&frame, &camera));
+    }
+    // Nothing waited for the GPU above; the timer saw each frame finish.
+    assert_eq!(timer.finish(), 3);
+    let wall_ms = 1e3 * start.elapsed().as_secs_f32();
+    let last = timer.last_ms();
+    assert!(last > 0.0 && last <= wall_ms, "last frame {last} ms of {wall_ms} ms");
+    // Frames after the timer stopped are not counted.
+    timer.submitted(gpu.submit(&frame, &camera));
+    assert_eq!(timer.finish(), 3);
+}
+
+#[test]
 fn trees_move_and_a_storm_moves_them_more_than_a_breeze() {
     let storm = render("storm", &[30, 31, 45]);
     let breeze = render("breeze", &[30, 31, 45]);

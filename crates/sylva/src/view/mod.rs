@@ -21,7 +21,7 @@ use std::time::Instant;
 use anyhow::Context;
 use clap::Args;
 use sylva_forest::{Forest, SceneSpec};
-use sylva_render::{Gpu, PanelFrame, PanelPass, Renderer, wgpu};
+use sylva_render::{Gpu, GpuTimer, PanelFrame, PanelPass, Renderer, wgpu};
 use winit::application::ApplicationHandler;
 use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, EventLoop};
@@ -77,6 +77,8 @@ struct Surface {
     /// The panel's last output; its texture changes wait here until a frame draws them
     /// (a frame can be skipped while the window is resized).
     pending: PanelFrame,
+    /// The GPU's time on each frame, taken off the frame loop.
+    timer: GpuTimer,
 }
 
 impl Drop for Surface {
@@ -145,8 +147,9 @@ impl App {
             Some(max_side),
         );
         let pending = PanelFrame::default();
+        let timer = GpuTimer::new(gpu.device.clone());
         self.surface =
-            Some(Surface { window, surface, gpu, config, renderer, panel, egui, pending });
+            Some(Surface { window, surface, gpu, config, renderer, panel, egui, pending, timer });
         Ok(())
     }
 
@@ -201,15 +204,16 @@ impl App {
         };
         let view = texture.texture.create_view(&wgpu::TextureViewDescriptor::default());
         let camera = v.orbit.camera();
-        let start = Instant::now();
         s.renderer.set_overlay(v.overlay);
         s.renderer.render(&s.gpu, &v.frame, &camera, &view);
         if with_panel {
             s.panel.draw(&s.gpu, &view, [w, h], &mut s.pending);
         }
-        // Wait for the GPU, so the figure is the frame's real rendering time.
-        let _ = s.gpu.device.poll(wgpu::PollType::Wait { submission_index: None, timeout: None });
-        v.figures.render_ms = 1e3 * start.elapsed().as_secs_f32();
+        // Not waited for: the GPU draws this frame while the next one is simulated and
+        // built (the surface holds the loop back once its frame latency is reached). The
+        // timer's thread measures the GPU's time; the figure is the latest frame finished.
+        s.timer.submitted(s.gpu.queue.submit([]));
+        v.figures.render_ms = s.timer.last_ms();
         s.gpu.queue.present(texture);
         if std::mem::take(&mut v.screenshot) {
             match screenshot(v, w, h) {

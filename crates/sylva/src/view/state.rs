@@ -205,7 +205,8 @@ pub struct Figures {
     pub sim_ms: f32,
     /// Building `FrameData`, ms.
     pub build_ms: f32,
-    /// Rendering (submitted and finished), ms.
+    /// Rendering: the GPU's time on the latest frame it finished, ms (the frame loop does
+    /// not wait for it; [`sylva_render::GpuTimer`]).
     pub render_ms: f32,
     /// Substeps run in the last frame.
     pub substeps: u32,
