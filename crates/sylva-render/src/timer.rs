@@ -8,10 +8,11 @@ use std::time::Instant;
 
 /// Times submitted frames on a thread of its own, so the loop that submits them need not
 /// wait for the GPU: the CPU builds the next frame while the GPU draws this one. The thread
-/// waits for each submission in turn; a frame's GPU time runs from when it was submitted,
-/// or when the frame before it finished if that was later (the GPU was still busy), to
-/// when it finished. Its finish is seen when the wait returns, so a figure is late by the
-/// thread's wake-up, microseconds.
+/// waits for each submission in turn; a frame's time runs from when its uploads and
+/// commands began (a software rasteriser such as lavapipe may draw inside the submit
+/// itself), or when the frame before it finished if that was later (the GPU was still
+/// busy), to when it finished. Its finish is seen when the wait returns, so a figure is
+/// late by the thread's wake-up, microseconds.
 #[derive(Debug)]
 pub struct GpuTimer {
     tx: Option<Sender<(wgpu::SubmissionIndex, Instant)>>,
@@ -48,11 +49,12 @@ impl GpuTimer {
         GpuTimer { tx: Some(tx), last_ms, frames, thread }
     }
 
-    /// Time the submission `index`, made just now (with the frame's last `queue.submit`;
-    /// `queue.submit([])` gives an index after everything submitted so far).
-    pub fn submitted(&self, index: wgpu::SubmissionIndex) {
+    /// Time the frame whose work began at `began` (before its uploads and encoding) and
+    /// ends with the submission `index` (the frame's last `queue.submit`; `queue.submit([])`
+    /// gives an index after everything submitted so far).
+    pub fn submitted(&self, index: wgpu::SubmissionIndex, began: Instant) {
         if let Some(tx) = &self.tx {
-            let _ = tx.send((index, Instant::now()));
+            let _ = tx.send((index, began));
         }
     }
 

@@ -204,6 +204,7 @@ impl App {
         };
         let view = texture.texture.create_view(&wgpu::TextureViewDescriptor::default());
         let camera = v.orbit.camera();
+        let began = Instant::now();
         s.renderer.set_overlay(v.overlay);
         s.renderer.render(&s.gpu, &v.frame, &camera, &view);
         if with_panel {
@@ -212,7 +213,7 @@ impl App {
         // Not waited for: the GPU draws this frame while the next one is simulated and
         // built (the surface holds the loop back once its frame latency is reached). The
         // timer's thread measures the GPU's time; the figure is the latest frame finished.
-        s.timer.submitted(s.gpu.queue.submit([]));
+        s.timer.submitted(s.gpu.queue.submit([]), began);
         v.figures.render_ms = s.timer.last_ms();
         s.gpu.queue.present(texture);
         if std::mem::take(&mut v.screenshot) {
