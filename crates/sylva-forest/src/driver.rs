@@ -1521,8 +1521,9 @@ impl Forest {
                 let w = steer(w, gain, turn);
                 let (sn, cs) = g.yaw.sin_cos();
                 s.winds[lane] = [cs * w[0] + sn * w[1], -sn * w[0] + cs * w[1], w[2]];
-                g.lean = s.lean.shear(s.winds[lane]);
-                g.tilt = tilt_along(g.lean, s.lean.tilt(s.winds[lane]));
+                let (shear, tilt) = s.lean.shear_and_tilt(s.winds[lane]);
+                g.lean = shear;
+                g.tilt = tilt_along(shear, tilt);
                 let speed = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
                 leaf.step(&mut g.leaf, speed, dt);
             }

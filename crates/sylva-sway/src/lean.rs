@@ -208,8 +208,14 @@ impl CrownLean {
     /// sway is: by z · min(1 / z_top, 1.5 / h) of it at height z (z_top the trunk top's
     /// height, h the tree's).
     pub fn shear(&self, u: [f32; 3]) -> [f32; 2] {
-        let m = self.mean(u);
-        [m[0] / self.profile, m[1] / self.profile]
+        self.shear_and_tilt(u).0
+    }
+
+    /// [`shear`](Self::shear) and [`tilt`](Self::tilt) together, from one look-up of the
+    /// table (what a simulation's impostors take every step).
+    pub fn shear_and_tilt(&self, u: [f32; 3]) -> ([f32; 2], [f32; 3]) {
+        let v = self.lookup(u);
+        ([v[0] / self.profile, v[1] / self.profile], [v[2], v[3], v[4]])
     }
 }
 

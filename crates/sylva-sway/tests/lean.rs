@@ -133,4 +133,8 @@ fn still_air_leans_nothing_and_the_lean_turns_with_the_wind() {
     // Stronger wind, more lean; less than quadratically (the leaves reconfigure).
     let (s6, s12) = (lean.mean([6.0, 0.0, 0.0])[0], lean.mean([12.0, 0.0, 0.0])[0]);
     assert!(s12 > s6 && s12 < 4.0 * s6, "{s6} {s12}");
+    // The shear and the tilt from one look-up are those looked up one by one.
+    for u in [[6.0, -2.0, 0.0], [-4.6, -6.5, 0.3], [0.0; 3]] {
+        assert_eq!(lean.shear_and_tilt(u), (lean.shear(u), lean.tilt(u)), "{u:?}");
+    }
 }
