@@ -97,7 +97,8 @@ impl Gpu {
         }
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("sylva"),
-            required_features: wgpu::Features::empty(),
+            // Timestamps where the adapter has them, for `Renderer::time_passes`.
+            required_features: adapter.features() & crate::passtimes::PassTimes::FEATURES,
             required_limits: limits,
             experimental_features: wgpu::ExperimentalFeatures::disabled(),
             memory_hints: wgpu::MemoryHints::Performance,

@@ -119,6 +119,17 @@ impl Headless {
         Ok(())
     }
 
+    /// Time each part of every frame on the GPU ([`Renderer::time_passes`]); false where
+    /// the device cannot.
+    pub fn time_passes(&mut self) -> bool {
+        self.renderer.time_passes(&self.gpu)
+    }
+
+    /// The GPU's time (ms) in each part of the last frame drawn ([`Renderer::pass_times`]).
+    pub fn pass_times(&self) -> Result<Option<[f64; crate::PASS_PARTS.len()]>, RenderError> {
+        self.renderer.pass_times(&self.gpu)
+    }
+
     /// The image last drawn, RGBA8 rows top first.
     pub fn read_back(&mut self) -> Result<Vec<u8>, RenderError> {
         let mut enc = self

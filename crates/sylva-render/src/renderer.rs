@@ -16,6 +16,7 @@ use crate::passes::ground::{Canopy, GroundPass, Woodland, mean_albedo};
 use crate::passes::leaf::{self, LeafPass};
 use crate::passes::shadow::{SHADOW_SIZE, ShadowPass};
 use crate::passes::sky::SkyPass;
+use crate::passtimes::{PARTS, PassTimes, Stamp, stamp};
 use crate::shared::{
     DEPTH, GlobalsBinding, Mesh, box_mips, globals_group, globals_layout, instance_buffer,
     palette_buffer, pipeline_layout, texture_entry, upload_mips,
@@ -100,6 +101,8 @@ pub struct Renderer {
     depth: wgpu::TextureView,
     lighting: Lighting,
     overlay: Overlay,
+    /// Timestamps between the passes, once [`Renderer::time_passes`] turned them on.
+    timing: Option<PassTimes>,
 }
 
 /// A colour overlay of the tree passes, for looking at the LODs.
@@ -312,7 +315,26 @@ impl Renderer {
             depth,
             lighting: assets.lighting,
             overlay: Overlay::Off,
+            timing: None,
         })
+    }
+
+    /// Time each part of every frame on the GPU from now on (the parts of
+    /// [`PASS_PARTS`](crate::PASS_PARTS): shadows, trees, impostors, ground, sky), read
+    /// with [`pass_times`](Self::pass_times). False, and nothing timed, where the device
+    /// has no timestamps inside passes.
+    pub fn time_passes(&mut self, gpu: &Gpu) -> bool {
+        if self.timing.is_none() {
+            self.timing = PassTimes::new(gpu);
+        }
+        self.timing.is_some()
+    }
+
+    /// The GPU's time (ms) in each part of the last frame rendered, in the order of
+    /// [`PASS_PARTS`](crate::PASS_PARTS) (waits for that frame to finish); `None` unless
+    /// [`time_passes`](Self::time_passes) turned timing on.
+    pub fn pass_times(&self, gpu: &Gpu) -> Result<Option<[f64; PARTS.len()]>, RenderError> {
+        self.timing.as_ref().map(|t| t.read(gpu)).transpose()
     }
 
     /// MSAA sample count in use.
@@ -403,6 +425,7 @@ impl Renderer {
             // as an impostor: its texels span metres, and it shades only beyond the near
             // one's reach, where the trees are small.
             let mut pass = self.shadow.begin(&mut enc);
+            stamp(self.timing.as_ref(), &mut pass, Stamp::ShadowStart);
             ShadowPass::viewport(&mut pass, 0);
             pass.set_vertex_buffer(1, self.instances.slice(..));
             let casters = [&self.shadow.branch, &self.shadow.leaf];
@@ -410,6 +433,7 @@ impl Renderer {
             self.draw_impostors(&mut pass, frame, &self.shadow_windows, Casting::AsDrawn);
             ShadowPass::viewport(&mut pass, 1);
             self.draw_impostors(&mut pass, frame, &self.shadow_windows_far, Casting::Every);
+            stamp(self.timing.as_ref(), &mut pass, Stamp::ShadowEnd);
         }
         {
             let (view, resolve) = match &self.msaa {
@@ -435,12 +459,24 @@ impl Renderer {
             // Nearest first, so the depth test rejects hidden fragments before they are
             // shaded: the trees (finest level and nearest tree first), the ground they
             // stand on, the sky behind everything.
+            if !shadows {
+                stamp(self.timing.as_ref(), &mut pass, Stamp::ShadowStart);
+                stamp(self.timing.as_ref(), &mut pass, Stamp::ShadowEnd);
+            }
+            stamp(self.timing.as_ref(), &mut pass, Stamp::ImageStart);
             pass.set_vertex_buffer(1, self.instances.slice(..));
             self.draw_trees(&mut pass, frame, [&self.branch.draw, &self.leaf.draw], None);
+            stamp(self.timing.as_ref(), &mut pass, Stamp::Trees);
             self.draw_impostors(&mut pass, frame, &self.windows, Casting::No);
+            stamp(self.timing.as_ref(), &mut pass, Stamp::Impostors);
             pass.set_bind_group(0, &self.windows[0], &[]);
             self.ground.draw(&mut pass);
+            stamp(self.timing.as_ref(), &mut pass, Stamp::Ground);
             self.sky.draw(&mut pass);
+            stamp(self.timing.as_ref(), &mut pass, Stamp::ImageEnd);
+        }
+        if let Some(t) = &self.timing {
+            t.resolve(&mut enc);
         }
         gpu.queue.submit([enc.finish()])
     }

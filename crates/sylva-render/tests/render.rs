@@ -120,6 +120,38 @@ fn frames_submitted_without_waiting_are_each_timed_once_within_the_wall_time() {
 }
 
 #[test]
+fn timing_the_passes_splits_the_frame_without_changing_its_image() {
+    let spec = SceneSpec::builtin("small").expect("small scene");
+    let mut forest = Forest::new(&spec).expect("forest");
+    // Coarse enough that the far trees are impostors and the near ones meshes.
+    forest.set_lod(sylva_forest::LodSettings { fraction: 3.0, far_level: 3, ..forest.lod() });
+    let camera: Camera = forest.default_camera();
+    let mut gpu = Headless::new(&forest, W, H).unwrap_or_else(|e| panic!("{e}"));
+    let mut frame = FrameData::default();
+    forest.step(1.0 / 30.0);
+    forest.frame(&camera, W as f32 / H as f32, &mut frame);
+    assert!(frame.stats.impostors > 0 && frame.stats.triangles > 0, "trees and impostors drawn");
+    gpu.draw(&frame, &camera).unwrap_or_else(|e| panic!("{e}"));
+    assert!(gpu.pass_times().expect("read").is_none(), "timing is off until asked for");
+    let untimed = gpu.read_back().expect("read back");
+    if !gpu.time_passes() {
+        eprintln!("skipped: this adapter has no timestamps inside passes");
+        return;
+    }
+    let start = std::time::Instant::now();
+    gpu.draw(&frame, &camera).unwrap_or_else(|e| panic!("{e}"));
+    let wall_ms = 1e3 * start.elapsed().as_secs_f64();
+    let parts = gpu.pass_times().expect("read").expect("timing is on");
+    // Each part is a time the GPU spent inside this frame: none negative, together more
+    // than nothing and no more than the frame took from submit to finish.
+    let sum: f64 = parts.iter().sum();
+    assert!(parts.iter().all(|t| t.is_finite() && *t >= 0.0), "{parts:?}");
+    assert!(sum > 0.0 && sum <= wall_ms, "parts {parts:?} sum to {sum} ms of {wall_ms} ms");
+    // The timestamps write nothing into the image.
+    assert!(gpu.read_back().expect("read back") == untimed, "timing changed the image");
+}
+
+#[test]
 fn trees_move_and_a_storm_moves_them_more_than_a_breeze() {
     let storm = render("storm", &[30, 31, 45]);
     let breeze = render("breeze", &[30, 31, 45]);

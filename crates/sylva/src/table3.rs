@@ -84,6 +84,12 @@ pub struct Table3Bench {
     /// slower of the CPU's and the GPU's work, not by their sum.
     #[arg(long)]
     overlapped: bool,
+    /// Also read the GPU's time in each part of every timed frame (timestamp queries
+    /// between the renderer's passes: shadows, trees, impostors, ground, sky and the MSAA
+    /// resolve), reported as medians per configuration. Where the adapter has no
+    /// timestamps inside passes, a line says so and nothing else changes.
+    #[arg(long)]
+    gpu_passes: bool,
     /// Frames of the popping measurement (scene `small`, calm, along its fly-in; 0: skip).
     #[arg(long, default_value_t = POPPING_FRAMES)]
     popping_frames: usize,
@@ -142,16 +148,33 @@ struct Cell {
     samples: [Vec<f64>; 3],
     /// Each round's median simulation + frame building, ms.
     round_cpu: Vec<f64>,
+    /// The GPU's time in each part of every timed frame (`--gpu-passes`), ms, in the order
+    /// of [`sylva_render::PASS_PARTS`] (every round's, pooled).
+    passes: Vec<[f64; PARTS]>,
 }
 
+/// Parts of a frame timed on the GPU.
+const PARTS: usize = sylva_render::PASS_PARTS.len();
+
 impl Cell {
+    /// The median GPU time of each part of the frame, ms (`--gpu-passes`).
+    fn pass_medians(&self) -> Option<[f64; PARTS]> {
+        (!self.passes.is_empty()).then(|| {
+            std::array::from_fn(|k| {
+                median(&mut self.passes.iter().map(|p| p[k]).collect::<Vec<f64>>())
+            })
+        })
+    }
+
     /// Pool the rounds `cells` (in order) into one: medians over all their timed frames,
     /// the slowest frame of any, each round's CPU median; the rest from the last round.
     fn pooled(cells: Vec<Cell>) -> Cell {
         let mut samples: [Vec<f64>; 3] = Default::default();
         let (mut round_cpu, mut cpu_max, mut overlapped) = (Vec::new(), 0.0f64, Vec::new());
+        let mut passes = Vec::new();
         for c in &cells {
             overlapped.extend_from_slice(&c.overlapped);
+            passes.extend_from_slice(&c.passes);
             for (all, one) in samples.iter_mut().zip(&c.samples) {
                 all.extend_from_slice(one);
             }
@@ -166,6 +189,7 @@ impl Cell {
         cell.render_ms = (!samples[2].is_empty()).then(|| median(&mut samples[2].clone()));
         cell.cpu_max_ms = cpu_max;
         cell.overlapped = overlapped;
+        cell.passes = passes;
         cell.samples = samples;
         cell.round_cpu = round_cpu;
         cell
@@ -264,7 +288,11 @@ fn run_config(
         Err(e) => return Ok(Cell { note: format!("not run: {e}"), ..Cell::default() }),
     };
     if gpu.is_none() {
-        *gpu = Some(Headless::new(&forest, w, h)?);
+        let mut g = Headless::new(&forest, w, h)?;
+        if a.gpu_passes && !g.time_passes() {
+            println!("  --gpu-passes: this adapter has no timestamps inside passes");
+        }
+        *gpu = Some(g);
     }
     let gpu = gpu.as_mut().context("renderer")?;
     let total = a.warmup + a.frames.max(1);
@@ -302,6 +330,11 @@ fn run_config(
             let t_draw = t.elapsed().as_secs_f64() * 1e3;
             if (i >= a.warmup && render_this) || (last && !render_this) {
                 draw.push(t_draw);
+                if a.gpu_passes
+                    && let Some(p) = gpu.pass_times()?
+                {
+                    cell.passes.push(p);
+                }
             }
             if wanted { Some(gpu.read_back()?) } else { None }
         } else {
@@ -513,6 +546,14 @@ pub fn run(a: Table3Bench) -> anyhow::Result<()> {
                     cell.state_mb,
                     cell.note
                 );
+                if let Some(p) = cell.pass_medians() {
+                    let parts: Vec<String> = sylva_render::PASS_PARTS
+                        .iter()
+                        .zip(p)
+                        .map(|(name, t)| format!("{name} {t:.2}"))
+                        .collect();
+                    println!("    GPU ms by part: {}", parts.join(" · "));
+                }
                 rounds[k].push(cell);
             }
         }
@@ -985,6 +1026,27 @@ fn write_outputs(
                 })
                 .collect();
             let _ = writeln!(md, "| {label} | {} |", cells.join(" | "));
+        }
+    }
+    if results.iter().any(|(_, _, cells)| cells.iter().any(|c| !c.passes.is_empty())) {
+        let _ = writeln!(
+            md,
+            "\nThe GPU's time in each part of the frame, ms (`--gpu-passes`: timestamp queries between the renderer's passes; medians over the timed frames; a draw still running when the next part starts shares its time with it):\n"
+        );
+        let _ = writeln!(
+            md,
+            "| scene | configuration | {} | sum |",
+            sylva_render::PASS_PARTS.join(" | ")
+        );
+        let _ = writeln!(md, "|---|---|{}---|", "---|".repeat(PARTS));
+        for (name, _, cells) in results {
+            for (c, (label, ..)) in cells.iter().zip(CONFIGS) {
+                if let Some(p) = c.pass_medians() {
+                    let parts: Vec<String> = p.iter().map(|t| format!("{t:.2}")).collect();
+                    let sum: f64 = p.iter().sum();
+                    let _ = writeln!(md, "| {name} | {label} | {} | {sum:.2} |", parts.join(" | "));
+                }
+            }
         }
     }
     let _ = writeln!(

@@ -454,6 +454,7 @@ fn table3_with_all_lods_only_runs_that_configuration_and_its_image_error() {
         "0",
         "--all-lods-only",
         "--overlapped",
+        "--gpu-passes",
         "--out",
         d,
     ];
@@ -495,6 +496,18 @@ fn table3_with_all_lods_only_runs_that_configuration_and_its_image_error() {
     let md = std::fs::read_to_string(dir.join("table3.md")).expect("table3.md");
     assert_eq!(md.matches("not run (--all-lods-only)").count(), 3, "{md}");
     assert!(md.contains("overlapping the GPU's on the one before"), "{md}");
+    // The GPU's time by part of the frame: five parts and their sum, which is within the
+    // frame's rendering time (that also holds the uploads and the wait for the GPU).
+    let parts = md
+        .lines()
+        .skip_while(|l| !l.starts_with("| scene | configuration | shadows | trees | impostors |"))
+        .find(|l| l.starts_with("| small | with all LODs |"))
+        .unwrap_or_else(|| panic!("no GPU time by part: {md}"));
+    let ms: Vec<f64> = parts.split('|').skip(3).filter_map(|c| c.trim().parse().ok()).collect();
+    assert_eq!(ms.len(), 6, "{parts}");
+    let sum: f64 = ms[..5].iter().sum();
+    assert!((sum - ms[5]).abs() < 0.035 && sum > 0.0, "{parts}");
+    assert!(sum <= up("render_ms") + 0.05, "parts {sum} ms, rendering {} ms", up("render_ms"));
     assert!(dir.join("small-with-all-LODs.png").exists());
     assert!(dir.join("small-full-detail.png").exists());
 }
