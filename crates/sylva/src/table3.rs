@@ -16,8 +16,11 @@
 //!
 //! Frames per second add simulation, frame building and rendering, each waited for: a
 //! bound from below. With `--overlapped` each rendered configuration also runs its timed
-//! frames as an interactive loop does, the CPU building a frame while the GPU draws the one
-//! before, and reports those frames per second beside them.
+//! frames as an interactive loop does, the CPU building a frame while the GPU draws the ones
+//! before (up to `--in-flight` frames queued on the GPU: two by default, as the viewer's
+//! surface allows), and reports those frames per second beside them. With `--gpu-passes`
+//! the GPU's time in each part of the frame (shadows, trees, impostors, ground, sky) is
+//! read from timestamp queries and reported too.
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -79,11 +82,17 @@ pub struct Table3Bench {
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=100))]
     rounds: u32,
     /// Also time the rendered configurations as an interactive loop runs: each frame's
-    /// simulation and frame building while the GPU still draws the frame before (one frame
-    /// in flight), the same timed frames again. Their frames per second are then set by the
-    /// slower of the CPU's and the GPU's work, not by their sum.
+    /// simulation and frame building while the GPU still draws the frames before (up to
+    /// `--in-flight` of them), the same timed frames again. Their frames per second are
+    /// then set by the slower of the CPU's and the GPU's work, not by their sum.
     #[arg(long)]
     overlapped: bool,
+    /// Frames the overlapped loop lets the GPU hold at once: 1 waits for each frame before
+    /// submitting the next (the GPU idles while a frame's commands are recorded and
+    /// submitted); 2 submits the next while the one before still draws, as the viewer does
+    /// (its surface holds up to two frames: wgpu's default frame latency).
+    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=4))]
+    in_flight: u32,
     /// Also read the GPU's time in each part of every timed frame (timestamp queries
     /// between the renderer's passes: shadows, trees, impostors, ground, sky and the MSAA
     /// resolve), reported as medians per configuration. Where the adapter has no
@@ -261,6 +270,12 @@ fn command_line(a: &Table3Bench, (w, h): (u32, u32)) -> String {
     }
     if a.overlapped {
         c.push_str(" --overlapped");
+        if a.in_flight != 2 {
+            let _ = write!(c, " --in-flight {}", a.in_flight);
+        }
+    }
+    if a.gpu_passes {
+        c.push_str(" --gpu-passes");
     }
     c
 }
@@ -361,7 +376,14 @@ fn run_config(
         }
     }
     if a.overlapped && render_all == Some(true) {
-        cell.overlapped.push(overlapped(&mut forest, gpu, &cameras[a.warmup..], dt, (w, h))?);
+        cell.overlapped.push(overlapped(
+            &mut forest,
+            gpu,
+            &cameras[a.warmup..],
+            dt,
+            (w, h),
+            a.in_flight,
+        )?);
     }
     let k = a.frames.max(1) as f64;
     for v in [&mut cell.triangles, &mut cell.draws, &mut cell.joints, &mut cell.upload_mb] {
@@ -394,28 +416,32 @@ fn run_config(
 }
 
 /// Frames per second of `forest` stepped and drawn along `cameras` as an interactive loop
-/// runs them: the simulation and frame building of each frame while the GPU draws the one
-/// before, then a wait for that one before this one is submitted (one frame in flight). The
-/// clock runs from the first step to the last frame's end on the GPU.
+/// runs them: the simulation and frame building of each frame while the GPU draws the ones
+/// before, then, where `limit` frames are already in flight, a wait for the oldest before
+/// this one is submitted. The clock runs from the first step to the last frame's end on
+/// the GPU.
 fn overlapped(
     forest: &mut Forest,
     gpu: &mut Headless,
     cameras: &[Camera],
     dt: f32,
     (w, h): (u32, u32),
+    limit: u32,
 ) -> anyhow::Result<f64> {
     let mut frame = FrameData::default();
-    let mut in_flight = None;
+    let mut in_flight = std::collections::VecDeque::new();
     let start = Instant::now();
     for camera in cameras {
         forest.step(dt);
         forest.frame(camera, w as f32 / h as f32, &mut frame);
-        if let Some(index) = in_flight.take() {
-            gpu.wait(index)?;
+        while in_flight.len() >= limit.max(1) as usize {
+            if let Some(index) = in_flight.pop_front() {
+                gpu.wait(index)?;
+            }
         }
-        in_flight = Some(gpu.submit(&frame, camera));
+        in_flight.push_back(gpu.submit(&frame, camera));
     }
-    if let Some(index) = in_flight {
+    if let Some(index) = in_flight.pop_back() {
         gpu.wait(index)?;
     }
     Ok(cameras.len() as f64 / start.elapsed().as_secs_f64().max(1e-9))
@@ -1014,7 +1040,11 @@ fn write_outputs(
     if results.iter().any(|(_, _, cells)| cells.iter().any(|c| !c.overlapped.is_empty())) {
         let _ = writeln!(
             md,
-            "\nFrames per second with the CPU's work on each frame overlapping the GPU's on the one before (`--overlapped`: one frame in flight, as an interactive loop runs; the figures above add the two):\n"
+            "\nFrames per second with the CPU's work on each frame overlapping the GPU's on the ones before (`--overlapped`: {}, as an interactive loop runs; the figures above add the two):\n",
+            match a.in_flight {
+                1 => "one frame in flight".to_string(),
+                n => format!("up to {n} frames in flight"),
+            }
         );
         let _ = writeln!(md, "| | {} |", header.join(" | "));
         let _ = writeln!(md, "|---|{}", "---|".repeat(results.len()));

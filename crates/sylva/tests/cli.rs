@@ -495,7 +495,7 @@ fn table3_with_all_lods_only_runs_that_configuration_and_its_image_error() {
     }
     let md = std::fs::read_to_string(dir.join("table3.md")).expect("table3.md");
     assert_eq!(md.matches("not run (--all-lods-only)").count(), 3, "{md}");
-    assert!(md.contains("overlapping the GPU's on the one before"), "{md}");
+    assert!(md.contains("overlapping the GPU's on the ones before"), "{md}");
     // The GPU's time by part of the frame: five parts and their sum, which is within the
     // frame's rendering time (that also holds the uploads and the wait for the GPU).
     let parts = md
