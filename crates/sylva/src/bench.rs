@@ -53,6 +53,10 @@ pub struct RenderBench {
     /// Geometry-LOD threshold h₀ (see `sylva render --help`; default: the scene's).
     #[arg(value_parser = crate::finite::<f32>, long)]
     lod_fraction: Option<f32>,
+    /// Also the GPU's time in each part of the frame (timestamp queries between the
+    /// renderer's passes: shadows, trees, impostors, ground, sky), medians.
+    #[arg(long)]
+    gpu_passes: bool,
     #[command(flatten)]
     lod: crate::render::LodArgs,
 }
@@ -119,6 +123,7 @@ fn render_bench(a: RenderBench) -> anyhow::Result<()> {
         lod_fraction: a.lod_fraction,
         no_gif: true,
         camera_path: false,
+        gpu_passes: a.gpu_passes,
         lod: a.lod,
     };
     println!("machine: {}", machine());
@@ -135,6 +140,9 @@ fn render_bench(a: RenderBench) -> anyhow::Result<()> {
         r.joints,
         r.adapter
     );
+    if let Some(line) = crate::render::passes_line(&r) {
+        println!("{line}");
+    }
     Ok(())
 }
 

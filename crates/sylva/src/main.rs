@@ -103,6 +103,7 @@ fn demo(a: DemoArgs) -> anyhow::Result<()> {
         lod_fraction: None,
         no_gif: false,
         camera_path: false,
+        gpu_passes: false,
         lod: render::LodArgs::default(),
     };
     println!(

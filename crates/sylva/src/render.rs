@@ -42,6 +42,11 @@ pub struct RenderArgs {
     /// path follow it anyway.
     #[arg(long)]
     pub camera_path: bool,
+    /// Also read the GPU's time in each part of every frame (timestamp queries between the
+    /// renderer's passes: shadows, trees, impostors, ground, sky) and report their medians.
+    /// Costs rendering time on lavapipe, where each timestamp inside a pass flushes it.
+    #[arg(long)]
+    pub gpu_passes: bool,
     #[command(flatten)]
     pub lod: LodArgs,
 }
@@ -171,6 +176,8 @@ pub struct RenderReport {
     pub step_ms: f64,
     pub render_ms: f64,
     pub triangles: f64,
+    /// Median GPU time of each part of the frame, ms (`--gpu-passes`).
+    pub passes: Option<[f64; sylva_render::PASS_PARTS.len()]>,
     pub simulated: usize,
     pub joints: usize,
     pub adapter: String,
@@ -299,6 +306,9 @@ pub fn render(a: &RenderArgs) -> anyhow::Result<RenderReport> {
     let mut gpu = Headless::new(&forest, w, h)?;
     let adapter = gpu.gpu.describe();
     println!("adapter {adapter}, {}× MSAA, {w}×{h}", gpu.renderer().samples());
+    if a.gpu_passes && !gpu.time_passes() {
+        println!("--gpu-passes: this adapter has no timestamps inside passes");
+    }
     let follow = a.camera_path || !spec.camera_path.is_empty();
     let fixed = forest.default_camera();
     let frames = (a.seconds * a.fps).round().max(1.0) as usize;
@@ -307,6 +317,7 @@ pub fn render(a: &RenderArgs) -> anyhow::Result<RenderReport> {
     let mut frame = FrameData::default();
     let (mut sim, mut draw, mut tris) = (Vec::new(), Vec::new(), 0.0);
     let mut step = Vec::new();
+    let mut passes: Vec<[f64; sylva_render::PASS_PARTS.len()]> = Vec::new();
     let bar = indicatif::ProgressBar::new(frames as u64);
     let aspect = w as f32 / h as f32;
     // A frame for the first camera before the first step: the animation LOD then simulates
@@ -323,6 +334,9 @@ pub fn render(a: &RenderArgs) -> anyhow::Result<RenderReport> {
         let t = Instant::now();
         let rgba = gpu.render(&frame, &camera)?;
         draw.push(t.elapsed().as_secs_f64() * 1e3);
+        if let Some(p) = gpu.pass_times()? {
+            passes.push(p);
+        }
         tris += frame.stats.triangles as f64;
         clip.frame(&rgba, dt as f64)?;
         bar.inc(1);
@@ -335,6 +349,9 @@ pub fn render(a: &RenderArgs) -> anyhow::Result<RenderReport> {
         step_ms: median(&mut step),
         render_ms: median(&mut draw),
         triangles: tris / frames as f64,
+        passes: (!passes.is_empty()).then(|| {
+            std::array::from_fn(|k| median(&mut passes.iter().map(|p| p[k]).collect::<Vec<f64>>()))
+        }),
         simulated: frame.stats.simulated,
         joints: frame.stats.joints,
         adapter,
@@ -352,6 +369,9 @@ pub fn print_report(a: &RenderArgs, r: &RenderReport) {
         "{} simulated trees (instance groups), {} joints stepped per frame; adapter {}",
         r.simulated, r.joints, r.adapter
     );
+    if let Some(line) = passes_line(r) {
+        println!("{line}");
+    }
     println!("wrote {}/frame_0000.png … frame_{:04}.png", a.out.display(), r.frames - 1);
     if let Some(g) = &r.gif {
         println!("wrote {}", g.display());
@@ -359,4 +379,16 @@ pub fn print_report(a: &RenderArgs, r: &RenderReport) {
     if let Some(m) = &r.mp4 {
         println!("wrote {}", m.display());
     }
+}
+
+/// The GPU's median time in each part of the frame, one line (`--gpu-passes`).
+pub fn passes_line(r: &RenderReport) -> Option<String> {
+    let p = r.passes?;
+    let parts: Vec<String> =
+        sylva_render::PASS_PARTS.iter().zip(p).map(|(n, t)| format!("{n} {t:.2}")).collect();
+    Some(format!(
+        "GPU ms by part (medians): {} · sum {:.2}",
+        parts.join(" · "),
+        p.iter().sum::<f64>()
+    ))
 }

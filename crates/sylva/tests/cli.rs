@@ -269,12 +269,19 @@ fn render_renders_frames_deterministically_and_says_what_to_install_without_a_dr
     assert!(text.contains("triangles per frame"), "{text}");
     let first = std::fs::read(dir.join("frame_0001.png")).expect("frame written");
     assert!(dir.join("forest.gif").exists());
-    let (ok, text) = sylva(&args);
+    // Again with the GPU's time read by part: the same frame, and the five parts' medians.
+    let timed: Vec<&str> = args.iter().copied().chain(["--gpu-passes"]).collect();
+    let (ok, text) = sylva(&timed);
     assert!(ok, "{text}");
     assert_eq!(
         first,
         std::fs::read(dir.join("frame_0001.png")).expect("frame"),
-        "same scene, same frame"
+        "same scene, same frame, timed or not"
+    );
+    let line = text.lines().find(|l| l.starts_with("GPU ms by part")).unwrap_or("");
+    assert!(
+        ["shadows", "trees", "impostors", "ground", "sky", "sum"].iter().all(|p| line.contains(p)),
+        "{text}"
     );
     // No Vulkan driver at all: the error names the packages to install.
     let out = Command::new(env!("CARGO_BIN_EXE_sylva"))
