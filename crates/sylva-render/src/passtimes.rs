@@ -1,10 +1,11 @@
 //! The GPU's time in each part of a frame, from timestamp queries written between the
 //! renderer's passes and draw groups.
 //!
-//! Seven timestamps a frame: the shadow pass's start and end, then inside the image pass
-//! its start and the points after the trees, after the impostors, after the ground and
-//! after the sky (the pass's end, which also holds the MSAA resolve). The five differences
-//! are the parts. On a GPU that draws commands in order (every desktop GPU), a timestamp
+//! Seven timestamps a frame: the shadow pass's start (before it clears the map) and end,
+//! then inside the image pass its start (after it cleared its targets) and the points
+//! after the trees, after the impostors and after the ground, and the pass's end (after
+//! the sky and the MSAA resolve). The five differences are the parts; the image pass's
+//! clear falls in none of them. On a GPU that draws commands in order (every desktop GPU), a timestamp
 //! inside a pass is written when the work recorded before it has left the pipeline, so
 //! draws that overlap across a boundary share their time between its two sides: the parts
 //! are a breakdown, good to a fraction of a millisecond, not separate runs. Lavapipe
@@ -105,6 +106,31 @@ impl PassTimes {
         };
         self.read.unmap();
         Ok(parts(&ticks, self.period_ns))
+    }
+}
+
+/// Timestamps `begin` and `end` written at a pass's start (before its clears) and end
+/// (after its resolve), where timing is on.
+pub(crate) fn pass_writes(
+    timing: Option<&PassTimes>,
+    begin: Stamp,
+    end: Stamp,
+) -> Option<wgpu::RenderPassTimestampWrites<'_>> {
+    timing.map(|t| wgpu::RenderPassTimestampWrites {
+        query_set: &t.set,
+        beginning_of_pass_write_index: Some(begin as u32),
+        end_of_pass_write_index: Some(end as u32),
+    })
+}
+
+impl PassTimes {
+    /// Timestamp `end` written at a pass's end, after its resolve.
+    pub(crate) fn end_of_pass(&self, end: Stamp) -> wgpu::RenderPassTimestampWrites<'_> {
+        wgpu::RenderPassTimestampWrites {
+            query_set: &self.set,
+            beginning_of_pass_write_index: None,
+            end_of_pass_write_index: Some(end as u32),
+        }
     }
 }
 

@@ -16,7 +16,7 @@ use crate::passes::ground::{Canopy, GroundPass, Woodland, mean_albedo};
 use crate::passes::leaf::{self, LeafPass};
 use crate::passes::shadow::{SHADOW_SIZE, ShadowPass};
 use crate::passes::sky::SkyPass;
-use crate::passtimes::{PARTS, PassTimes, Stamp, stamp};
+use crate::passtimes::{PARTS, PassTimes, Stamp, pass_writes, stamp};
 use crate::shared::{
     DEPTH, GlobalsBinding, Mesh, box_mips, globals_group, globals_layout, instance_buffer,
     palette_buffer, pipeline_layout, texture_entry, upload_mips,
@@ -424,8 +424,8 @@ impl Renderer {
             // near one as drawn (meshes two levels coarser, and impostors), into the far one
             // as an impostor: its texels span metres, and it shades only beyond the near
             // one's reach, where the trees are small.
-            let mut pass = self.shadow.begin(&mut enc);
-            stamp(self.timing.as_ref(), &mut pass, Stamp::ShadowStart);
+            let stamps = pass_writes(self.timing.as_ref(), Stamp::ShadowStart, Stamp::ShadowEnd);
+            let mut pass = self.shadow.begin(&mut enc, stamps);
             ShadowPass::viewport(&mut pass, 0);
             pass.set_vertex_buffer(1, self.instances.slice(..));
             let casters = [&self.shadow.branch, &self.shadow.leaf];
@@ -433,7 +433,6 @@ impl Renderer {
             self.draw_impostors(&mut pass, frame, &self.shadow_windows, Casting::AsDrawn);
             ShadowPass::viewport(&mut pass, 1);
             self.draw_impostors(&mut pass, frame, &self.shadow_windows_far, Casting::Every);
-            stamp(self.timing.as_ref(), &mut pass, Stamp::ShadowEnd);
         }
         {
             let (view, resolve) = match &self.msaa {
@@ -452,7 +451,8 @@ impl Renderer {
                     },
                 })],
                 depth_stencil_attachment: Some(crate::shared::depth_cleared(&self.depth)),
-                timestamp_writes: None,
+                // The pass's end stamp comes after its MSAA resolve.
+                timestamp_writes: self.timing.as_ref().map(|t| t.end_of_pass(Stamp::ImageEnd)),
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
@@ -473,7 +473,6 @@ impl Renderer {
             self.ground.draw(&mut pass);
             stamp(self.timing.as_ref(), &mut pass, Stamp::Ground);
             self.sky.draw(&mut pass);
-            stamp(self.timing.as_ref(), &mut pass, Stamp::ImageEnd);
         }
         if let Some(t) = &self.timing {
             t.resolve(&mut enc);

@@ -103,8 +103,13 @@ impl ShadowPass {
         (lit, GlobalsBinding { shadow: &self.placeholder, ..lit })
     }
 
-    /// Open the pass drawing into the map (both cascades cleared).
-    pub fn begin<'e>(&self, enc: &'e mut wgpu::CommandEncoder) -> wgpu::RenderPass<'e> {
+    /// Open the pass drawing into the map (both cascades cleared), writing `timestamps`
+    /// at its start and end when given.
+    pub fn begin<'e>(
+        &self,
+        enc: &'e mut wgpu::CommandEncoder,
+        timestamps: Option<wgpu::RenderPassTimestampWrites<'_>>,
+    ) -> wgpu::RenderPass<'e> {
         enc.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("shadow map"),
             color_attachments: &[],
@@ -116,7 +121,7 @@ impl ShadowPass {
                 }),
                 stencil_ops: None,
             }),
-            timestamp_writes: None,
+            timestamp_writes: timestamps,
             occlusion_query_set: None,
             multiview_mask: None,
         })
