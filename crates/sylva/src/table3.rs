@@ -1089,7 +1089,7 @@ fn write_outputs(
     );
     let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     let mut csv = String::from(
-        "scene,trees,configuration,fps,sim_ms,frame_ms,render_ms,triangles,draws,joint_updates,uploaded_mb,uploaded_max_mb,state_mb,simulated,impostors,shadow_only,flip,ssim,cpu_max_ms,overlapped_fps\n",
+        "scene,trees,configuration,fps,sim_ms,frame_ms,render_ms,triangles,draws,joint_updates,uploaded_mb,uploaded_max_mb,state_mb,simulated,impostors,shadow_only,flip,ssim,cpu_max_ms,overlapped_fps,gpu_shadows_ms,gpu_trees_ms,gpu_impostors_ms,gpu_ground_ms,gpu_sky_resolve_ms\n",
     );
     for (name, trees, cells) in results {
         for (c, (label, ..)) in cells.iter().zip(CONFIGS) {
@@ -1116,7 +1116,7 @@ fn write_outputs(
             );
             let _ = writeln!(
                 csv,
-                "{name},{trees},{label},{},{:.3},{:.3},{},{:.0},{:.0},{:.0},{:.3},{:.3},{:.3},{},{:.0},{:.0},{},{},{:.3},{}",
+                "{name},{trees},{label},{},{:.3},{:.3},{},{:.0},{:.0},{:.0},{:.3},{:.3},{:.3},{},{:.0},{:.0},{},{},{:.3},{},{}",
                 c.fps().map_or(String::new(), |f| format!("{f:.3}")),
                 c.sim_ms,
                 c.frame_ms,
@@ -1133,7 +1133,11 @@ fn write_outputs(
                 c.flip.map_or(String::new(), |s| format!("{s:.4}")),
                 c.ssim.map_or(String::new(), |s| format!("{s:.4}")),
                 c.cpu_max_ms,
-                c.overlapped_fps().map_or(String::new(), |f| format!("{f:.3}"))
+                c.overlapped_fps().map_or(String::new(), |f| format!("{f:.3}")),
+                match c.pass_medians() {
+                    Some(p) => p.map(|t| format!("{t:.3}")).join(","),
+                    None => ",".repeat(PARTS - 1),
+                }
             );
         }
     }

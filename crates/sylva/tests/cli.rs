@@ -515,6 +515,13 @@ fn table3_with_all_lods_only_runs_that_configuration_and_its_image_error() {
     let sum: f64 = ms[..5].iter().sum();
     assert!((sum - ms[5]).abs() < 0.035 && sum > 0.0, "{parts}");
     assert!(sum <= up("render_ms") + 0.05, "parts {sum} ms, rendering {} ms", up("render_ms"));
+    // The same parts in the CSV, every row as many fields as the header.
+    let csv_parts: f64 = ["shadows", "trees", "impostors", "ground", "sky_resolve"]
+        .iter()
+        .map(|p| rows[0][col(&format!("gpu_{p}_ms"))].parse::<f64>().expect("a part's ms"))
+        .sum();
+    assert!((csv_parts - sum).abs() < 0.03, "CSV {csv_parts} ms, Markdown {sum} ms");
+    assert!(rows.iter().all(|r| r.len() == header.len()), "{csv}");
     assert!(dir.join("small-with-all-LODs.png").exists());
     assert!(dir.join("small-full-detail.png").exists());
 }
