@@ -13,6 +13,9 @@
 //! real too, but the extra flushes cost: scene D at 640×360 rendered in 1 038 ms a frame
 //! timed against 807 ms untimed. Timing is therefore off unless asked for.
 
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+
 use crate::gpu::{Gpu, RenderError};
 
 /// The parts of a frame, in order: [`PassTimes::read`] returns one time for each.
@@ -33,15 +36,33 @@ pub(crate) enum Stamp {
     ImageEnd = 6,
 }
 
-/// A query set of [`STAMPS`] timestamps, and the buffers its values are read back through.
+/// A query set of [`STAMPS`] timestamps, and the buffers its values are read back through:
+/// a few, each mapped once its frame is done, so frames in flight need not wait for one
+/// another's read-back.
 #[derive(Debug)]
 pub(crate) struct PassTimes {
     set: wgpu::QuerySet,
     resolved: wgpu::Buffer,
-    read: wgpu::Buffer,
+    slots: Vec<Slot>,
+    /// The slot to try first for the next frame.
+    next: usize,
+    /// The slot the frame being recorded copies its timestamps into, if one was free.
+    pending: Option<usize>,
+    /// The parts of the latest frame read back.
+    latest: Arc<Mutex<Option<[f64; PARTS.len()]>>>,
     /// Nanoseconds per timestamp tick.
     period_ns: f64,
 }
+
+/// A read-back buffer, busy from the copy into it until its mapping has been read.
+#[derive(Debug)]
+struct Slot {
+    buffer: wgpu::Buffer,
+    busy: Arc<AtomicBool>,
+}
+
+/// Read-back buffers: one more than the frames a surface holds in flight.
+const SLOTS: usize = 3;
 
 /// Bytes of one frame's timestamps.
 const BYTES: u64 = STAMPS as u64 * 8;
@@ -73,39 +94,69 @@ impl PassTimes {
             "pass times resolved",
             wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
         );
-        let read =
-            buffer("pass times read", wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ);
+        let slots = (0..SLOTS)
+            .map(|_| Slot {
+                buffer: buffer(
+                    "pass times read",
+                    wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+                ),
+                busy: Arc::new(AtomicBool::new(false)),
+            })
+            .collect();
         let period_ns = gpu.queue.get_timestamp_period() as f64;
-        Some(PassTimes { set, resolved, read, period_ns })
+        let latest = Arc::new(Mutex::new(None));
+        Some(PassTimes { set, resolved, slots, next: 0, pending: None, latest, period_ns })
     }
 
-    /// After the frame's passes: copy its timestamps where [`read`](Self::read) finds them.
-    pub(crate) fn resolve(&self, enc: &mut wgpu::CommandEncoder) {
-        enc.resolve_query_set(&self.set, 0..STAMPS, &self.resolved, 0);
-        enc.copy_buffer_to_buffer(&self.resolved, 0, &self.read, 0, BYTES);
+    /// After the frame's passes: copy its timestamps into a free read-back buffer (none
+    /// free: this frame is not read back).
+    pub(crate) fn resolve(&mut self, enc: &mut wgpu::CommandEncoder) {
+        self.pending = (0..SLOTS)
+            .map(|k| (self.next + k) % SLOTS)
+            .find(|&k| !self.slots[k].busy.load(Ordering::Acquire));
+        if let Some(k) = self.pending {
+            self.slots[k].busy.store(true, Ordering::Release);
+            self.next = (k + 1) % SLOTS;
+            enc.resolve_query_set(&self.set, 0..STAMPS, &self.resolved, 0);
+            enc.copy_buffer_to_buffer(&self.resolved, 0, &self.slots[k].buffer, 0, BYTES);
+        }
     }
 
-    /// The parts' times (ms, in the order of [`PARTS`]) of the last frame submitted; waits
-    /// for the GPU to finish it.
-    pub(crate) fn read(&self, gpu: &Gpu) -> Result<[f64; PARTS.len()], RenderError> {
-        let slice = self.read.slice(..);
-        let (tx, rx) = std::sync::mpsc::channel();
-        slice.map_async(wgpu::MapMode::Read, move |r| {
-            let _ = tx.send(r);
+    /// After the frame's submission: read its timestamps back once the GPU has drawn it
+    /// (when the device is next polled), into [`latest`](Self::latest).
+    pub(crate) fn submitted(&mut self) {
+        let Some(k) = self.pending.take() else { return };
+        let Slot { buffer, busy } = &self.slots[k];
+        let (buffer, busy, latest) = (buffer.clone(), busy.clone(), self.latest.clone());
+        let period_ns = self.period_ns;
+        self.slots[k].buffer.slice(..).map_async(wgpu::MapMode::Read, move |r| {
+            if r.is_ok() {
+                let ticks: Option<Vec<u64>> = buffer.slice(..).get_mapped_range().ok().map(|d| {
+                    d.chunks_exact(8)
+                        .map(|b| u64::from_le_bytes(b.try_into().expect("chunks of 8 bytes")))
+                        .collect()
+                });
+                buffer.unmap();
+                if let (Some(t), Ok(mut l)) = (ticks, latest.lock()) {
+                    *l = Some(parts(&t, period_ns));
+                }
+            }
+            busy.store(false, Ordering::Release);
         });
-        let fail = |e: String| RenderError::Readback(format!("pass times: {e}"));
+    }
+
+    /// The parts' times (ms, in the order of [`PARTS`]) of the latest frame read back,
+    /// without waiting.
+    pub(crate) fn latest(&self) -> Option<[f64; PARTS.len()]> {
+        self.latest.lock().ok().and_then(|l| *l)
+    }
+
+    /// The parts' times of the last frame submitted; waits for the GPU to finish it.
+    pub(crate) fn read(&self, gpu: &Gpu) -> Result<Option<[f64; PARTS.len()]>, RenderError> {
         gpu.device
             .poll(wgpu::PollType::Wait { submission_index: None, timeout: None })
-            .map_err(|e| fail(e.to_string()))?;
-        rx.recv().map_err(|e| fail(e.to_string()))?.map_err(|e| fail(e.to_string()))?;
-        let ticks: Vec<u64> = {
-            let data = slice.get_mapped_range().map_err(|e| fail(e.to_string()))?;
-            data.chunks_exact(8)
-                .map(|b| u64::from_le_bytes(b.try_into().expect("chunks of 8 bytes")))
-                .collect()
-        };
-        self.read.unmap();
-        Ok(parts(&ticks, self.period_ns))
+            .map_err(|e| RenderError::Readback(format!("pass times: {e}")))?;
+        Ok(self.latest())
     }
 }
 

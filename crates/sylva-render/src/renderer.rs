@@ -330,11 +330,23 @@ impl Renderer {
         self.timing.is_some()
     }
 
+    /// Stop timing the passes (and forget the latest times).
+    pub fn stop_timing_passes(&mut self) {
+        self.timing = None;
+    }
+
     /// The GPU's time (ms) in each part of the last frame rendered, in the order of
     /// [`PASS_PARTS`](crate::PASS_PARTS) (waits for that frame to finish); `None` unless
     /// [`time_passes`](Self::time_passes) turned timing on.
     pub fn pass_times(&self, gpu: &Gpu) -> Result<Option<[f64; PARTS.len()]>, RenderError> {
-        self.timing.as_ref().map(|t| t.read(gpu)).transpose()
+        Ok(self.timing.as_ref().map(|t| t.read(gpu)).transpose()?.flatten())
+    }
+
+    /// The same for the latest frame the GPU has finished and whose times were read back
+    /// (when the device was last polled: the viewer's [`crate::GpuTimer`] polls as each
+    /// frame finishes), without waiting; `None` before the first or when timing is off.
+    pub fn latest_pass_times(&self) -> Option<[f64; PARTS.len()]> {
+        self.timing.as_ref().and_then(|t| t.latest())
     }
 
     /// MSAA sample count in use.
@@ -474,10 +486,14 @@ impl Renderer {
             stamp(self.timing.as_ref(), &mut pass, Stamp::Ground);
             self.sky.draw(&mut pass);
         }
-        if let Some(t) = &self.timing {
+        if let Some(t) = &mut self.timing {
             t.resolve(&mut enc);
         }
-        gpu.queue.submit([enc.finish()])
+        let index = gpu.queue.submit([enc.finish()]);
+        if let Some(t) = &mut self.timing {
+            t.submitted();
+        }
+        index
     }
 }
 

@@ -206,6 +206,11 @@ impl App {
         let camera = v.orbit.camera();
         let began = Instant::now();
         s.renderer.set_overlay(v.overlay);
+        if v.gpu_passes {
+            s.renderer.time_passes(&s.gpu);
+        } else {
+            s.renderer.stop_timing_passes();
+        }
         s.renderer.render(&s.gpu, &v.frame, &camera, &view);
         if with_panel {
             s.panel.draw(&s.gpu, &view, [w, h], &mut s.pending);
@@ -215,6 +220,7 @@ impl App {
         // timer's thread measures the GPU's time; the figure is the latest frame finished.
         s.timer.submitted(s.gpu.queue.submit([]), began);
         v.figures.render_ms = s.timer.last_ms();
+        v.figures.passes = s.renderer.latest_pass_times();
         s.gpu.queue.present(texture);
         if std::mem::take(&mut v.screenshot) {
             match screenshot(v, w, h) {

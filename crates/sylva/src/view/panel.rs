@@ -80,6 +80,7 @@ fn contents(ui: &mut Ui, v: &Viewer, draft: &mut Draft, out: &mut Vec<Action>) {
         ui.colored_label(Color32::from_rgb(255, 120, 100), e);
     }
     figures(ui, v);
+    gpu_passes(ui, v, out);
     egui::CollapsingHeader::new("Wind").default_open(true).show(ui, |ui| wind(ui, v, out));
     egui::CollapsingHeader::new("Level of detail")
         .default_open(true)
@@ -118,6 +119,31 @@ fn figures(ui: &mut Ui, v: &Viewer) {
         row("animation state", format!("{:.1} MB{capped}", s.state_bytes as f64 / 1e6));
         row("simulated time", format!("{:.1} s", v.forest.time()));
     });
+}
+
+/// The switch for the GPU's time by part of the frame, and those times.
+fn gpu_passes(ui: &mut Ui, v: &Viewer, out: &mut Vec<Action>) {
+    let mut on = v.gpu_passes;
+    if ui.checkbox(&mut on, "GPU time by part (timestamp queries)").changed() {
+        out.push(Action::GpuPasses(on));
+    }
+    if !v.gpu_passes {
+        return;
+    }
+    match v.figures.passes {
+        Some(p) => {
+            egui::Grid::new("gpu passes").num_columns(2).show(ui, |ui| {
+                for (name, ms) in sylva_render::PASS_PARTS.iter().zip(p) {
+                    ui.label(format!("  {name}"));
+                    ui.label(format!("{ms:.2} ms"));
+                    ui.end_row();
+                }
+            });
+        }
+        None => {
+            ui.label("  no times yet (or no timestamps on this adapter)");
+        }
+    }
 }
 
 fn wind(ui: &mut Ui, v: &Viewer, out: &mut Vec<Action>) {

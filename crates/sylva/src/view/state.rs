@@ -60,6 +60,9 @@ pub enum Action {
     Help(bool),
     /// Tint the trees by geometry level or instance group, or not.
     Overlay(sylva_render::Overlay),
+    /// Time each part of the frame on the GPU (shadows, trees, impostors, ground, sky) for
+    /// the panel, or stop.
+    GpuPasses(bool),
     /// Save the next frame as a PNG.
     Screenshot,
     /// Start (true) or stop recording a clip of the 3-D view (PNG frames, GIF, MP4 through
@@ -208,6 +211,9 @@ pub struct Figures {
     /// Rendering: the GPU's time on the latest frame it finished, ms (the frame loop does
     /// not wait for it; [`sylva_render::GpuTimer`]).
     pub render_ms: f32,
+    /// The GPU's time in each part of the latest frame read back, ms, in the order of
+    /// [`sylva_render::PASS_PARTS`] (when asked for and the adapter can: timestamp queries).
+    pub passes: Option<[f64; sylva_render::PASS_PARTS.len()]>,
     /// Substeps run in the last frame.
     pub substeps: u32,
 }
@@ -262,6 +268,8 @@ pub struct Viewer {
     pub help: bool,
     /// The renderer's colour overlay.
     pub overlay: sylva_render::Overlay,
+    /// The GPU's time by part of the frame asked for ([`Figures::passes`]).
+    pub gpu_passes: bool,
     /// A screenshot was asked for.
     pub screenshot: bool,
     /// A clip is being recorded (the window layer renders and writes its frames).
@@ -315,6 +323,7 @@ impl Viewer {
             panel: true,
             help: false,
             overlay: sylva_render::Overlay::Off,
+            gpu_passes: false,
             screenshot: false,
             clip: false,
             quit: false,
@@ -406,6 +415,10 @@ impl Viewer {
             Action::Panel(on) => self.panel = on,
             Action::Help(on) => self.help = on,
             Action::Overlay(o) => self.overlay = o,
+            Action::GpuPasses(on) => {
+                self.gpu_passes = on;
+                self.figures.passes = None;
+            }
             Action::Screenshot => self.screenshot = true,
             Action::Clip(on) => self.clip = on,
             Action::Record(true) => {

@@ -161,6 +161,19 @@ fn the_clock_keeps_real_time_in_fixed_substeps_up_to_its_cap() {
     assert!((v.forest.time() - t - SUBSTEP as f64).abs() < 1e-6);
 }
 
+#[test]
+fn gpu_time_by_part_is_asked_for_and_dropped_with_its_switch() {
+    let mut v = viewer(3);
+    assert!(!v.gpu_passes, "off by default: timestamps inside passes cost on lavapipe");
+    v.figures.passes = Some([1.0; sylva_render::PASS_PARTS.len()]);
+    v.apply(Action::GpuPasses(true));
+    // Times from before the switch are not shown as if they were this frame's.
+    assert!(v.gpu_passes && v.figures.passes.is_none());
+    v.figures.passes = Some([1.0; sylva_render::PASS_PARTS.len()]);
+    v.apply(Action::GpuPasses(false));
+    assert!(!v.gpu_passes && v.figures.passes.is_none());
+}
+
 fn key(code: KeyCode) -> [Input; 2] {
     [
         Input::Key { code, pressed: true, repeat: false },
@@ -312,8 +325,10 @@ fn the_panel_renders_headless_like_its_golden_image() {
         sim_ms: 1.0,
         build_ms: 0.1,
         render_ms: 20.0,
+        passes: Some([0.72, 1.5, 9.33, 2.81, 0.23]),
         substeps: 2,
     };
+    v.gpu_passes = true;
     let ctx = egui::Context::default();
     let raw = egui::RawInput {
         screen_rect: Some(egui::Rect::from_min_size(
