@@ -5,20 +5,22 @@
 //! then inside the image pass its start (after it cleared its targets) and the points
 //! after the trees, after the impostors and after the ground, and the pass's end (after
 //! the sky and the MSAA resolve). The five differences are the parts; the image pass's
-//! clear falls in none of them. On a GPU that draws commands in order (every desktop GPU), a timestamp
-//! inside a pass is written when the work recorded before it has left the pipeline, so
-//! draws that overlap across a boundary share their time between its two sides: the parts
-//! are a breakdown, good to a fraction of a millisecond, not separate runs. Lavapipe
-//! draws what it has binned before it writes a timestamp inside a pass, so its split is
-//! real too, but the extra flushes cost: scene D at 640×360 rendered in 1 038 ms a frame
-//! timed against 807 ms untimed. Timing is therefore off unless asked for.
+//! clear falls in none of them.
+//!
+//! On a GPU that draws commands in order (every desktop GPU), a timestamp inside a pass is
+//! written when the work recorded before it has left the pipeline, so draws that overlap
+//! across a boundary share their time between its two sides: the parts are a breakdown,
+//! good to a fraction of a millisecond, not separate runs. Lavapipe draws what it has
+//! binned before it writes a timestamp inside a pass, so its split is real too, but the
+//! extra flushes cost: scene D at 640×360 rendered in 1 038 ms a frame timed against
+//! 807 ms untimed. Timing is therefore off unless asked for.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
 use crate::gpu::{Gpu, RenderError};
 
-/// The parts of a frame, in order: [`PassTimes::read`] returns one time for each.
+/// The parts of a frame, in order: [`crate::Renderer::pass_times`] gives one time for each.
 pub const PARTS: [&str; 5] = ["shadows", "trees", "impostors", "ground", "sky + resolve"];
 
 /// Timestamps written each frame.

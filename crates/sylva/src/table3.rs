@@ -1156,12 +1156,14 @@ fn write_outputs(
         "\nSampling alone — full detail in the rest pose against itself with the camera turned a quarter pixel aside (how much per-pixel metrics move where foliage is finer than a pixel): {}",
         per_scene(floors, |f| f.still.map(|s| flip_ssim(s.sampling)))
     );
-    // Speed-up of each LOD: with all LODs against that one off, in frames per second and in
-    // CPU time (simulation + frame building), beside the paper's.
+    // Speed-up of each LOD: with all LODs against that one off, in frames per second, in
+    // CPU time (simulation + frame building) and, with `--gpu-passes`, in the GPU's time
+    // (the parts' sum), beside the paper's.
     let _ = writeln!(
         md,
-        "\nSpeed-up of each LOD (all LODs ÷ that LOD off): FPS here · CPU ms here{} · FPS in the paper:\n",
-        if a.rounds > 1 { " (lowest–highest of the rounds)" } else { "" }
+        "\nSpeed-up of each LOD (all LODs ÷ that LOD off): FPS here · CPU ms here{}{} · FPS in the paper:\n",
+        if a.rounds > 1 { " (lowest–highest of the rounds)" } else { "" },
+        if a.gpu_passes { " · GPU ms here" } else { "" }
     );
     let _ = writeln!(md, "| LOD | {} |", header.join(" | "));
     let _ = writeln!(md, "|---|{}", "---|".repeat(results.len()));
@@ -1184,10 +1186,16 @@ fn write_outputs(
                 } else {
                     "—".into()
                 };
+                let gpu_ms = |c: &Cell| c.pass_medians().map(|p| p.iter().sum::<f64>());
+                let gpu = match (gpu_ms(on), gpu_ms(off)) {
+                    (Some(x), Some(y)) if x > 0.0 => format!(" · ×{:.2}", y / x),
+                    _ if a.gpu_passes => " · —".into(),
+                    _ => String::new(),
+                };
                 let col = ["A", "B", "C", "D"].iter().position(|s| s == name);
                 let paper =
                     col.map_or("—".into(), |c| format!("×{:.2}", PAPER[0][c] / PAPER[row][c]));
-                format!("{fps} · {cpu} · {paper}")
+                format!("{fps} · {cpu}{gpu} · {paper}")
             })
             .collect();
         let _ =
