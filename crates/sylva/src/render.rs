@@ -44,7 +44,6 @@ pub struct RenderArgs {
     pub camera_path: bool,
     /// Also read the GPU's time in each part of every frame (timestamp queries between the
     /// renderer's passes: shadows, trees, impostors, ground, sky) and report their medians.
-    /// Costs rendering time on lavapipe, where each timestamp inside a pass flushes it.
     #[arg(long)]
     pub gpu_passes: bool,
     #[command(flatten)]

@@ -164,7 +164,7 @@ fn the_clock_keeps_real_time_in_fixed_substeps_up_to_its_cap() {
 #[test]
 fn gpu_time_by_part_is_asked_for_and_dropped_with_its_switch() {
     let mut v = viewer(3);
-    assert!(!v.gpu_passes, "off by default: timestamps inside passes cost on lavapipe");
+    assert!(!v.gpu_passes, "off by default: no frame needs the timestamps");
     v.figures.passes = Some([1.0; sylva_render::PASS_PARTS.len()]);
     v.apply(Action::GpuPasses(true));
     // Times from before the switch are not shown as if they were this frame's.
