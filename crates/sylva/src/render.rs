@@ -134,6 +134,16 @@ pub fn median(v: &mut [f64]) -> f64 {
     v[v.len() / 2]
 }
 
+/// Each part's median over frames of the GPU's time by part (`--gpu-passes`); `None`
+/// without frames.
+pub fn part_medians(
+    frames: &[[f64; sylva_render::PASS_PARTS.len()]],
+) -> Option<[f64; sylva_render::PASS_PARTS.len()]> {
+    (!frames.is_empty()).then(|| {
+        std::array::from_fn(|k| median(&mut frames.iter().map(|p| p[k]).collect::<Vec<f64>>()))
+    })
+}
+
 /// Write an RGBA image as PNG, atomically (the previous file stays whole until the new one is).
 pub fn write_png(path: &Path, w: u32, h: u32, rgba: &[u8]) -> anyhow::Result<()> {
     let mut file =
@@ -348,9 +358,7 @@ pub fn render(a: &RenderArgs) -> anyhow::Result<RenderReport> {
         step_ms: median(&mut step),
         render_ms: median(&mut draw),
         triangles: tris / frames as f64,
-        passes: (!passes.is_empty()).then(|| {
-            std::array::from_fn(|k| median(&mut passes.iter().map(|p| p[k]).collect::<Vec<f64>>()))
-        }),
+        passes: part_medians(&passes),
         simulated: frame.stats.simulated,
         joints: frame.stats.joints,
         adapter,
@@ -382,12 +390,12 @@ pub fn print_report(a: &RenderArgs, r: &RenderReport) {
 
 /// The GPU's median time in each part of the frame, one line (`--gpu-passes`).
 pub fn passes_line(r: &RenderReport) -> Option<String> {
-    let p = r.passes?;
+    r.passes.map(|p| format!("GPU ms by part (medians): {}", parts_text(&p)))
+}
+
+/// The GPU's time by part, each named, and their sum: `shadows 0.72 · … · sum 13.08`.
+pub fn parts_text(p: &[f64; sylva_render::PASS_PARTS.len()]) -> String {
     let parts: Vec<String> =
         sylva_render::PASS_PARTS.iter().zip(p).map(|(n, t)| format!("{n} {t:.2}")).collect();
-    Some(format!(
-        "GPU ms by part (medians): {} · sum {:.2}",
-        parts.join(" · "),
-        p.iter().sum::<f64>()
-    ))
+    format!("{} · sum {:.2}", parts.join(" · "), p.iter().sum::<f64>())
 }

@@ -168,11 +168,7 @@ const PARTS: usize = sylva_render::PASS_PARTS.len();
 impl Cell {
     /// The median GPU time of each part of the frame, ms (`--gpu-passes`).
     fn pass_medians(&self) -> Option<[f64; PARTS]> {
-        (!self.passes.is_empty()).then(|| {
-            std::array::from_fn(|k| {
-                median(&mut self.passes.iter().map(|p| p[k]).collect::<Vec<f64>>())
-            })
-        })
+        crate::render::part_medians(&self.passes)
     }
 
     /// Pool the rounds `cells` (in order) into one: medians over all their timed frames,
@@ -573,12 +569,7 @@ pub fn run(a: Table3Bench) -> anyhow::Result<()> {
                     cell.note
                 );
                 if let Some(p) = cell.pass_medians() {
-                    let parts: Vec<String> = sylva_render::PASS_PARTS
-                        .iter()
-                        .zip(p)
-                        .map(|(name, t)| format!("{name} {t:.2}"))
-                        .collect();
-                    println!("    GPU ms by part: {}", parts.join(" · "));
+                    println!("    GPU ms by part: {}", crate::render::parts_text(&p));
                 }
                 rounds[k].push(cell);
             }
