@@ -430,10 +430,11 @@ fn overlapped(
     for camera in cameras {
         forest.step(dt);
         forest.frame(camera, w as f32 / h as f32, &mut frame);
-        while in_flight.len() >= limit.max(1) as usize {
-            if let Some(index) = in_flight.pop_front() {
-                gpu.wait(index)?;
-            }
+        // One frame is submitted at a time, so at most the oldest need be waited for.
+        if in_flight.len() >= limit.max(1) as usize
+            && let Some(oldest) = in_flight.pop_front()
+        {
+            gpu.wait(oldest)?;
         }
         in_flight.push_back(gpu.submit(&frame, camera));
     }
