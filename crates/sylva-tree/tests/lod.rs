@@ -87,10 +87,23 @@ fn every_preset_at_every_lod_is_well_formed() {
             let tris = lod.triangles();
             assert!(tris < last_tris, "{name}: LOD {} has {tris} triangles, not fewer", lod.level);
             if lod.level > 0 {
-                // Roughly ×3 per level: between ×2 and ×5.
-                let ratio = last_tris as f32 / tris as f32;
-                assert!((2.0..5.0).contains(&ratio), "{name}: LOD {} ratio {ratio}", lod.level);
+                // The wood: roughly ×3 per level, between ×1.5 and ×5.
+                let prev = &m.lods[lod.level - 1];
+                let ratio = prev.branches.triangles() as f32 / b.triangles() as f32;
+                assert!(
+                    (1.5..5.0).contains(&ratio),
+                    "{name}: LOD {} wood ratio {ratio}",
+                    lod.level
+                );
             }
+            // The leaves: level 1 keeps level 0's cards, level k ≥ 2 merges runs of 3^k.
+            let runs = if lod.level <= 1 { 1 } else { 3usize.pow(lod.level as u32) };
+            assert_eq!(
+                lod.clusters.len(),
+                m.lods[0].clusters.len().div_ceil(runs),
+                "{name}: LOD {} cards",
+                lod.level
+            );
             last_tris = tris;
             let area = lod.leaf_area();
             assert!(
@@ -121,8 +134,9 @@ fn thin_stems_are_dropped_first_and_their_leaves_rehung_on_kept_joints() {
     for pair in m.lods.windows(2) {
         assert!(pair[1].min_radius >= pair[0].min_radius, "threshold falls");
     }
-    for lod in &m.lods[1..] {
-        // Every joint a vertex or a cluster uses is kept: no geometry on dropped joints.
+    for lod in &m.lods[2..] {
+        // Every joint a vertex or a cluster uses is kept: no geometry on dropped joints
+        // (level 1 keeps level 0's cards on their own joints, see above).
         let mut used = vec![false; js.len()];
         for v in &lod.branches.joints {
             used[v[0] as usize] = true;
@@ -130,6 +144,28 @@ fn thin_stems_are_dropped_first_and_their_leaves_rehung_on_kept_joints() {
         for c in &lod.clusters {
             assert!(used[c.joint as usize], "LOD {}: cluster on a joint without wood", lod.level);
         }
+    }
+}
+
+#[test]
+fn level_one_keeps_every_leaf_card_of_full_detail_on_less_wood() {
+    // A tree drawn at level 1 shows the leaves of level 0, card for card, each on its own
+    // joint (so it moves as at full detail), where level 1 drops the thinnest stems: some
+    // cards hang from joints whose wood level 1 does not draw.
+    for name in ["quaking_aspen", "douglas_fir", "black_tupelo"] {
+        let m = model(name, 5);
+        let (l0, l1) = (&m.lods[0], &m.lods[1]);
+        assert!(l1.min_radius > 0.0, "{name}: level 1 drops no stem");
+        assert!(3 * l1.branches.triangles() < 2 * l0.branches.triangles(), "{name}: wood");
+        assert_eq!(l1.clusters, l0.clusters, "{name}: level 1's cards are level 0's");
+        let mut wood = vec![false; m.tree.skeleton.len()];
+        for v in &l1.branches.joints {
+            wood[v[0] as usize] = true;
+        }
+        assert!(
+            l1.clusters.iter().any(|c| !wood[c.joint as usize]),
+            "{name}: no card on a dropped twig"
+        );
     }
 }
 
