@@ -612,7 +612,9 @@ pub fn lod_levels(
     } else {
         coverage.iter().map(|c| c.clamp(0.05, 1.0)).collect()
     };
-    let base_clusters = leaf_clusters(sk, &coverage, span, seed);
+    // In joint order, as levels 0 and 1 show them.
+    let mut base_clusters = leaf_clusters(sk, &coverage, span, seed);
+    base_clusters.sort_by_key(|c| c.joint);
     let all = vec![true; n];
     let base_branch_tris = branch_triangles(&topo, 0, &all);
     // Stem start radii, sorted, for the bisection on the drop threshold.
@@ -648,9 +650,7 @@ pub fn lod_levels(
         let clusters = if lod <= 1 {
             // Levels 0 and 1 show every card on its own joint (see the module
             // documentation): a card of a twig level 1 does not draw still moves with it.
-            let mut own = base_clusters.clone();
-            own.sort_by_key(|c| c.joint);
-            own
+            base_clusters.clone()
         } else {
             // Re-hang the cards of dropped joints on the nearest kept ancestor, then merge
             // runs of 3^k.
