@@ -32,7 +32,7 @@
 //! [`LodSettings::hysteresis`] (per view, kept in the [`FrameData`]) keeps a tree whose size
 //! wavers about a threshold from flickering. Levels `0 … far_level − 1` are meshes of the
 //! tree's LOD chain; from `far_level` on the tree is an impostor (two triangles showing
-//! the tree rendered from eight sides). In the last [`LodSettings::band`] of each level the
+//! the tree rendered from sixteen sides). In the last [`LodSettings::band`] of each level the
 //! tree is drawn at both that level and the next, cross-faded per pixel by a screen-space
 //! dither: the two draws keep complementary pixel sets ([`Instance::fade`]), so no frame
 //! shows a tree jump from one level to the next. Trees outside the view cone are culled,

@@ -703,7 +703,7 @@ fn looking_at(base: [f32; 3], eye: [f32; 3]) -> Camera {
 #[test]
 fn an_impostor_turns_from_one_baked_view_to_the_next_without_a_jump() {
     // The camera circles the tree in steps of 1° through 100°, so it passes at least two
-    // half-way directions between baked views (they are 45° apart). Without the
+    // half-way directions between baked views (they are 22.5° apart). Without the
     // cross-fade, the step across one swaps the whole crown's picture at once; with it,
     // the swap is spread over the steps of the band.
     let path = |base: [f32; 3]| -> Vec<Camera> {
