@@ -1,6 +1,6 @@
 //! Far trees as impostors (`far.wgsl`): each species is rendered once, at start-up, from
-//! [`VIEWS`] directions around it at each of [`ROWS`] elevations (its finest LOD level within
-//! [`BAKE_TRIANGLES`], rest pose, orthographic, centred on the middle of its bounds) into an
+//! [`VIEWS`] directions around it at each of [`ROWS`] elevations ([`bake_level`], rest
+//! pose, orthographic, centred on the middle of its bounds) into an
 //! atlas of albedo and tree-space normals; a far tree is then one camera-facing quad (two
 //! triangles) showing the nearest view, lit per pixel like the near trees and swayed by its
 //! trunk-top joint. Seen from between two views, over the middle half of the step between
@@ -40,9 +40,16 @@ pub const ROWS: u32 = 3;
 pub const ROW_STEP_DEG: f32 = 30.0;
 /// Side of one view in the atlas, texels.
 pub const VIEW_SIZE: u32 = 256;
-/// Impostors are rendered from the finest LOD level with at most this many triangles
-/// (full detail for every preset but the willow, whose level 0 has 851 000).
+/// Impostors are rendered from a level with at most this many triangles (see
+/// [`bake_level`]).
 pub const BAKE_TRIANGLES: usize = 300_000;
+/// The finest level impostors are rendered from: level 1, which keeps full detail's leaf
+/// cards, card for card, on a third of its wood. The stand of `impostor_stand` (scene B's
+/// mix, 100–150 pixels tall) reads the same FLIP against full detail baked from level 1
+/// as from level 0 (0.0388 and 0.0387; as brightness within 0.1 %), and the bake of B's
+/// five species takes about a fifth less time on lavapipe (6.4 s against 8.3, medians of
+/// four; docs/benchmarks.md, "Sixteen impostor views").
+pub const BAKE_FINEST: usize = 1;
 
 /// Sunlight's extinction in a crown per unit of leaf area density (m² of leaf per m³):
 /// 0.5 for leaves facing every way, times about 0.7 for their gathering on twigs, which
@@ -71,13 +78,13 @@ pub fn crown_ellipsoid(clusters: &[sylva_tree::mesh::LeafCluster]) -> [f32; 4] {
     [z, a, b, CROWN_EXTINCTION * total / volume]
 }
 
-/// The level of `model` its impostor is rendered from (see [`BAKE_TRIANGLES`]).
+/// The level of `model` its impostor is rendered from: the finest with at most
+/// [`BAKE_TRIANGLES`] triangles, and not finer than [`BAKE_FINEST`] (nor past the chain's
+/// last level).
 pub fn bake_level(model: &TreeModel) -> usize {
-    model
-        .lods
-        .iter()
-        .position(|l| l.triangles() <= BAKE_TRIANGLES)
-        .unwrap_or(model.lods.len().saturating_sub(1))
+    let last = model.lods.len().saturating_sub(1);
+    let within = model.lods.iter().position(|l| l.triangles() <= BAKE_TRIANGLES);
+    within.unwrap_or(last).max(BAKE_FINEST).min(last)
 }
 /// Distance of the bake's eye point from the tree, m: the views are orthographic, and what
 /// turns towards the eye (leaf cards) must turn as for a viewer far away.
@@ -566,6 +573,26 @@ pub fn impostor_mips(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn impostors_are_baked_from_level_one_with_every_leaf_card_of_full_detail() {
+        // Every preset's impostor is rendered from level 1 (each preset's level 1 is within
+        // BAKE_TRIANGLES), which has full detail's leaf cards on less wood: only the wood is
+        // thinned, not the foliage the impostor mostly shows. Full detail itself is within
+        // the cap for most presets, so it is BAKE_FINEST, not the cap, that picks level 1.
+        let mut full_within_cap = 0;
+        for (name, _) in sylva_tree::species::PRESETS {
+            let species = sylva_tree::species::Species::preset(name).expect("preset");
+            let model = species.model(1, sylva_tree::mesh::LOD_LEVELS).expect("model");
+            let (full, baked) = (&model.lods[0], &model.lods[bake_level(&model)]);
+            assert_eq!(bake_level(&model), 1, "{name}");
+            assert!(baked.triangles() <= BAKE_TRIANGLES, "{name}: {}", baked.triangles());
+            assert_eq!(baked.clusters.len(), full.clusters.len(), "{name}: leaf cards");
+            assert!(baked.triangles() < full.triangles(), "{name}: less wood");
+            full_within_cap += usize::from(full.triangles() <= BAKE_TRIANGLES);
+        }
+        assert!(full_within_cap > 0);
+    }
 
     #[test]
     fn the_crown_ellipsoid_of_clusters_filling_one_gives_back_its_radii_and_leaf_density() {
