@@ -31,9 +31,9 @@
 //! on the nearest kept ancestor joint (they keep their place in the crown, so the crown
 //! keeps its volume) and runs of `3^k` neighbouring clusters (in joint order, so neighbours
 //! along the branches) are merged into one, placed at their area-weighted centre and
-//! enlarged so the merged billboard shows their summed area. Level 1 keeps level 0's leaf cards, card for card and
-//! each on its own joint (a card whose twig is dropped still hangs from the twig's joint and
-//! moves with it), on a third of its wood. The wood is most of a tree's triangles (85–96 %
+//! enlarged so the merged billboard shows their summed area. Level 1 keeps level 0's leaf
+//! cards, card for card and each on its own joint (a card whose twig is dropped still hangs
+//! from the twig's joint and moves with it), on a third of its wood. The wood is most of a tree's triangles (85–96 %
 //! at level 0 but for the Douglas fir's 64 %), so level 1 costs 24–58 % of level 0, and its
 //! picture of the foliage — which pixels the leaves cover, and how they move — is level
 //! 0's: a tree between a fifth and a fifteenth of the image tall drawn at level 1 instead
