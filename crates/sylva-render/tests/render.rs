@@ -271,6 +271,21 @@ fn render_spec(spec: &SceneSpec, camera: Option<Camera>) -> (Vec<u8>, FrameData,
     (gpu.render(&frame, &camera).expect("render"), frame, camera)
 }
 
+/// The scene of `spec` after one step, rendered from each of `cameras` by one renderer.
+fn render_views(spec: &SceneSpec, cameras: &[Camera]) -> Vec<Vec<u8>> {
+    let mut forest = Forest::new(spec).expect("forest");
+    let mut gpu = Headless::new(&forest, W, H).unwrap_or_else(|e| panic!("{e}"));
+    let mut frame = FrameData::default();
+    forest.step(1.0 / 30.0);
+    cameras
+        .iter()
+        .map(|camera| {
+            forest.frame(camera, W as f32 / H as f32, &mut frame);
+            gpu.render(&frame, camera).expect("render")
+        })
+        .collect()
+}
+
 /// Pixel of world point `p`, if in the image.
 fn pixel_of(camera: &Camera, p: [f32; 3]) -> Option<(u32, u32)> {
     let m = camera.view_projection(W as f32 / H as f32);
@@ -331,11 +346,18 @@ fn impostors_cast_shadows_too() {
 /// same distance towards the sun (nothing between it and the sun) is not. `impostors`: every
 /// tree in view must be drawn as one.
 fn check_shadows(spec: &SceneSpec, impostors: bool, camera: Option<Camera>) {
-    let spec = spec.clone();
-    let mut off = spec.clone();
-    off.lighting.shadows = false;
-    let (lit, frame, camera) = render_spec(&spec, camera);
-    let (flat, _, _) = render_spec(&off, Some(camera));
+    // One renderer for both images: the shadows are switched off through its lighting.
+    let mut forest = Forest::new(spec).expect("forest");
+    let camera = camera.unwrap_or_else(|| forest.default_camera());
+    let mut gpu = Headless::new(&forest, W, H).unwrap_or_else(|e| panic!("{e}"));
+    let mut frame = FrameData::default();
+    forest.step(1.0 / 30.0);
+    forest.frame(&camera, W as f32 / H as f32, &mut frame);
+    assert!(spec.lighting.shadows, "the scene's shadows are on");
+    let lit = gpu.render(&frame, &camera).expect("render");
+    let lighting = gpu.renderer().lighting();
+    gpu.renderer_mut().set_lighting(sylva_forest::Lighting { shadows: false, ..lighting });
+    let flat = gpu.render(&frame, &camera).expect("render");
     let sun = spec.lighting.sun_unit();
     if impostors {
         assert!(frame.instances.iter().all(|i| i.tag & 15 == 15), "all impostors");
@@ -379,14 +401,16 @@ fn a_tree_drawn_with_part_of_a_cross_fade_casts_that_part_of_its_shadow() {
             spec.lod.fraction = 100.0;
         }
         let sun = spec.lighting.sun_unit();
+        // One renderer for every image: the shadows are switched through its lighting.
+        let mut gpu = Headless::new(&Forest::new(&spec).expect("forest"), W, H)
+            .unwrap_or_else(|e| panic!("{e}"));
+        let lighting = gpu.renderer().lighting();
         // Image with every tree given `fade`, shadows on or off, and the points of the
         // ground where each tree's crown (7 m up) puts its shadow.
-        let draw = |fade: [f32; 2], shadows: bool| {
-            let mut spec = spec.clone();
-            spec.lighting.shadows = shadows;
+        let mut draw = |fade: [f32; 2], shadows: bool| {
             let mut forest = Forest::new(&spec).expect("forest");
+            gpu.renderer_mut().set_lighting(sylva_forest::Lighting { shadows, ..lighting });
             let camera = forest.default_camera();
-            let mut gpu = Headless::new(&forest, W, H).unwrap_or_else(|e| panic!("{e}"));
             let mut frame = FrameData::default();
             forest.step(1.0 / 30.0);
             forest.frame(&camera, W as f32 / H as f32, &mut frame);
@@ -410,7 +434,7 @@ fn a_tree_drawn_with_part_of_a_cross_fade_casts_that_part_of_its_shadow() {
             (gpu.render(&frame, &camera).expect("render"), points)
         };
         // Summed over the shadow points: how much darker the ground is with shadows.
-        let darkening = |fade: [f32; 2]| {
+        let mut darkening = |fade: [f32; 2]| {
             let ((lit, points), (flat, _)) = (draw(fade, true), draw(fade, false));
             assert!(points.len() >= 3, "only {} shadow points in view", points.len());
             points.iter().map(|&p| brightness(&flat, p) - brightness(&lit, p)).sum::<f64>()
@@ -632,23 +656,27 @@ fn painted_woodland_crowns_stand_up_in_front_of_the_meadow_behind_them() {
         })
         .collect();
     let target = ground(woodland.start - 2.5 * spacing);
-    // Share of the meadow points whose pixel the woodland changes, seen from `elevation_deg`
-    // above the target, 120 m out beyond the woodland's edge.
-    let hidden = |elevation_deg: f32| {
-        let (e, d) = (elevation_deg.to_radians(), 120.0);
-        let eye =
-            [target[0] + d * e.cos() * c, target[1] + d * e.cos() * s, target[2] + d * e.sin()];
-        let camera = Camera { eye, target, fov_deg: 50.0, near: 0.5, far: 8000.0 };
-        let (bare, ..) = render_spec(&open, Some(camera));
-        let (wood, ..) = render_spec(&wooded, Some(camera));
+    // Seen from 75° and 12° above the target, 120 m out beyond the woodland's edge.
+    let cameras: Vec<Camera> = [75.0f32, 12.0]
+        .iter()
+        .map(|elevation_deg| {
+            let (e, d) = (elevation_deg.to_radians(), 120.0);
+            let eye =
+                [target[0] + d * e.cos() * c, target[1] + d * e.cos() * s, target[2] + d * e.sin()];
+            Camera { eye, target, fov_deg: 50.0, near: 0.5, far: 8000.0 }
+        })
+        .collect();
+    let (bare, wood) = (render_views(&open, &cameras), render_views(&wooded, &cameras));
+    // Share of the meadow points whose pixel the woodland changes, seen from camera `i`.
+    let hidden = |i: usize| {
         let changed = meadow
             .iter()
-            .map(|&p| pixel_of(&camera, p).expect("meadow point in view"))
-            .filter(|&px| (brightness(&bare, px) - brightness(&wood, px)).abs() > 4.0)
+            .map(|&p| pixel_of(&cameras[i], p).expect("meadow point in view"))
+            .filter(|&px| (brightness(&bare[i], px) - brightness(&wood[i], px)).abs() > 4.0)
             .count();
         changed as f64 / meadow.len() as f64
     };
-    let (above, low) = (hidden(75.0), hidden(12.0));
+    let (above, low) = (hidden(0), hidden(1));
     assert!(above < 0.1, "from above, {:.0} % of the meadow points changed", 100.0 * above);
     assert!(low > 0.3, "low over the woodland, {:.0} % of the meadow points hidden", 100.0 * low);
 }
@@ -786,9 +814,11 @@ fn impostor_brightness(
     stray: usize,
 ) -> Vec<f64> {
     let mut sums = Vec::new();
+    // One renderer for both: the two scenes differ in their level choice only.
+    let mut gpu =
+        Headless::new(&Forest::new(full).expect("forest"), W, H).unwrap_or_else(|e| panic!("{e}"));
     for s in [full, impostors] {
         let mut forest = Forest::new(s).expect("forest");
-        let mut gpu = Headless::new(&forest, W, H).unwrap_or_else(|e| panic!("{e}"));
         let mut frame = FrameData::default();
         forest.step(1.0 / 30.0);
         let mut row = Vec::new();
@@ -823,9 +853,11 @@ fn impostors_darken_in_a_strong_wind_as_full_detail_does() {
         far: 8000.0,
     };
     let mut darkening = Vec::new();
+    // One renderer for both: the two scenes differ in their level choice only.
+    let mut gpu =
+        Headless::new(&Forest::new(&full).expect("forest"), W, H).unwrap_or_else(|e| panic!("{e}"));
     for s in [&full, &spec] {
         let mut forest = Forest::new(s).expect("forest");
-        let mut gpu = Headless::new(&forest, W, H).unwrap_or_else(|e| panic!("{e}"));
         let mut frame = FrameData::default();
         // Before the first step every tree stands in its rest pose.
         forest.frame(&camera, W as f32 / H as f32, &mut frame);
