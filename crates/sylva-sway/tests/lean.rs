@@ -5,56 +5,68 @@
 use sylva_sway::{CrownLean, Palette, SwayBatch, SwayParams, SwaySpecies, transform};
 use sylva_tree::{Joint, NO_PARENT, PRESETS, Skeleton, Species};
 
-/// Leaf-weighted mean over the leaves of `f(joint i, M_i, M_c)`, c the nearest joint on
-/// the trunk line at or above i.
-fn leaf_mean(
-    b: &SwayBatch,
-    sk: &Skeleton,
-    f: impl Fn(&Joint, Palette, Palette) -> [f32; 3],
-) -> [f32; 3] {
-    let joints = sk.joints();
-    let mut trunk = vec![false; joints.len()];
-    let mut a = sk.trunk_top() as u32;
-    while a != NO_PARENT {
-        trunk[a as usize] = true;
-        a = joints[a as usize].parent;
-    }
-    let (mut sum, mut total) = ([0.0f64; 3], 0.0f64);
-    for (i, j) in joints.iter().enumerate() {
-        if j.leaf_area <= 0.0 {
-            continue;
-        }
-        let mut c = i;
-        while !trunk[c] {
-            c = joints[c].parent as usize;
-        }
-        let v = f(j, b.palette(0, i), b.palette(0, c));
-        for k in 0..3 {
-            sum[k] += (j.leaf_area * v[k]) as f64;
-        }
-        total += j.leaf_area as f64;
-    }
-    sum.map(|s| (s / total) as f32)
-}
+/// The leaves of a skeleton: per leaf-bearing joint i, the nearest joint c on the trunk
+/// line at or above it, and its leaf area.
+struct Leaves(Vec<(usize, usize, f32)>);
 
-/// Leaf-weighted mean of M_i x_i − M_c x_i over the leaves, x_i mid segment (tree space):
-/// how far the joints off the trunk line carry the leaves, the trunk's own bend taken out.
-fn measured_lean(b: &SwayBatch, sk: &Skeleton) -> [f32; 3] {
-    leaf_mean(b, sk, |j, p, q| {
-        let x = std::array::from_fn(|k| j.origin[k] + 0.5 * j.length * j.axis[k]);
-        let (p, q) = (transform(&p, x), transform(&q, x));
-        std::array::from_fn(|k| p[k] - q[k])
-    })
-}
+impl Leaves {
+    fn of(sk: &Skeleton) -> Leaves {
+        let joints = sk.joints();
+        let mut trunk = vec![false; joints.len()];
+        let mut a = sk.trunk_top() as u32;
+        while a != NO_PARENT {
+            trunk[a as usize] = true;
+            a = joints[a as usize].parent;
+        }
+        let leaves = joints.iter().enumerate().filter(|(_, j)| j.leaf_area > 0.0).map(|(i, j)| {
+            let mut c = i;
+            while !trunk[c] {
+                c = joints[c].parent as usize;
+            }
+            (i, c, j.leaf_area)
+        });
+        Leaves(leaves.collect())
+    }
 
-/// Leaf-weighted mean of R_c⁻¹ R_i ẑ over the leaves: where the joints off the trunk line
-/// turn the vertical, the trunk's own bend taken out. Palettes are row-major 3 × 4: R ẑ is
-/// the third column, Rᵀ v the columns' dot products with v.
-fn measured_tilt(b: &SwayBatch, sk: &Skeleton) -> [f32; 3] {
-    leaf_mean(b, sk, |_, p, q| {
-        let z = [p[2], p[6], p[10]];
-        std::array::from_fn(|k| (0..3).map(|r| q[4 * r + k] * z[r]).sum::<f32>())
-    })
+    /// Leaf-weighted mean over the leaves of `f(joint i, M_i, M_c)` for instance `n`.
+    fn mean(
+        &self,
+        b: &SwayBatch,
+        n: usize,
+        sk: &Skeleton,
+        f: impl Fn(&Joint, Palette, Palette) -> [f32; 3],
+    ) -> [f32; 3] {
+        let (mut sum, mut total) = ([0.0f64; 3], 0.0f64);
+        for &(i, c, area) in &self.0 {
+            let v = f(&sk.joints()[i], b.palette(n, i), b.palette(n, c));
+            for k in 0..3 {
+                sum[k] += (area * v[k]) as f64;
+            }
+            total += area as f64;
+        }
+        sum.map(|s| (s / total) as f32)
+    }
+
+    /// Leaf-weighted mean of M_i x_i − M_c x_i over the leaves, x_i mid segment (tree
+    /// space): how far the joints off the trunk line carry the leaves, the trunk's own bend
+    /// taken out.
+    fn lean(&self, b: &SwayBatch, n: usize, sk: &Skeleton) -> [f32; 3] {
+        self.mean(b, n, sk, |j, p, q| {
+            let x = std::array::from_fn(|k| j.origin[k] + 0.5 * j.length * j.axis[k]);
+            let (p, q) = (transform(&p, x), transform(&q, x));
+            std::array::from_fn(|k| p[k] - q[k])
+        })
+    }
+
+    /// Leaf-weighted mean of R_c⁻¹ R_i ẑ over the leaves: where the joints off the trunk
+    /// line turn the vertical, the trunk's own bend taken out. Palettes are row-major 3 × 4:
+    /// R ẑ is the third column, Rᵀ v the columns' dot products with v.
+    fn tilt(&self, b: &SwayBatch, n: usize, sk: &Skeleton) -> [f32; 3] {
+        self.mean(b, n, sk, |_, p, q| {
+            let z = [p[2], p[6], p[10]];
+            std::array::from_fn(|k| (0..3).map(|r| q[4 * r + k] * z[r]).sum::<f32>())
+        })
+    }
 }
 
 fn norm(v: [f32; 3]) -> f32 {
@@ -70,7 +82,9 @@ fn the_predicted_lean_is_where_the_springs_settle_in_a_steady_wind() {
         let params = SwayParams::for_leaves(sylva_tree::texture::is_needle(&species));
         let sp = SwaySpecies::new(sk, params).expect("valid params");
         let lean = CrownLean::new(&sp, sk);
+        let leaves = Leaves::of(sk);
         for wind in [[5.0f32, 0.0, 0.0], [0.0, 8.0, 0.0], [-12.0, 0.0, 0.0], [-4.6, -6.5, 0.0]] {
+            // One instance a batch: a lone instance steps one lane.
             let mut b = SwayBatch::new(sp.clone(), 1);
             // 40 s of steady wind at 30 Hz: the trunk (the slowest joint, a fraction of a
             // hertz at a damping ratio of several per cent) has settled to millimetres.
@@ -79,7 +93,7 @@ fn the_predicted_lean_is_where_the_springs_settle_in_a_steady_wind() {
             for k in 0..steps {
                 b.step(1.0 / 30.0, &[wind]);
                 if k >= steps - 150 {
-                    let (last, turned) = (measured_lean(&b, sk), measured_tilt(&b, sk));
+                    let (last, turned) = (leaves.lean(&b, 0, sk), leaves.tilt(&b, 0, sk));
                     for c in 0..3 {
                         mean[c] += last[c] / 150.0;
                         tilt[c] += turned[c] / 150.0;
