@@ -262,13 +262,20 @@ fn palettes_beyond_one_storage_binding_are_drawn_through_windows() {
 /// One calm frame of `spec` from `camera` (the scene's default when `None`), with its frame
 /// data.
 fn render_spec(spec: &SceneSpec, camera: Option<Camera>) -> (Vec<u8>, FrameData, Camera) {
+    let (mut gpu, frame, camera) = one_frame(spec, camera);
+    (gpu.render(&frame, &camera).expect("render"), frame, camera)
+}
+
+/// A renderer for `spec`, and the frame data of its scene after one calm step seen from
+/// `camera` (the scene's default when `None`).
+fn one_frame(spec: &SceneSpec, camera: Option<Camera>) -> (Headless, FrameData, Camera) {
     let mut forest = Forest::new(spec).expect("forest");
     let camera = camera.unwrap_or_else(|| forest.default_camera());
-    let mut gpu = Headless::new(&forest, W, H).unwrap_or_else(|e| panic!("{e}"));
+    let gpu = Headless::new(&forest, W, H).unwrap_or_else(|e| panic!("{e}"));
     let mut frame = FrameData::default();
     forest.step(1.0 / 30.0);
     forest.frame(&camera, W as f32 / H as f32, &mut frame);
-    (gpu.render(&frame, &camera).expect("render"), frame, camera)
+    (gpu, frame, camera)
 }
 
 /// The scene of `spec` after one step, rendered from each of `cameras` by one renderer.
@@ -347,12 +354,7 @@ fn impostors_cast_shadows_too() {
 /// tree in view must be drawn as one.
 fn check_shadows(spec: &SceneSpec, impostors: bool, camera: Option<Camera>) {
     // One renderer for both images: the shadows are switched off through its lighting.
-    let mut forest = Forest::new(spec).expect("forest");
-    let camera = camera.unwrap_or_else(|| forest.default_camera());
-    let mut gpu = Headless::new(&forest, W, H).unwrap_or_else(|e| panic!("{e}"));
-    let mut frame = FrameData::default();
-    forest.step(1.0 / 30.0);
-    forest.frame(&camera, W as f32 / H as f32, &mut frame);
+    let (mut gpu, frame, camera) = one_frame(spec, camera);
     assert!(spec.lighting.shadows, "the scene's shadows are on");
     let lit = gpu.render(&frame, &camera).expect("render");
     let lighting = gpu.renderer().lighting();
