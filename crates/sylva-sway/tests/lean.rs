@@ -28,17 +28,16 @@ impl Leaves {
         Leaves(leaves.collect())
     }
 
-    /// Leaf-weighted mean over the leaves of `f(joint i, M_i, M_c)` for instance `n`.
+    /// Leaf-weighted mean over the leaves of `f(joint i, M_i, M_c)` (the batch's one instance).
     fn mean(
         &self,
         b: &SwayBatch,
-        n: usize,
         sk: &Skeleton,
         f: impl Fn(&Joint, Palette, Palette) -> [f32; 3],
     ) -> [f32; 3] {
         let (mut sum, mut total) = ([0.0f64; 3], 0.0f64);
         for &(i, c, area) in &self.0 {
-            let v = f(&sk.joints()[i], b.palette(n, i), b.palette(n, c));
+            let v = f(&sk.joints()[i], b.palette(0, i), b.palette(0, c));
             for k in 0..3 {
                 sum[k] += (area * v[k]) as f64;
             }
@@ -50,8 +49,8 @@ impl Leaves {
     /// Leaf-weighted mean of M_i x_i − M_c x_i over the leaves, x_i mid segment (tree
     /// space): how far the joints off the trunk line carry the leaves, the trunk's own bend
     /// taken out.
-    fn lean(&self, b: &SwayBatch, n: usize, sk: &Skeleton) -> [f32; 3] {
-        self.mean(b, n, sk, |j, p, q| {
+    fn lean(&self, b: &SwayBatch, sk: &Skeleton) -> [f32; 3] {
+        self.mean(b, sk, |j, p, q| {
             let x = std::array::from_fn(|k| j.origin[k] + 0.5 * j.length * j.axis[k]);
             let (p, q) = (transform(&p, x), transform(&q, x));
             std::array::from_fn(|k| p[k] - q[k])
@@ -61,8 +60,8 @@ impl Leaves {
     /// Leaf-weighted mean of R_c⁻¹ R_i ẑ over the leaves: where the joints off the trunk
     /// line turn the vertical, the trunk's own bend taken out. Palettes are row-major 3 × 4:
     /// R ẑ is the third column, Rᵀ v the columns' dot products with v.
-    fn tilt(&self, b: &SwayBatch, n: usize, sk: &Skeleton) -> [f32; 3] {
-        self.mean(b, n, sk, |_, p, q| {
+    fn tilt(&self, b: &SwayBatch, sk: &Skeleton) -> [f32; 3] {
+        self.mean(b, sk, |_, p, q| {
             let z = [p[2], p[6], p[10]];
             std::array::from_fn(|k| (0..3).map(|r| q[4 * r + k] * z[r]).sum::<f32>())
         })
@@ -93,7 +92,7 @@ fn the_predicted_lean_is_where_the_springs_settle_in_a_steady_wind() {
             for k in 0..steps {
                 b.step(1.0 / 30.0, &[wind]);
                 if k >= steps - 150 {
-                    let (last, turned) = (leaves.lean(&b, 0, sk), leaves.tilt(&b, 0, sk));
+                    let (last, turned) = (leaves.lean(&b, sk), leaves.tilt(&b, sk));
                     for c in 0..3 {
                         mean[c] += last[c] / 150.0;
                         tilt[c] += turned[c] / 150.0;
