@@ -48,7 +48,7 @@ pub const BAKE_TRIANGLES: usize = 300_000;
 /// mix, 100–150 pixels tall) reads the same FLIP against full detail baked from level 1
 /// as from level 0 (0.0388 and 0.0387; as brightness within 0.1 %), and the bake of B's
 /// five species takes about a fifth less time on lavapipe (6.4 s against 8.3, medians of
-/// four; docs/benchmarks.md, "Sixteen impostor views").
+/// four; docs/benchmarks.md, "Baked from level 1").
 pub const BAKE_FINEST: usize = 1;
 
 /// Sunlight's extinction in a crown per unit of leaf area density (m² of leaf per m³):
