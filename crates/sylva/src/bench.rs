@@ -47,8 +47,8 @@ pub struct RenderBench {
     /// Image size.
     #[arg(long, default_value = "1024x768")]
     size: String,
-    /// Frames timed (after one warm-up frame).
-    #[arg(long, default_value_t = 10)]
+    /// Frames timed (after one warm-up frame; at least 1).
+    #[arg(long, default_value_t = 10, value_parser = crate::at_least_one)]
     frames: usize,
     /// Geometry-LOD threshold h₀ (see `sylva render --help`; default: the scene's).
     #[arg(value_parser = crate::finite::<f32>, long)]
@@ -115,7 +115,7 @@ fn tree(a: TreeBench) -> anyhow::Result<()> {
 fn render_bench(a: RenderBench) -> anyhow::Result<()> {
     let args = crate::render::RenderArgs {
         scene: a.scene,
-        seconds: (a.frames.max(1) + 1) as f64 / 10.0,
+        seconds: (a.frames + 1) as f64 / 10.0,
         fps: 10.0,
         size: a.size,
         out: std::path::PathBuf::from("out/bench-render"),

@@ -27,6 +27,16 @@ where
     if v.into().is_finite() { Ok(v) } else { Err(format!("`{s}` is not a finite number")) }
 }
 
+/// A count flag of at least 1 (`--frames 0` is an error naming the flag, not one frame in
+/// silence).
+pub(crate) fn at_least_one(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<usize>() {
+        Ok(0) => Err("must be at least 1".into()),
+        Ok(v) => Ok(v),
+        Err(e) => Err(format!("`{s}` is not a count ({e})")),
+    }
+}
+
 /// Forests in wind: wind-engineering wind fields, Weber–Penn trees, swaying branches, rendered.
 #[derive(Debug, Parser)]
 #[command(name = "sylva", version, about, long_about = None)]

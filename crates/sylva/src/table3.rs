@@ -47,8 +47,9 @@ pub struct Table3Bench {
     /// Image size.
     #[arg(long, default_value = "1024x768")]
     size: String,
-    /// Frames timed per configuration (after the warm-up), spread along the camera path.
-    #[arg(long, default_value_t = 6)]
+    /// Frames timed per configuration (after the warm-up), spread along the camera path
+    /// (at least 1).
+    #[arg(long, default_value_t = 6, value_parser = crate::at_least_one)]
     frames: usize,
     /// Warm-up frames, not timed.
     #[arg(long, default_value_t = 2)]
@@ -306,7 +307,7 @@ fn run_config(
         *gpu = Some(g);
     }
     let gpu = gpu.as_mut().context("renderer")?;
-    let total = a.warmup + a.frames.max(1);
+    let total = a.warmup + a.frames;
     let duration = path_duration(&spec, &forest);
     let dt = 0.1f32;
     let cameras: Vec<_> = (0..total)
@@ -381,7 +382,7 @@ fn run_config(
             a.in_flight,
         )?);
     }
-    let k = a.frames.max(1) as f64;
+    let k = a.frames as f64;
     for v in [&mut cell.triangles, &mut cell.draws, &mut cell.joints, &mut cell.upload_mb] {
         *v /= k;
     }
@@ -504,7 +505,7 @@ fn still_error(
         let spec = configure(spec, a, lods)?;
         let Ok(forest) = Forest::new(&spec) else { return Ok(None) };
         // The last timed frame's camera: the path's end (its start when one frame is run).
-        let last = if a.warmup + a.frames.max(1) > 1 { path_duration(&spec, &forest) } else { 0.0 };
+        let last = if a.warmup + a.frames > 1 { path_duration(&spec, &forest) } else { 0.0 };
         let camera = forest.camera_at(last);
         let mut frame = FrameData::default();
         forest.frame(&camera, w as f32 / h as f32, &mut frame);

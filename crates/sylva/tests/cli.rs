@@ -321,6 +321,20 @@ fn lod_flags_are_checked_before_any_work() {
     }
 }
 
+/// A benchmark asked for no timed frames says so, naming the flag, instead of timing one.
+#[test]
+fn benchmarks_refuse_zero_timed_frames() {
+    for args in [
+        ["bench", "table3", "--scenes", "small", "--frames", "0"],
+        ["bench", "render", "--scene", "small", "--frames", "0"],
+    ] {
+        let (ok, text) = sylva(&args);
+        assert!(!ok, "{args:?} must fail");
+        assert!(text.contains("--frames") && text.contains("at least 1"), "{args:?}: {text}");
+        assert!(!text.contains("panicked"), "{text}");
+    }
+}
+
 #[test]
 fn output_errors_come_before_the_synthesis() {
     // A .bts column outside the grid, uneven .bts heights, a field larger than the machine
