@@ -31,8 +31,8 @@ pub enum BenchCommand {
 
 #[derive(Debug, Args)]
 pub struct TreeBench {
-    /// Runs per preset (the median is reported).
-    #[arg(long, default_value_t = 7)]
+    /// Runs per preset (the median is reported; at least 1).
+    #[arg(long, default_value_t = 7, value_parser = crate::at_least_one)]
     runs: usize,
     /// Seed of the generated trees.
     #[arg(long, default_value_t = 1)]
@@ -70,7 +70,7 @@ fn tree(a: TreeBench) -> anyhow::Result<()> {
         "{:<22}{:>10}{:>12}{:>10}{:>12}{:>12}  triangles per LOD",
         "preset", "joints", "LOD0 ms", "LOD0 tris", "chain ms", "textures ms"
     );
-    let runs = a.runs.max(1);
+    let runs = a.runs;
     for (name, _) in PRESETS {
         let sp = Species::preset(name).expect("shipped preset");
         let atlas = leaf_atlas(&sp, a.seed, sylva_tree::mesh::ATLAS_SIZE);
@@ -148,11 +148,11 @@ fn render_bench(a: RenderBench) -> anyhow::Result<()> {
 
 #[derive(Debug, Args)]
 pub struct SwayBench {
-    /// Instances of each species stepped together.
-    #[arg(long, default_value_t = 1000)]
+    /// Instances of each species stepped together (at least 1).
+    #[arg(long, default_value_t = 1000, value_parser = crate::at_least_one)]
     instances: usize,
-    /// Steps timed per species (the median step is reported).
-    #[arg(long, default_value_t = 10)]
+    /// Steps timed per species (the median step is reported; at least 1).
+    #[arg(long, default_value_t = 10, value_parser = crate::at_least_one)]
     steps: usize,
     /// Species to run, comma-separated (default: every preset).
     #[arg(long, value_delimiter = ',')]
@@ -187,7 +187,7 @@ fn sway(a: SwayBench) -> anyhow::Result<()> {
             .collect();
         let mut times = one.install(|| {
             batch.step(1.0 / 60.0, &winds);
-            (0..a.steps.max(1))
+            (0..a.steps)
                 .map(|_| {
                     let t0 = Instant::now();
                     batch.step(1.0 / 60.0, &winds);
@@ -213,8 +213,8 @@ fn sway(a: SwayBench) -> anyhow::Result<()> {
 
 #[derive(Debug, Args)]
 pub struct WindBench {
-    /// Repetitions of each timed case (the median is reported).
-    #[arg(long, default_value_t = 5)]
+    /// Repetitions of each timed case (the median is reported; at least 1).
+    #[arg(long, default_value_t = 5, value_parser = crate::at_least_one)]
     runs: usize,
     /// Also run 1000×1000 cells × 3 components × 1024 frames (about 12 GiB of output).
     #[arg(long)]
