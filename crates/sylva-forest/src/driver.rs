@@ -213,9 +213,10 @@ pub fn shadow_level(level: u32, chain: u32) -> u32 {
 }
 
 /// How much finer (in levels) than it is drawn a tree is simulated, so the simulation
-/// leads the camera by a frame. A quarter level was measured and not kept: a fifth to a
-/// half fewer joint updates, but scene B's image error in motion rose from FLIP 0.057 to
-/// 0.069, its nearest crowns drawn before their sway had built up (docs/benchmarks.md).
+/// leads the camera by a frame. A quarter level was measured and not kept: a quarter to
+/// three fifths fewer joint updates, but scene B's image error in motion rose from FLIP
+/// 0.057 to 0.069, its nearest crowns drawn before their sway had built up
+/// (docs/benchmarks.md).
 pub const SIM_MARGIN: f32 = 0.5;
 
 /// Animation LOD by projected size: a tree simulates the joints of the mesh level its size
