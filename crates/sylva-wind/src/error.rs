@@ -31,14 +31,15 @@ pub enum WindError {
     /// separable method on several heights).
     #[error("unsupported configuration: {0}")]
     Unsupported(String),
-    /// An I/O error while reading or writing `path`.
-    #[error("{path}: {source}")]
+    /// An I/O error while reading or writing `path`. Its message names the file and the
+    /// system's reason; the I/O error is in `error`, not repeated as the
+    /// [`source`](std::error::Error::source), so a printed chain says it once.
+    #[error("{path}: {error}")]
     Io {
         /// The file.
         path: String,
         /// The underlying error.
-        #[source]
-        source: std::io::Error,
+        error: std::io::Error,
     },
     /// A wind file is malformed at a byte offset.
     #[error("malformed wind file at byte {offset}: {reason}")]
@@ -59,6 +60,6 @@ impl WindError {
     }
 
     pub(crate) fn io(path: &std::path::Path, source: std::io::Error) -> Self {
-        WindError::Io { path: path.display().to_string(), source }
+        WindError::Io { path: path.display().to_string(), error: source }
     }
 }

@@ -561,7 +561,16 @@ pub fn read(path: &Path) -> anyhow::Result<WindField> {
         ),
         _ => io::read_field(path),
     };
-    field.with_context(|| format!("reading {}", path.display()))
+    reading(field, path)
+}
+
+/// A wind file's read error, with `reading PATH` before it unless it names the file itself
+/// (an I/O error does; a malformed file's byte offset does not).
+fn reading<T>(result: Result<T, sylva_wind::WindError>, path: &Path) -> anyhow::Result<T> {
+    result.map_err(|e| match e {
+        sylva_wind::WindError::Io { .. } => anyhow::Error::new(e),
+        _ => anyhow::Error::new(e).context(format!("reading {}", path.display())),
+    })
 }
 
 /// Mean and standard deviation of `values`.
@@ -575,7 +584,7 @@ fn info(path: &Path) -> anyhow::Result<()> {
     // Per height: (z, [(mean, σ) of u, v, w]).
     let mut rows: Vec<(f64, [(f64, f64); 3])> = Vec::new();
     if path.extension().and_then(|e| e.to_str()) == Some("bts") {
-        let b = io::read_bts(path).with_context(|| format!("reading {}", path.display()))?;
+        let b = reading(io::read_bts(path), path)?;
         println!(
             "TurbSim .bts ({}): {} heights × {} points across, dz {} m, dy {} m, {} tower \
              points; {} steps of {} s; hub {} m at {:.3} m/s",

@@ -101,6 +101,28 @@ fn wind_info_reads_swf_and_bts_alike() {
     assert!(!ok && text.contains("wind info"), "{text}");
 }
 
+/// A wind file that cannot be read is named once, with the system's reason once, whatever
+/// the command and the format; a malformed file is named with the byte where it goes wrong.
+#[test]
+fn unreadable_wind_files_are_named_once_with_their_reason() {
+    let dir = temp("missing");
+    let folder = dir.to_str().expect("utf-8 path");
+    std::fs::create_dir_all(&dir).expect("temp folder");
+    for (command, file) in [("info", "gone.swf"), ("info", "gone.bts"), ("stats", "gone.npy")] {
+        let path = format!("{folder}/{file}");
+        let (ok, text) = sylva(&["wind", command, &path]);
+        assert!(!ok, "{text}");
+        assert_eq!(text.matches(path.as_str()).count(), 1, "the file named once: {text}");
+        assert_eq!(text.matches("No such file").count(), 1, "the reason given once: {text}");
+    }
+    let (ok, text) = sylva(&["wind", "info", folder]);
+    assert!(!ok && text.matches(folder).count() == 1, "a folder is named once: {text}");
+    let short = format!("{folder}/short.swf");
+    std::fs::write(&short, b"SWF").expect("write a truncated file");
+    let (ok, text) = sylva(&["wind", "info", &short]);
+    assert!(!ok && text.contains(&format!("reading {short}")) && text.contains("byte"), "{text}");
+}
+
 /// `--max-memory` sets the forest's animation-state cap: below what the scene needs (every
 /// joint of every tree, without the animation LOD), the render is refused before the
 /// simulation is built, naming the cap and how to raise it.
