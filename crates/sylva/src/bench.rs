@@ -127,7 +127,7 @@ fn render_bench(a: RenderBench) -> anyhow::Result<()> {
         lod: a.lod,
     };
     println!("machine: {}", machine());
-    let r = crate::render::render(&args)?;
+    let r = crate::render::render(&args, 1)?;
     println!(
         "{} frames at {}: simulation {:.1} ms (sway step {:.1} ms) + rendering {:.1} ms per frame (medians; rendering = upload, draw, read back), {:.2} M triangles per frame, {} simulated trees, {} joints per step, adapter {}",
         r.frames,

@@ -119,7 +119,7 @@ fn demo(a: DemoArgs) -> anyhow::Result<()> {
     println!(
         "sylva demo: no display, rendering scene A (1000 trees in strong wind), 5 s at 10 fps, 800×600"
     );
-    let r = render::render(&args)?;
+    let r = render::render(&args, 0)?;
     render::print_report(&args, &r);
     Ok(())
 }
@@ -169,7 +169,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::View(a) => view::view(&a),
         Command::Wind(c) => wind::run(*c),
         Command::Render(a) => {
-            let r = render::render(&a)?;
+            let r = render::render(&a, 0)?;
             render::print_report(&a, &r);
             Ok(())
         }

@@ -282,7 +282,9 @@ impl ClipWriter {
     }
 }
 
-pub fn render(a: &RenderArgs) -> anyhow::Result<RenderReport> {
+/// Renders the clip `a` asks for; the first `warmup` frames are written like the others but
+/// left out of the report's medians and mean (`frames` counts the rest).
+pub fn render(a: &RenderArgs, warmup: usize) -> anyhow::Result<RenderReport> {
     let mut spec = SceneSpec::load(&a.scene)?;
     if let Some(w) = &a.wind {
         spec.set_wind(w);
@@ -324,7 +326,7 @@ pub fn render(a: &RenderArgs) -> anyhow::Result<RenderReport> {
     let dt = (1.0 / a.fps) as f32;
     let mut clip = ClipWriter::new(&a.out, w, h, !a.no_gif)?;
     let mut frame = FrameData::default();
-    let (mut sim, mut draw, mut tris) = (Vec::new(), Vec::new(), 0.0);
+    let (mut sim, mut draw, mut tris) = (Vec::new(), Vec::new(), Vec::new());
     let mut step = Vec::new();
     let mut passes: Vec<[f64; sylva_render::PASS_PARTS.len()]> = Vec::new();
     let bar = indicatif::ProgressBar::new(frames as u64);
@@ -346,19 +348,22 @@ pub fn render(a: &RenderArgs) -> anyhow::Result<RenderReport> {
         if let Some(p) = gpu.pass_times()? {
             passes.push(p);
         }
-        tris += frame.stats.triangles as f64;
+        tris.push(frame.stats.triangles as f64);
         clip.frame(&rgba, dt as f64)?;
         bar.inc(1);
     }
     bar.finish_and_clear();
     let (gif, mp4) = clip.finish()?;
+    let skip = warmup.min(frames - 1);
+    let timed = frames - skip;
+    let timed_passes = passes.get(skip..).unwrap_or_default();
     Ok(RenderReport {
-        frames,
-        sim_ms: median(&mut sim),
-        step_ms: median(&mut step),
-        render_ms: median(&mut draw),
-        triangles: tris / frames as f64,
-        passes: part_medians(&passes),
+        frames: timed,
+        sim_ms: median(&mut sim[skip..].to_vec()),
+        step_ms: median(&mut step[skip..].to_vec()),
+        render_ms: median(&mut draw[skip..].to_vec()),
+        triangles: tris[skip..].iter().sum::<f64>() / timed as f64,
+        passes: part_medians(timed_passes),
         simulated: frame.stats.simulated,
         joints: frame.stats.joints,
         adapter,

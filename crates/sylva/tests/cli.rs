@@ -327,6 +327,24 @@ fn render_renders_frames_deterministically_and_says_what_to_install_without_a_dr
     }
 }
 
+/// `bench render --frames N` times N frames after its warm-up frame: the warm-up is left out
+/// of the count and of the medians.
+#[test]
+fn bench_render_reports_the_frames_it_timed() {
+    let dir = temp("bench");
+    std::fs::create_dir_all(&dir).expect("temp folder");
+    let out = Command::new(env!("CARGO_BIN_EXE_sylva"))
+        .args(["bench", "render", "--scene", "small", "--frames", "2", "--size", "96x64"])
+        .current_dir(&dir)
+        .output()
+        .expect("run sylva");
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}{}", String::from_utf8_lossy(&out.stderr));
+    let line = text.lines().find(|l| l.contains("frames at")).unwrap_or("");
+    assert!(line.starts_with("2 frames at 96x64"), "{text}");
+    assert!(dir.join("out/bench-render/frame_0002.png").exists(), "three frames rendered");
+}
+
 #[test]
 fn lod_flags_are_checked_before_any_work() {
     for (args, needle) in [
