@@ -355,15 +355,17 @@ pub fn render(a: &RenderArgs, warmup: usize) -> anyhow::Result<RenderReport> {
     bar.finish_and_clear();
     let (gif, mp4) = clip.finish()?;
     let skip = warmup.min(frames - 1);
-    let timed = frames - skip;
-    let timed_passes = passes.get(skip..).unwrap_or_default();
+    for timings in [&mut sim, &mut step, &mut draw, &mut tris] {
+        timings.drain(..skip);
+    }
+    passes.drain(..skip.min(passes.len()));
     Ok(RenderReport {
-        frames: timed,
-        sim_ms: median(&mut sim[skip..].to_vec()),
-        step_ms: median(&mut step[skip..].to_vec()),
-        render_ms: median(&mut draw[skip..].to_vec()),
-        triangles: tris[skip..].iter().sum::<f64>() / timed as f64,
-        passes: part_medians(timed_passes),
+        frames: frames - skip,
+        sim_ms: median(&mut sim),
+        step_ms: median(&mut step),
+        render_ms: median(&mut draw),
+        triangles: tris.iter().sum::<f64>() / tris.len() as f64,
+        passes: part_medians(&passes),
         simulated: frame.stats.simulated,
         joints: frame.stats.joints,
         adapter,
