@@ -5,9 +5,12 @@
 //! detail from a quarter pixel aside (`aside{i}.png`, the sampling floor any comparison of
 //! foliage has). Compare with `tools/image_error.py OUT/full2.png OUT/impostor2.png`.
 //!
-//! `cargo run --release -p sylva-render --example impostor_stand -- OUT [shadows: 1|0] [spacing m]`
-//! (defaults: out/impostor-stand, shadows on, 7 m; a wider spacing moves the cameras out
-//! and narrows their view in proportion, so the crowns keep their size but stand apart).
+//! `cargo run --release -p sylva-render --example impostor_stand -- OUT [shadows: 1|0] [spacing m] [elevation °]`
+//! (defaults: out/impostor-stand, shadows on, 7 m, the cameras about 8° above the stand's
+//! centre; a wider spacing moves the cameras out and narrows their view in proportion, so
+//! the crowns keep their size but stand apart; an elevation puts the cameras that many
+//! degrees above the horizon seen from the stand's centre, at the same distances, as a
+//! camera over a forest looks down on its nearer impostors).
 
 use std::path::Path;
 
@@ -35,6 +38,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Some(s) => s.parse().map_err(|e| format!("spacing {s:?}: {e}"))?,
         None => 7.0,
     };
+    let elevation: Option<f32> = match args.get(4) {
+        Some(s) => Some(s.parse().map_err(|e| format!("elevation {s:?}: {e}"))?),
+        None => None,
+    };
     std::fs::create_dir_all(&out)?;
     let mut spec = SceneSpec::builtin("B")?;
     spec.trees = 120;
@@ -52,13 +59,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .iter()
         .map(|&d| {
             let d = d * k;
-            Camera {
-                eye: [-d, -0.35 * d, 0.15 * d + 8.0],
-                target: [0.0, 0.0, 6.0],
-                fov_deg: fov,
-                near: 0.5,
-                far: 8000.0,
-            }
+            let eye = match elevation {
+                // Along the same horizontal bearing, `d` from the target, `e` above it.
+                Some(e) => {
+                    let (s, c) = e.to_radians().sin_cos();
+                    let h = d * c / 1.0f32.hypot(0.35);
+                    [-h, -0.35 * h, 6.0 + d * s]
+                }
+                None => [-d, -0.35 * d, 0.15 * d + 8.0],
+            };
+            Camera { eye, target: [0.0, 0.0, 6.0], fov_deg: fov, near: 0.5, far: 8000.0 }
         })
         .collect();
     let aspect = W as f32 / H as f32;
@@ -80,7 +90,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             // A quarter pixel across the view, at the target's distance.
             let (dx, dy) = (camera.target[0] - camera.eye[0], camera.target[1] - camera.eye[1]);
             let dist = dx.hypot(dy);
-            let step = 0.25 * 2.0 * dist * (0.5 * fov).to_radians().tan() / H as f32;
+            let range = dist.hypot(camera.target[2] - camera.eye[2]);
+            let step = 0.25 * 2.0 * range * (0.5 * fov).to_radians().tan() / H as f32;
             let (rx, ry) = (dy / dist * step, -dx / dist * step);
             let mut aside = *camera;
             aside.eye[0] += rx;

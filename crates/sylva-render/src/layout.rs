@@ -191,8 +191,10 @@ pub struct FarSpecies {
     pub height: f32,
     /// Step between the baked elevations, rad.
     pub row_step: f32,
-    /// Padding.
-    pub pad0: u32,
+    /// Half the depth range the views' depth maps span about the plane through the
+    /// views' centre, m: a depth texel of `z` (0 … 1) lies `(2z − 1)·depth_range` behind
+    /// that plane along its view.
+    pub depth_range: f32,
     /// The crown as an ellipsoid about the trunk axis, tree space: its centre's height,
     /// horizontal and vertical radii (m), and the light's extinction in it (1/m).
     pub crown: [f32; 4],

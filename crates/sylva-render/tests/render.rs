@@ -923,12 +923,17 @@ fn leaf_edges_come_closer_to_a_supersampled_reference() {
 
 #[test]
 fn an_impostor_keeps_the_outline_of_full_detail_seen_level_and_from_above() {
-    // One quaking aspen 120 m off, seen level and from 60° above (as a camera over a
+    // One quaking aspen 120 m off, seen level, from 45° above (half-way between two baked
+    // elevations, where both are shown, cross-faded) and from 60° (as a camera over a
     // forest sees the trees below it): the pixels its impostor covers against those full
     // detail covers, each told from the same frame drawn without the tree. Baked at one
     // elevation only, the tree seen from above showed its side, the trunk reaching below
     // the crown: at 60° the outlines overlapped by 0.58 and the impostor covered 10 % more
-    // pixels (0.71 and 7 % fewer with the views baked at 0, 30 and 60°).
+    // pixels (0.71 and 7 % fewer with the views baked at 0, 30 and 60°). Each pixel showing
+    // where its line of sight meets the view's depth map (`surface_uv`), not the view's
+    // pixel at the same place on the quad: overlaps 0.844, 0.729 and 0.784 at 0, 45 and 60°
+    // with the impostor 0.999 of full detail's pixels level, against 0.843, 0.719 and 0.711
+    // and 0.952 without.
     let text = r#"
         name = "aspen"
         seed = 3
@@ -944,7 +949,7 @@ fn an_impostor_keeps_the_outline_of_full_detail_seen_level_and_from_above() {
     full.lod.geometry = false;
     let mut far = spec.clone();
     far.lod.fraction = 100.0;
-    let cameras = [0.0f32, 60.0].map(|elevation| {
+    let cameras = [0.0f32, 45.0, 60.0].map(|elevation| {
         let (s, c) = elevation.to_radians().sin_cos();
         Camera {
             eye: [-120.0 * c, 0.0, 6.5 + 120.0 * s],
@@ -980,7 +985,7 @@ fn an_impostor_keeps_the_outline_of_full_detail_seen_level_and_from_above() {
                 .collect()
         })
         .collect();
-    for (i, elevation) in [0, 60].into_iter().enumerate() {
+    for (i, elevation) in [0, 45, 60].into_iter().enumerate() {
         let masks = [masks[0][i].as_slice(), masks[1][i].as_slice()];
         let count = |m: &[bool]| m.iter().filter(|&&m| m).count();
         let both = masks[0].iter().zip(masks[1]).filter(|(a, b)| **a && **b).count();
@@ -990,8 +995,8 @@ fn an_impostor_keeps_the_outline_of_full_detail_seen_level_and_from_above() {
         eprintln!("{elevation}°: full detail {nf} px, impostor {ni} px, overlap {overlap:.3}");
         assert!(nf > 3000, "the tree fills too little of the image: {nf} px");
         let size = ni as f64 / nf as f64;
-        assert!((size - 1.0).abs() < 0.15, "{elevation}°: impostor / full detail pixels {size:.3}");
-        assert!(overlap > 0.65, "{elevation}°: outlines overlap by {overlap:.3}");
+        assert!((size - 1.0).abs() < 0.1, "{elevation}°: impostor / full detail pixels {size:.3}");
+        assert!(overlap > 0.72, "{elevation}°: outlines overlap by {overlap:.3}");
     }
 }
 

@@ -1,9 +1,12 @@
 //! Far trees as impostors (`far.wgsl`): each species is rendered once, at start-up, from
 //! [`VIEWS`] directions around it at each of [`ROWS`] elevations ([`bake_level`], rest
 //! pose, orthographic, centred on the middle of its bounds) into an
-//! atlas of albedo and tree-space normals; a far tree is then one camera-facing quad (two
-//! triangles) showing the nearest view, lit per pixel like the near trees and swayed by its
-//! trunk-top joint. Seen from between two views, over the middle half of the step between
+//! atlas of albedo, tree-space normals and depth; a far tree is then one camera-facing quad
+//! (two triangles) showing the nearest view, lit per pixel like the near trees and swayed by
+//! its trunk-top joint. Each pixel finds the leaf it shows by following its line of sight
+//! into the view's depth map (`surface_uv` in `far.wgsl`), so a view baked up to 11.25° round
+//! or 15° above or below the line of sight still puts each clump of leaves where full detail
+//! shows it. Seen from between two views, over the middle half of the step between
 //! them, it shows both, cross-faded per pixel by a screen-space dither (`VIEW_BAND` in
 //! `far.wgsl`), so a tree does not jump from one view to the next as the camera goes round
 //! it or rises over it. The elevations matter to a camera over a forest: a tree 40° below
@@ -92,6 +95,9 @@ const FAR_EYE: f32 = 1.0e4;
 /// Formats of the bake targets: albedo (sRGB) and normals (linear).
 pub const BAKE_TARGETS: [wgpu::TextureFormat; 2] =
     [wgpu::TextureFormat::Rgba8UnormSrgb, wgpu::TextureFormat::Rgba8Unorm];
+/// Format of the views' depth maps: 256 steps across the tree's depth (about 9 cm for a
+/// 20 m tree), filtered like the albedo.
+const DEPTH_MAP: wgpu::TextureFormat = wgpu::TextureFormat::R8Unorm;
 
 /// The impostor pass.
 #[derive(Debug)]
@@ -141,6 +147,7 @@ impl FarPass {
             entries: &[
                 texture_entry(0),
                 texture_entry(1),
+                texture_entry(3),
                 wgpu::BindGroupLayoutEntry {
                     binding: 2,
                     visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
@@ -294,10 +301,19 @@ impl FarPass {
                     },
                 })
             };
+            // The depth is kept: it becomes the views' depth maps.
+            let depth = wgpu::RenderPassDepthStencilAttachment {
+                view: &dv,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            };
             let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("impostor bake"),
                 color_attachments: &[clear(&av), clear(&nv)],
-                depth_stencil_attachment: Some(crate::shared::depth_cleared(&dv)),
+                depth_stencil_attachment: Some(depth),
                 timestamp_writes: None,
                 occlusion_query_set: None,
                 multiview_mask: None,
@@ -316,11 +332,23 @@ impl FarPass {
                 }
             }
         }
-        let albedo = read_back(gpu, enc, &[&albedo_tex, &normal_tex], w, h)?;
-        let (albedo, normal) = (&albedo[0], &albedo[1]);
+        // Depth32Float reads back as four bytes a texel, as RGBA8 does.
+        let read = read_back(gpu, enc, &[&albedo_tex, &normal_tex, &depth_tex], w, h)?;
+        let (albedo, normal) = (&read[0], &read[1]);
+        // The bake's depth is linear along each view (orthographic): 0 … 1 across
+        // ±depth_range about the plane through the views' centre, nearest first.
+        let depth: Vec<u8> = read[2]
+            .chunks_exact(4)
+            .map(|b| {
+                let z = f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+                (z.clamp(0.0, 1.0) * 255.0).round() as u8
+            })
+            .collect();
         let (albedo_mips, normal_mips) = impostor_mips(albedo, normal, w, h, (VIEWS, ROWS));
+        let depth_mips = depth_mips(&depth, albedo, w, h);
         let av = upload_mips(gpu, &albedo_mips, w, h, BAKE_TARGETS[0], "impostor albedo");
         let nv = upload_mips(gpu, &normal_mips, w, h, BAKE_TARGETS[1], "impostor normals");
+        let dv = upload_mips(gpu, &depth_mips, w, h, DEPTH_MAP, "impostor depth");
         let sk = &model.tree.skeleton;
         let top = sk.trunk_top();
         let tip = sk.joints().get(top).map(|j| j.tip()).unwrap_or([0.0, 0.0, 1.0]);
@@ -334,7 +362,7 @@ impl FarPass {
             radius,
             height: z1 - z0,
             row_step: ROW_STEP_DEG.to_radians(),
-            pad0: 0,
+            depth_range,
             crown: crown_ellipsoid(&level.clusters),
         };
         let uniform =
@@ -352,6 +380,10 @@ impl FarPass {
                     resource: wgpu::BindingResource::TextureView(&nv),
                 },
                 wgpu::BindGroupEntry { binding: 2, resource: uniform.as_entire_binding() },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: wgpu::BindingResource::TextureView(&dv),
+                },
             ],
         });
         Ok(FarSpeciesGpu {
@@ -452,6 +484,52 @@ fn read_back(
         out.push(img);
     }
     Ok(out)
+}
+
+/// Mip chain of the views' depth map `depth` (one byte a texel, `w × h`), down to 4 texels
+/// a side as [`impostor_mips`]'s: the mean depth of the texels under each, weighted by the
+/// albedo's alpha as colour is (the depth of the leaves a coarse texel shows, not of the
+/// background between them); a texel over nothing takes the mean depth of the covered
+/// ones, so a line of sight followed into the map near a crown's edge stays in its range.
+pub fn depth_mips(depth: &[u8], albedo: &[u8], w: u32, h: u32) -> Vec<Vec<u8>> {
+    let n = (w * h) as usize;
+    let mut raw: Vec<f32> = albedo.chunks(4).take(n).map(|p| p[3] as f32).collect();
+    let covered: Vec<usize> = (0..n).filter(|&i| raw[i] >= 128.0).collect();
+    let mean = covered.iter().map(|&i| depth[i] as f64).sum::<f64>() / covered.len().max(1) as f64;
+    let fill = if covered.is_empty() { 128 } else { mean.round() as u8 };
+    let mut level: Vec<u8> =
+        (0..n).map(|i| if raw[i] >= 128.0 { depth[i] } else { fill }).collect();
+    let mut out = Vec::new();
+    let (mut cw, mut ch) = (w, h);
+    loop {
+        out.push(level.clone());
+        if cw <= 4 || ch <= 4 {
+            break;
+        }
+        let (nw, nh) = (cw / 2, ch / 2);
+        let mut next = vec![0u8; (nw * nh) as usize];
+        let mut next_raw = vec![0.0f32; (nw * nh) as usize];
+        for y in 0..nh {
+            for x in 0..nw {
+                let texels = [(0, 0), (1, 0), (0, 1), (1, 1)]
+                    .map(|(dx, dy)| ((2 * y + dy) * cw + 2 * x + dx) as usize);
+                let weight: f32 = texels.iter().map(|&t| raw[t]).sum();
+                let o = (y * nw + x) as usize;
+                let sum: f32 = if weight > 0.0 {
+                    texels.iter().map(|&t| raw[t] * level[t] as f32).sum::<f32>() / weight
+                } else {
+                    texels.iter().map(|&t| level[t] as f32).sum::<f32>() / 4.0
+                };
+                next[o] = sum.round() as u8;
+                next_raw[o] = weight / 4.0;
+            }
+        }
+        level = next;
+        raw = next_raw;
+        cw = nw;
+        ch = nh;
+    }
+    out
 }
 
 /// Mip chains of the baked albedo and normals (`w × h`, RGBA8), down to 4 texels a side.
@@ -633,6 +711,49 @@ mod tests {
             "extinction {extinction} for density {density}"
         );
         assert_eq!(crown_ellipsoid(&[]), [0.0; 4], "no leaves, no shade");
+    }
+
+    #[test]
+    fn a_coarse_depth_texel_holds_the_depth_of_the_leaves_under_it_not_of_the_background() {
+        // An 8 × 8 view: a leaf at depth 60 covering one texel of each 2 × 2 block in the
+        // left half, one at depth 200 in the top right quarter, nothing else (depth 255,
+        // the bake's cleared far plane). A plain mean would pull every coarse texel towards
+        // the far plane; weighted by coverage each holds its leaves' depth, and texels over
+        // nothing hold the covered texels' mean, inside the crown's range.
+        let (w, h) = (8u32, 8u32);
+        let mut albedo = vec![0u8; (w * h * 4) as usize];
+        let mut depth = vec![255u8; (w * h) as usize];
+        for y in 0..h {
+            for x in 0..w {
+                let i = (y * w + x) as usize;
+                let leaf = if x < 4 && x % 2 == 0 && y % 2 == 0 {
+                    60
+                } else if x >= 4 && y < 4 {
+                    200
+                } else {
+                    continue;
+                };
+                albedo[4 * i + 3] = 255;
+                depth[i] = leaf;
+            }
+        }
+        let mips = depth_mips(&depth, &albedo, w, h);
+        assert_eq!(mips.len(), 2, "8 × 8 and 4 × 4, as impostor_mips stops");
+        let covered = 8 + 16;
+        let mean = ((8 * 60 + 16 * 200) as f64 / covered as f64).round() as u8;
+        assert_eq!(mips[0][(7 * w + 7) as usize], mean, "background takes the covered mean");
+        assert_eq!(mips[0][0], 60);
+        let l1 = &mips[1];
+        for y in 0..4u32 {
+            for x in 0..4u32 {
+                let want = match (x < 2, y < 2) {
+                    (true, _) => 60,
+                    (false, true) => 200,
+                    (false, false) => mean,
+                };
+                assert_eq!(l1[(y * 4 + x) as usize], want, "level 1 texel ({x}, {y})");
+            }
+        }
     }
 
     #[test]
