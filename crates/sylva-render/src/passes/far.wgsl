@@ -128,15 +128,15 @@ fn cell_uv(p: vec3<f32>, axes: mat3x3<f32>) -> vec2<f32> {
 }
 
 // Where view (k, r) shows what the line of sight through the quad's point `at` (tree
-// space) meets, `look` its direction: the place in the view's cell. The point is projected
-// into the view (at `at` itself the place is that of the same point seen along the view,
+// space) meets, `look` its direction: the place in the view's cell, and how far along
+// `look` from `at` that is (m, tree space). The point is projected into the view (at `at` itself the place is that of the same point seen along the view,
 // which differs from `at`'s place on the quad as soon as the view and the line of sight
 // do), the depth the view holds there is read, and the point moved along the line of sight
 // to that depth (SURFACE_STEPS times). A view baked up to 11.25° round or 15° above the
 // line of sight then shows each clump of leaves where the tree has it, not shifted by its
 // depth in the crown times the angle between them (about a metre at the edge of a crown of
 // 4 m radius).
-fn surface_uv(at: vec3<f32>, look: vec3<f32>, k: u32, r: u32, gx: vec2<f32>, gy: vec2<f32>) -> vec2<f32> {
+fn surface_uv(at: vec3<f32>, look: vec3<f32>, k: u32, r: u32, gx: vec2<f32>, gy: vec2<f32>) -> vec3<f32> {
     let axes = view_axes(k, r);
     let p0 = at - vec3<f32>(0.0, 0.0, far.center);
     // The line of sight's advance along the view's axis per metre (the two are within
@@ -149,7 +149,7 @@ fn surface_uv(at: vec3<f32>, look: vec3<f32>, k: u32, r: u32, gx: vec2<f32>, gy:
         let surface = (2.0 * z - 1.0) * far.depth_range;
         t += (surface - dot(p, axes[2])) / along;
     }
-    return cell_uv(p0 + look * t, axes);
+    return vec3<f32>(cell_uv(p0 + look * t, axes), t);
 }
 
 // The next baked view's share of the cross-fade at `s` (in steps between baked views,
@@ -239,7 +239,8 @@ fn vs_main(@builtin(vertex_index) vi: u32, inst: InstanceIn, lean: LeanIn) -> Fa
         out.shadow_far = shadow_far(upright, globals.sun_dir);
     }
     out.crown_at = vec3<f32>(0.0, 0.0, far.center) + rotate_z(right * q.x + up * q.y, -yaw);
-    out.crown_look = rotate_z(vec3<f32>(d * cos(elevation), -sin(elevation)), -yaw);
+    // Its length carries the instance's scale (all sixteen locations are taken).
+    out.crown_look = rotate_z(vec3<f32>(d * cos(elevation), -sin(elevation)), -yaw) * inst.scale;
     out.uv = vec2<f32>(0.5 + q.x / far.extent, 0.5 - q.y / far.extent);
     out.views = vec2<u32>(k0, (k0 + 1u) % far.views);
     out.blend = band(s);
@@ -339,7 +340,9 @@ fn fs_main(in: FarOut) -> @location(0) vec4<f32> {
     let v = select((u - in.row_blend) / max(1.0 - in.row_blend, 1e-6), u / max(in.row_blend, 1e-6), upper);
     let r = select(in.rows.x, in.rows.y, upper);
     let k = select(in.views.x, in.views.y, v < in.blend);
-    let uv = view_uv(surface_uv(in.crown_at, in.crown_look, k, r, gx, gy), k, r);
+    let look = normalize(in.crown_look);
+    let hit = surface_uv(in.crown_at, look, k, r, gx, gy);
+    let uv = view_uv(hit.xy, k, r);
     let albedo = textureSampleGrad(far_albedo, linear_sampler, uv, gx, gy);
     let a = coverage(albedo.a, fwidth(albedo.a));
     if (a <= 0.0 || !dither_keeps(in.clip.xy, in.fade)) {
@@ -354,8 +357,14 @@ fn fs_main(in: FarOut) -> @location(0) vec4<f32> {
     let n = rotate_z(mix(n_tree, turn_leaves(n_tree, in.tilt), baked.a), in.yaw);
     // Leaf pixels (normal alpha 1) take the tree's colour variation, as near trees do.
     let tint = mix(vec3<f32>(1.0), in.tint, baked.a);
-    let sun = cascades_visibility(in.shadow_near, in.shadow_far, true)
-        * crown_light(in.crown_at, in.crown_look, rotate_z(globals.sun_dir, -in.yaw));
+    // The shadow is looked up at the height of the leaf the pixel shows, not of the quad's
+    // point in front of it or behind it (the quad leans back under a camera looking down):
+    // the shadow coordinates are affine in the world position.
+    let dz = look.z * hit.z * length(in.crown_look);
+    let near = in.shadow_near + globals.sun_view_proj[2] * dz;
+    let far_c = in.shadow_far + globals.sun_view_proj_far[2] * dz;
+    let sun = cascades_visibility(near, far_c, true)
+        * crown_light(in.crown_at, look, rotate_z(globals.sun_dir, -in.yaw));
     let lit = albedo.rgb * tint * (lighting(n, sun) + sun * baked.a * in.glow);
     return vec4<f32>(finish(mix_fog(overlay(lit, in.tag), in.fog)).rgb, a);
 }
