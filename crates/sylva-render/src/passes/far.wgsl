@@ -129,10 +129,11 @@ fn cell_uv(p: vec3<f32>, axes: mat3x3<f32>) -> vec2<f32> {
 
 // Where view (k, r) shows what the line of sight through the quad's point `at` (tree
 // space) meets, `look` its direction: the place in the view's cell, and how far along
-// `look` from `at` that is (m, tree space). The point is projected into the view (at `at` itself the place is that of the same point seen along the view,
-// which differs from `at`'s place on the quad as soon as the view and the line of sight
-// do), the depth the view holds there is read, and the point moved along the line of sight
-// to that depth (SURFACE_STEPS times). A view baked up to 11.25° round or 15° above the
+// `look` from `at` that is (m, tree space). The point is projected into the view (at `at`
+// itself the place is that of the same point seen along the view, which differs from
+// `at`'s place on the quad as soon as the view and the line of sight do), the depth the
+// view holds there is read, and the point moved along the line of sight to that depth
+// (SURFACE_STEPS times). A view baked up to 11.25° round or 15° above the
 // line of sight then shows each clump of leaves where the tree has it, not shifted by its
 // depth in the crown times the angle between them (about a metre at the edge of a crown of
 // 4 m radius).
