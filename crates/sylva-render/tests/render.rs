@@ -1098,13 +1098,13 @@ fn an_impostor_leans_downwind_by_its_crowns_lean() {
 fn a_stand_drawn_as_impostors_keeps_the_brightness_of_full_detail_under_shadows() {
     // The stand of 200 trees in calm air with the sun's shadows, seen from three sides at
     // 60, 120 and 240 m and from a fourth at 60 m (lit from the front, the side and
-    // partly against the light: the sun stands at azimuth -122°, 49° up). Full detail's crowns shade their own
-    // leaves in the shadow map; an impostor, lit on the plane through its trunk, does not
-    // see its own crown there and darkens its leaves as an ellipsoid of leaves would
-    // (`crown_light`). Measured (impostors / full detail, 256×192), without that shade
-    // 1.050 1.025 1.008 | 1.126 1.045 1.002 | 1.094 1.080 1.002 | 1.012 (off by 12.6 % at
-    // worst, 4.4 % on average), with it 0.988 0.986 0.994 | 1.063 1.008 0.991 | 1.049
-    // 1.043 0.992 | 0.961 (6.3 %, 2.5 %).
+    // partly against the light: the sun stands at azimuth -122°, 49° up). Full detail's
+    // crowns shade their own leaves in the shadow map; an impostor's leaf is not shadowed
+    // by its own caster and darkens as an ellipsoid of leaves would (`crown_light`).
+    // Measured (impostors / full detail, 256×192), without that shade 1.050 1.025 1.008 |
+    // 1.126 1.045 1.002 | 1.094 1.080 1.002 | 1.012 (off by 12.6 % at worst, 4.4 % on
+    // average, when half of each crown also lay in its own caster's shadow), with it
+    // 1.027 0.992 0.990 | 1.039 1.012 0.988 | 1.018 1.026 0.984 | 0.980 (3.9 %, 1.9 %).
     let (mut full, mut spec) = stand(200, "calm");
     full.lighting.shadows = true;
     spec.lighting.shadows = true;
@@ -1136,5 +1136,5 @@ fn a_stand_drawn_as_impostors_keeps_the_brightness_of_full_detail_under_shadows(
     eprintln!("impostors / full detail under shadows: {ratios:.3?}");
     let worst = ratios.iter().map(|r| (r - 1.0).abs()).fold(0.0, f64::max);
     let mean = ratios.iter().map(|r| (r - 1.0).abs()).sum::<f64>() / ratios.len() as f64;
-    assert!(worst < 0.075 && mean < 0.035, "off by {worst:.3} at worst, {mean:.3} on average");
+    assert!(worst < 0.055 && mean < 0.03, "off by {worst:.3} at worst, {mean:.3} on average");
 }

@@ -227,13 +227,12 @@ fn vs_main(@builtin(vertex_index) vi: u32, inst: InstanceIn, lean: LeanIn) -> Fa
     if (!SHADOW) {
         out.fog = fog_at(world);
         out.glow = translucency(world);
-        // Shadows are looked up on the upright plane through the trunk facing the camera,
-        // the point moved back to it horizontally: the quad leans back as the camera rises,
-        // and the leaning part would lie behind the upright quad the tree casts its shadow
-        // from, in its own shadow. The plane sways as the quad does (moved back by the
-        // quad's own offset, not to the resting trunk), so a crown leaning along the line
-        // of sight stays in its own shadow as its caster leans with it. Offset towards the
-        // sun against self-shadowing (the baked normals vary per pixel).
+        // The shadow coordinates are interpolated on the upright plane through the trunk
+        // facing the camera, the point moved back to it horizontally (the quad leans back
+        // as the camera rises); the fragment moves them to the leaf it shows. The plane
+        // sways as the quad does (moved back by the quad's own offset, not to the resting
+        // trunk). Offset towards the sun against self-shadowing (the baked normals vary
+        // per pixel).
         let across = vec3<f32>(d, 0.0);
         let upright = world - across * dot(offset, across);
         out.shadow_near = shadow_near(upright, globals.sun_dir);
@@ -292,15 +291,15 @@ fn crown_chord(p: vec3<f32>, d: vec3<f32>) -> vec2<f32> {
     return vec2<f32>(-b - r, -b + r) / a;
 }
 
-// The crown's shade on its own leaves, which the shadow map looked up on the plane
-// through the trunk does not see (the views are baked unshadowed): the leaf a texel shows
-// is taken to lie half a free path (0.5 / extinction) into the crown along the line of
-// sight `look` from where it enters the crown's ellipsoid (at most half-way through), and
-// the sunlight reaching it (towards `sun`, tree space) is dimmed by the leaves between it
-// and the ellipsoid's surface (Beer–Lambert). 1 where the line of sight misses the
-// ellipsoid, and without shadows (full detail then has none either). A stand of impostors
-// under shadows read up to 13 % brighter than full detail without it; with it, within
-// about 6 % from every side measured (render test).
+// The crown's shade on its own leaves, which the shadow map does not give (the views are
+// baked unshadowed, and a leaf behind the tree's own caster is moved up to it): the leaf a
+// texel shows is taken to lie half a free path (0.5 / extinction) into the crown along the
+// line of sight `look` from where it enters the crown's ellipsoid (at most half-way
+// through), and the sunlight reaching it (towards `sun`, tree space) is dimmed by the
+// leaves between it and the ellipsoid's surface (Beer–Lambert). 1 where the line of sight
+// misses the ellipsoid, and without shadows (full detail then has none either). A stand
+// of impostors under shadows read up to 13 % brighter than full detail without it; with
+// it, within 4 % from every side measured (render test).
 fn crown_light(at: vec3<f32>, look: vec3<f32>, sun: vec3<f32>) -> f32 {
     let extinction = far.crown.w;
     if (extinction <= 0.0 || globals.shadow_texel <= 0.0) {
@@ -358,12 +357,28 @@ fn fs_main(in: FarOut) -> @location(0) vec4<f32> {
     let n = rotate_z(mix(n_tree, turn_leaves(n_tree, in.tilt), baked.a), in.yaw);
     // Leaf pixels (normal alpha 1) take the tree's colour variation, as near trees do.
     let tint = mix(vec3<f32>(1.0), in.tint, baked.a);
-    // The shadow is looked up at the height of the leaf the pixel shows, not of the quad's
-    // point in front of it or behind it (the quad leans back under a camera looking down):
-    // the shadow coordinates are affine in the world position.
-    let dz = look.z * hit.z * length(in.crown_look);
-    let near = in.shadow_near + globals.sun_view_proj[2] * dz;
-    let far_c = in.shadow_far + globals.sun_view_proj_far[2] * dz;
+    // The shadow is looked up where the leaf the pixel shows is (the shadow coordinates are
+    // affine in the world position): `rel` is that leaf in tree space from the views'
+    // centre, `to_leaf` its offset in world metres from the point on the upright plane
+    // through the trunk the coordinates were interpolated at.
+    let size = length(in.crown_look);
+    let q = in.crown_at - vec3<f32>(0.0, 0.0, far.center);
+    let rel = q + look * hit.z;
+    let across = normalize(vec3<f32>(look.xy, 0.0));
+    var to_leaf = rotate_z(across * dot(q, across) + look * hit.z, in.yaw) * size;
+    // The tree casts its shadow from an upright quad through its trunk facing the sun's
+    // azimuth. A leaf behind that quad would lie in the shadow of the whole crown's side
+    // view, cut off along the trunk (seen from above, each crown showed a dark half with a
+    // vertical edge): it is moved along the sun's rays up to the quad (their horizontal
+    // part taken as at least a tenth, so the move is bounded), and the crown's shade on
+    // its own leaves is `crown_light`'s alone.
+    let sun_h = globals.sun_dir.xy;
+    if (dot(sun_h, sun_h) > 1e-8) {
+        let behind = -dot(rotate_z(vec3<f32>(rel.xy, 0.0), in.yaw) * size, vec3<f32>(normalize(sun_h), 0.0));
+        to_leaf += globals.sun_dir * (max(behind, 0.0) / max(length(sun_h), 0.1));
+    }
+    let near = in.shadow_near + globals.sun_view_proj * vec4<f32>(to_leaf, 0.0);
+    let far_c = in.shadow_far + globals.sun_view_proj_far * vec4<f32>(to_leaf, 0.0);
     let sun = cascades_visibility(near, far_c, true)
         * crown_light(in.crown_at, look, rotate_z(globals.sun_dir, -in.yaw));
     let lit = albedo.rgb * tint * (lighting(n, sun) + sun * baked.a * in.glow);
