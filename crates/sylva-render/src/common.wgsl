@@ -136,6 +136,22 @@ fn cascades_visibility(p: vec4<f32>, f: vec4<f32>, single: bool) -> f32 {
     return mix(cascade_lookup(p, 0.0, single), far, smoothstep(0.8, 1.0, max(abs(p.x), abs(p.y))));
 }
 
+// How much of the shadow map's shade reaches the point with cascade positions `p`, `f`
+// (as `cascades_visibility` weighs them): 1 inside either cascade, falling to 0 over the
+// far one's outer tenth and 0 beyond it, where nothing casts a shadow.
+fn cascades_reach(p: vec4<f32>, f: vec4<f32>) -> f32 {
+    if (globals.shadow_texel <= 0.0) {
+        return 0.0;
+    }
+    if (in_cascade(p)) {
+        return 1.0;
+    }
+    if (in_cascade(f)) {
+        return 1.0 - smoothstep(0.9, 1.0, max(abs(f.x), abs(f.y)));
+    }
+    return 0.0;
+}
+
 fn cascade_lookup(p: vec4<f32>, half: f32, single: bool) -> f32 {
     if (single) {
         let uv = vec2<f32>(0.25 + 0.25 * p.x + half, 0.5 - 0.5 * p.y);

@@ -56,14 +56,16 @@ pub const BAKE_FINEST: usize = 1;
 
 /// Sunlight's extinction in a crown per unit of leaf area density (m² of leaf per m³ of
 /// the crown's ellipsoid), for an impostor's shade on its own leaves (`crown_light` in
-/// far.wgsl). Leaves facing every way give 0.5 in a crown filled evenly; full detail's
-/// crowns are darker inside than that, their leaves on fewer, denser twigs than the
-/// ellipsoid's volume suggests and their wood casting shadow too. Matched against full
+/// far.wgsl) in the shadow map's near cascade (the far one takes half of it,
+/// `FAR_CASCADE_SHADE`). Leaves facing every way give 0.5 in a crown filled evenly; full
+/// detail's crowns are darker inside than that, their leaves on fewer, denser twigs than
+/// the ellipsoid's volume suggests and their wood casting shadow too. Matched against full
 /// detail's shadow map in a stand seen from several sides
 /// (`a_stand_drawn_as_impostors_keeps_the_brightness_of_full_detail_under_shadows`:
-/// impostors within 3.9 % of full detail's brightness at worst, 1.9 % on average; 0.5
-/// and 0.7 read 7.9 / 3.4 % and 5.6 / 2.2 %, 1.4 reads 2.8 / 1.5 %).
-pub const CROWN_EXTINCTION: f32 = 1.0;
+/// impostors within 5.8 % of full detail's brightness at worst, 2.3 % on average; 0.5
+/// reads 7.9 / 3.4 %, 1.0 reads 3.9 / 1.9 % but darkens scene C's impostors seen from
+/// outside the forest, FLIP 0.061 against 0.056).
+pub const CROWN_EXTINCTION: f32 = 0.7;
 
 /// The crown of leaf `clusters` as an ellipsoid about the trunk axis: centre height,
 /// horizontal and vertical radii (those of a uniformly filled ellipsoid with the clusters'
