@@ -133,7 +133,13 @@ fn cascades_visibility(p: vec4<f32>, f: vec4<f32>, single: bool) -> f32 {
     if (!in_cascade(p)) {
         return far;
     }
-    return mix(cascade_lookup(p, 0.0, single), far, smoothstep(0.8, 1.0, max(abs(p.x), abs(p.y))));
+    return mix(cascade_lookup(p, 0.0, single), far, far_share(p));
+}
+
+// The far cascade's share where the near one reaches (position `p` in it): 0 inside,
+// rising to 1 over the near one's outer fifth.
+fn far_share(p: vec4<f32>) -> f32 {
+    return smoothstep(0.8, 1.0, max(abs(p.x), abs(p.y)));
 }
 
 // How much of the shadow map's shade reaches the point with cascade positions `p`, `f`

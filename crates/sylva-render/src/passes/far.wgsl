@@ -392,7 +392,7 @@ fn fs_main(in: FarOut) -> @location(0) vec4<f32> {
     // of it in the far one (blended as `cascades_visibility` blends them), none beyond.
     var near_w = 0.0;
     if (in_cascade(near)) {
-        near_w = 1.0 - smoothstep(0.8, 1.0, max(abs(near.x), abs(near.y)));
+        near_w = 1.0 - far_share(near);
     }
     let share = mix(FAR_CASCADE_SHADE, 1.0, near_w);
     let own = mix(1.0, crown_light(in.crown_at, look, rotate_z(globals.sun_dir, -in.yaw), share), cascades_reach(near, far_c));
