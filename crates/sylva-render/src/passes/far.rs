@@ -353,7 +353,7 @@ impl FarPass {
             })
             .collect();
         let (albedo_mips, normal_mips) = impostor_mips(albedo, normal, w, h, (VIEWS, ROWS));
-        let depth_mips = depth_mips(&depth, albedo, w, h);
+        let depth_mips = depth_mips(&depth, albedo, w, h, VIEW_SIZE);
         let av = upload_mips(gpu, &albedo_mips, w, h, BAKE_TARGETS[0], "impostor albedo");
         let nv = upload_mips(gpu, &normal_mips, w, h, BAKE_TARGETS[1], "impostor normals");
         let dv = upload_mips(gpu, &depth_mips, w, h, DEPTH_MAP, "impostor depth");
@@ -494,19 +494,74 @@ fn read_back(
     Ok(out)
 }
 
-/// Mip chain of the views' depth map `depth` (one byte a texel, `w × h`), down to 4 texels
-/// a side as [`impostor_mips`]'s: the mean depth of the texels under each, weighted by the
-/// albedo's alpha as colour is (the depth of the leaves a coarse texel shows, not of the
-/// background between them); a texel over nothing takes the mean depth of the covered
-/// ones, so a line of sight followed into the map near a crown's edge stays in its range.
-pub fn depth_mips(depth: &[u8], albedo: &[u8], w: u32, h: u32) -> Vec<Vec<u8>> {
+/// Mip chain of the views' depth map `depth` (one byte a texel, `w × h`, views `cell`
+/// texels a side), down to 4 texels a side as [`impostor_mips`]'s: the mean depth of the
+/// texels under each, weighted by the albedo's alpha as colour is (the depth of the leaves
+/// a coarse texel shows, not of the background between them).
+///
+/// A texel over nothing takes the depth of the covered texels around it (pulled up a
+/// pyramid of coverage-weighted means within its view, and pushed back down to the
+/// texels without any): a line of sight followed into the map from a gap in the crown, or
+/// from beside the trunk, reads the depth of what is next to it, and its one step lands on
+/// it. With one depth for every such texel (the covered texels' mean, the views' middle
+/// plane) a trunk seen from above, whose foot lies metres behind that plane, was shown
+/// twice where the views baked from above met its line of sight a little aside. A view
+/// with nothing in it takes the covered texels' mean.
+pub fn depth_mips(depth: &[u8], albedo: &[u8], w: u32, h: u32, cell: u32) -> Vec<Vec<u8>> {
     let n = (w * h) as usize;
     let mut raw: Vec<f32> = albedo.chunks(4).take(n).map(|p| p[3] as f32).collect();
     let covered: Vec<usize> = (0..n).filter(|&i| raw[i] >= 128.0).collect();
     let mean = covered.iter().map(|&i| depth[i] as f64).sum::<f64>() / covered.len().max(1) as f64;
-    let fill = if covered.is_empty() { 128 } else { mean.round() as u8 };
-    let mut level: Vec<u8> =
-        (0..n).map(|i| if raw[i] >= 128.0 { depth[i] } else { fill }).collect();
+    let fill = if covered.is_empty() { 128.0 } else { mean as f32 };
+    // Pull: (depth, weight) of the covered texels under each texel, level by level, while a
+    // texel stays within one view.
+    let mut pull: Vec<(Vec<f32>, Vec<f32>, u32)> = vec![(
+        (0..n).map(|i| if raw[i] >= 128.0 { depth[i] as f32 } else { 0.0 }).collect(),
+        (0..n).map(|i| if raw[i] >= 128.0 { 1.0 } else { 0.0 }).collect(),
+        w,
+    )];
+    let (mut cw, mut ch, mut side) = (w, h, 1u32);
+    while 2 * side <= cell && cw % 2 == 0 && ch % 2 == 0 && cw > 1 && ch > 1 {
+        let (nw, nh) = (cw / 2, ch / 2);
+        let (d, wt, _) = pull.last().expect("level 0 is there");
+        let mut nd = vec![0.0f32; (nw * nh) as usize];
+        let mut nwt = vec![0.0f32; (nw * nh) as usize];
+        for y in 0..nh {
+            for x in 0..nw {
+                let o = (y * nw + x) as usize;
+                for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                    let t = ((2 * y + dy) * cw + 2 * x + dx) as usize;
+                    nd[o] += d[t] * wt[t];
+                    nwt[o] += wt[t];
+                }
+                if nwt[o] > 0.0 {
+                    nd[o] /= nwt[o];
+                }
+            }
+        }
+        pull.push((nd, nwt, nw));
+        (cw, ch, side) = (nw, nh, 2 * side);
+    }
+    // Push: from the coarsest level down, a texel without coverage takes its parent's.
+    let mut parent: Option<(Vec<f32>, u32)> = None;
+    for (d, wt, lw) in pull.into_iter().rev() {
+        let mut d = d;
+        for (i, v) in d.iter_mut().enumerate() {
+            if wt[i] > 0.0 {
+                continue;
+            }
+            *v = match &parent {
+                Some((p, pw)) => {
+                    let (x, y) = (i as u32 % lw, i as u32 / lw);
+                    p[((y / 2) * pw + x / 2) as usize]
+                }
+                None => fill,
+            };
+        }
+        parent = Some((d, lw));
+    }
+    let (filled, _) = parent.expect("level 0 is there");
+    let mut level: Vec<u8> = filled.iter().map(|v| v.round().clamp(0.0, 255.0) as u8).collect();
     let mut out = Vec::new();
     let (mut cw, mut ch) = (w, h);
     loop {
@@ -726,8 +781,9 @@ mod tests {
         // An 8 × 8 view: a leaf at depth 60 covering one texel of each 2 × 2 block in the
         // left half, one at depth 200 in the top right quarter, nothing else (depth 255,
         // the bake's cleared far plane). A plain mean would pull every coarse texel towards
-        // the far plane; weighted by coverage each holds its leaves' depth, and texels over
-        // nothing hold the covered texels' mean, inside the crown's range.
+        // the far plane; weighted by coverage each holds its leaves' depth. Texels over
+        // nothing hold the depth of the leaves next to them (the empty quarter, next to
+        // nothing within its 4 × 4 block, the covered texels' mean).
         let (w, h) = (8u32, 8u32);
         let mut albedo = vec![0u8; (w * h * 4) as usize];
         let mut depth = vec![255u8; (w * h) as usize];
@@ -745,12 +801,14 @@ mod tests {
                 depth[i] = leaf;
             }
         }
-        let mips = depth_mips(&depth, &albedo, w, h);
+        let mips = depth_mips(&depth, &albedo, w, h, 8);
         assert_eq!(mips.len(), 2, "8 × 8 and 4 × 4, as impostor_mips stops");
         let covered = 8 + 16;
         let mean = ((8 * 60 + 16 * 200) as f64 / covered as f64).round() as u8;
-        assert_eq!(mips[0][(7 * w + 7) as usize], mean, "background takes the covered mean");
+        assert_eq!(mips[0][(7 * w + 7) as usize], mean, "an empty quarter takes the covered mean");
         assert_eq!(mips[0][0], 60);
+        assert_eq!(mips[0][(w + 1) as usize], 60, "a gap between the near leaves takes theirs");
+        assert_eq!(mips[0][(5 * w + 3) as usize], 60, "and lower down");
         let l1 = &mips[1];
         for y in 0..4u32 {
             for x in 0..4u32 {
@@ -762,6 +820,44 @@ mod tests {
                 assert_eq!(l1[(y * 4 + x) as usize], want, "level 1 texel ({x}, {y})");
             }
         }
+    }
+
+    #[test]
+    fn a_texel_over_nothing_takes_the_depth_of_what_is_beside_it_in_its_own_view() {
+        // Two 16 × 16 views side by side. The left one holds a vertical trunk two texels wide
+        // at depth 220 (a foot seen from above, behind the views' middle) and a leaf at
+        // depth 20 in its top left corner; the right one a single leaf at depth 100. Beside
+        // the trunk the map must read the trunk's depth, so that a line of sight followed
+        // into it from just beside the trunk lands on the trunk and not a view's width
+        // away; the right view's empty texels must read its own leaf's depth, not the left
+        // view's.
+        let (w, h, cell) = (32u32, 16u32, 16u32);
+        let mut albedo = vec![0u8; (w * h * 4) as usize];
+        let mut depth = vec![255u8; (w * h) as usize];
+        let mut put = |x: u32, y: u32, d: u8| {
+            let i = (y * w + x) as usize;
+            albedo[4 * i + 3] = 255;
+            depth[i] = d;
+        };
+        for y in 8..16 {
+            put(7, y, 220);
+            put(8, y, 220);
+        }
+        put(0, 0, 20);
+        put(24, 4, 100);
+        let mips = depth_mips(&depth, &albedo, w, h, cell);
+        let at = |x: u32, y: u32| mips[0][(y * w + x) as usize];
+        for y in 8..16 {
+            for x in [5, 6, 9, 10] {
+                assert_eq!(at(x, y), 220, "texel ({x}, {y}) beside the trunk");
+            }
+        }
+        assert_eq!(at(1, 1), 20, "beside the corner leaf");
+        for (x, y) in [(16, 0), (31, 15), (20, 10)] {
+            assert_eq!(at(x, y), 100, "texel ({x}, {y}) of the right view");
+        }
+        // The covered texels keep their own depth.
+        assert_eq!((at(7, 12), at(0, 0), at(24, 4)), (220, 20, 100));
     }
 
     #[test]
