@@ -62,11 +62,16 @@ pub const BAKE_FINEST: usize = 1;
 /// the ellipsoid's volume suggests and their wood casting shadow too. Matched against full
 /// detail's shadow map in a stand seen from several sides
 /// (`a_stand_drawn_as_impostors_keeps_the_brightness_of_full_detail_under_shadows`:
-/// impostors within 6.1 % of full detail's brightness at worst, 2.1 % on average; 0.7
-/// reads 6.5 / 2.2 %, 0.8 reads 5.6 / 2.0 %). Before each impostor pixel followed its own
-/// line of sight 0.7 read 5.8 / 2.3 %, 0.5 7.9 / 3.4 %, and 1.0 3.9 / 1.9 % but darkened
+/// impostors within 3.3 % of full detail's brightness at worst, 1.4 % on average, with
+/// the baked mean normals lengthened half way to unit length in far.wgsl, which
+/// brightens the crowns by a few percent). With the mean normals as they were, 0.6
+/// read 2.9 / 1.4 % (0.55 3.6 / 1.4 %, 0.65 2.5 / 1.4 %, 0.75 3.2 / 1.4 %) and scene C's
+/// error against full detail FLIP 0.081 in motion and 0.082 at rest, against 0.082 and
+/// 0.085 at 0.75. Before the depth map's empty texels held the depth beside them
+/// (`depth_mips`) 0.75 read 6.1 / 2.1 % and 0.7 6.5 / 2.2 %; before each impostor pixel
+/// followed its own line of sight 0.5 read 7.9 / 3.4 %, and 1.0 3.9 / 1.9 % but darkened
 /// scene C's impostors seen from outside the forest (FLIP 0.061 against 0.056).
-pub const CROWN_EXTINCTION: f32 = 0.75;
+pub const CROWN_EXTINCTION: f32 = 0.9;
 
 /// The crown of leaf `clusters` as an ellipsoid about the trunk axis: centre height,
 /// horizontal and vertical radii (those of a uniformly filled ellipsoid with the clusters'
