@@ -507,7 +507,7 @@ fn read_back(
 /// A texel over nothing takes the depth of the covered texels around it (pulled up a
 /// pyramid of coverage-weighted means within its view, and pushed back down to the
 /// texels without any): a line of sight followed into the map from a gap in the crown, or
-/// from beside the trunk, reads the depth of what is next to it, and its one step lands on
+/// from beside the trunk, reads the depth of what is next to it, and its steps land on
 /// it. With one depth for every such texel (the covered texels' mean, the views' middle
 /// plane) a trunk seen from above, whose foot lies metres behind that plane, was shown
 /// twice where the views baked from above met its line of sight a little aside. A view
@@ -549,8 +549,7 @@ pub fn depth_mips(depth: &[u8], albedo: &[u8], w: u32, h: u32, cell: u32) -> Vec
     }
     // Push: from the coarsest level down, a texel without coverage takes its parent's.
     let mut parent: Option<(Vec<f32>, u32)> = None;
-    for (d, wt, lw) in pull.into_iter().rev() {
-        let mut d = d;
+    for (mut d, wt, lw) in pull.into_iter().rev() {
         for (i, v) in d.iter_mut().enumerate() {
             if wt[i] > 0.0 {
                 continue;
