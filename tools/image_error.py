@@ -1,13 +1,16 @@
 #!/usr/bin/env python3
 """Where the image error of two frames sits: by bands of rows, and by scale.
 
-Usage: tools/image_error.py REFERENCE.png TEST.png [BANDS]
+Usage: tools/image_error.py REFERENCE.png TEST.png [BANDS] [--crop X0,Y0,X1,Y1]
 
 Prints mean FLIP (NVIDIA's LDR-FLIP through the `flip-evaluator` package) over the
 whole frame, then per band of rows (FLIP, mean luma of each image, share of the total
 error), over sky and non-sky pixels, and at 2x, 4x and 8x box-averaged resolution (the
 frames seen from twice, four and eight times as far, or on a display that many times
-smaller). Needs `pip install flip-evaluator pillow numpy`.
+smaller), and the fine contrast of each: the standard deviation of luma within 4x4
+blocks, averaged (lower in the test when it is blurred, higher when it is grainier).
+`--crop` compares only the pixels from (X0, Y0) up to (X1, Y1), e.g. a stand of trees
+without the ground around it. Needs `pip install flip-evaluator pillow numpy`.
 """
 import sys
 
@@ -32,18 +35,50 @@ def box(im, k):
 
 
 def flip(ref, test):
-    err, mean, _ = flip_evaluator.evaluate(ref, test, "LDR")
+    # The error itself, not the magma colour map the package applies by default.
+    err, mean, _ = flip_evaluator.evaluate(ref, test, "LDR", applyMagma=False)
     err = err if err.ndim == 2 else err[..., 0]
     return err, float(mean)
 
 
+def fine_contrast(lum):
+    h, w = lum.shape[0] // 4 * 4, lum.shape[1] // 4 * 4
+    return float(lum[:h, :w].reshape(h // 4, 4, w // 4, 4).std(axis=(1, 3)).mean())
+
+
+def crop_box(text, shape):
+    try:
+        x0, y0, x1, y1 = (int(v) for v in text.split(","))
+    except ValueError:
+        sys.exit(f"--crop {text!r}: expected four integers X0,Y0,X1,Y1")
+    if not (0 <= x0 < x1 <= shape[1] and 0 <= y0 < y1 <= shape[0]):
+        sys.exit(f"--crop {text!r}: outside the {shape[1]}x{shape[0]} frame or empty")
+    return (slice(y0, y1), slice(x0, x1))
+
+
 def main():
-    if len(sys.argv) < 3:
+    args = sys.argv[1:]
+    crop = None
+    if "--crop" in args:
+        i = args.index("--crop")
+        if i + 1 >= len(args):
+            sys.exit("--crop needs X0,Y0,X1,Y1")
+        crop = args[i + 1]
+        del args[i : i + 2]
+    if len(args) < 2:
         sys.exit(__doc__)
-    ref, test = load(sys.argv[1]), load(sys.argv[2])
+    ref, test = load(args[0]), load(args[1])
     if ref.shape != test.shape:
         sys.exit(f"the frames differ in size: {ref.shape[:2]} and {test.shape[:2]}")
-    bands = int(sys.argv[3]) if len(sys.argv) > 3 else 8
+    if crop is not None:
+        region = crop_box(crop, ref.shape)
+        ref, test = ref[region], test[region]
+    try:
+        bands = int(args[2]) if len(args) > 2 else 8
+    except ValueError:
+        sys.exit(f"BANDS {args[2]!r}: expected a whole number of row bands")
+    if not 1 <= bands <= ref.shape[0]:
+        sys.exit(f"BANDS {bands}: between 1 and the frame's {ref.shape[0]} rows")
     err, mean = flip(ref, test)
     print(f"mean FLIP {mean:.3f}")
     height = err.shape[0]
@@ -64,6 +99,7 @@ def main():
             f"elsewhere FLIP {err[~sky].mean():.3f}, "
             f"luma {lr[~sky].mean():.3f} -> {lt[~sky].mean():.3f}"
         )
+    print(f"fine contrast (luma std in 4x4 blocks): {fine_contrast(lr):.4f} -> {fine_contrast(lt):.4f}")
     for k in (2, 4, 8):
         _, m = flip(box(ref, k), box(test, k))
         print(f"{k}x box-averaged: FLIP {m:.3f}")

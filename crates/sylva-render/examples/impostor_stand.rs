@@ -5,12 +5,14 @@
 //! detail from a quarter pixel aside (`aside{i}.png`, the sampling floor any comparison of
 //! foliage has). Compare with `tools/image_error.py OUT/full2.png OUT/impostor2.png`.
 //!
-//! `cargo run --release -p sylva-render --example impostor_stand -- OUT [shadows: 1|0] [spacing m] [elevation °]`
+//! `cargo run --release -p sylva-render --example impostor_stand -- OUT [shadows: 1|0] [spacing m] [elevation °] [distance factor]`
 //! (defaults: out/impostor-stand, shadows on, 7 m, the cameras about 8° above the stand's
 //! centre; a wider spacing moves the cameras out and narrows their view in proportion, so
 //! the crowns keep their size but stand apart; an elevation puts the cameras that many
 //! degrees above the horizon seen from the stand's centre, at the same distances, as a
-//! camera over a forest looks down on its nearer impostors).
+//! camera over a forest looks down on its nearer impostors; a distance factor moves the
+//! cameras that many times farther, the view kept, so the crowns shrink as a forest's
+//! middle distance shows them).
 
 use std::path::Path;
 
@@ -42,6 +44,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Some(s) => Some(s.parse().map_err(|e| format!("elevation {s:?}: {e}"))?),
         None => None,
     };
+    // The three distances times this, the field of view kept: smaller crowns.
+    let farther: f32 = match args.get(5) {
+        Some(s) => s.parse().map_err(|e| format!("distance factor {s:?}: {e}"))?,
+        None => 1.0,
+    };
     std::fs::create_dir_all(&out)?;
     let mut spec = SceneSpec::builtin("B")?;
     spec.trees = 120;
@@ -58,7 +65,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let cameras: Vec<Camera> = [70.0f32, 110.0, 170.0]
         .iter()
         .map(|&d| {
-            let d = d * k;
+            let d = d * k * farther;
             let eye = match elevation {
                 // Along the same horizontal bearing, `d` from the target, `e` above it.
                 Some(e) => {
