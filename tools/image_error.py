@@ -51,8 +51,8 @@ def crop_box(text, shape):
         x0, y0, x1, y1 = (int(v) for v in text.split(","))
     except ValueError:
         sys.exit(f"--crop {text!r}: expected four integers X0,Y0,X1,Y1")
-    if not (0 <= x0 < x1 <= shape[1] and 0 <= y0 < y1 <= shape[0]):
-        sys.exit(f"--crop {text!r}: outside the {shape[1]}x{shape[0]} frame or empty")
+    if not (0 <= x0 and x0 + 16 <= x1 <= shape[1] and 0 <= y0 and y0 + 16 <= y1 <= shape[0]):
+        sys.exit(f"--crop {text!r}: not a region of at least 16x16 inside the {shape[1]}x{shape[0]} frame")
     return (slice(y0, y1), slice(x0, x1))
 
 

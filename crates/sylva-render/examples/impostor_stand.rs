@@ -49,6 +49,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Some(s) => s.parse().map_err(|e| format!("distance factor {s:?}: {e}"))?,
         None => 1.0,
     };
+    if !(farther.is_finite() && farther > 0.0) {
+        return Err(format!("distance factor {farther}: must be a positive number").into());
+    }
     std::fs::create_dir_all(&out)?;
     let mut spec = SceneSpec::builtin("B")?;
     spec.trees = 120;
