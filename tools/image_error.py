@@ -80,7 +80,7 @@ def main():
     if not 1 <= bands <= ref.shape[0]:
         sys.exit(f"BANDS {bands}: between 1 and the frame's {ref.shape[0]} rows")
     err, mean = flip(ref, test)
-    print(f"mean FLIP {mean:.3f}")
+    print(f"mean FLIP {mean:.4f}")
     height = err.shape[0]
     lr, lt = luma(ref), luma(test)
     total = max(err.sum(), 1e-12)
@@ -97,12 +97,13 @@ def main():
         print(
             f"sky {sky.mean():.2f} of the frame: FLIP {err[sky].mean():.3f}; "
             f"elsewhere FLIP {err[~sky].mean():.3f}, "
-            f"luma {lr[~sky].mean():.3f} -> {lt[~sky].mean():.3f}"
+            f"luma {lr[~sky].mean():.3f} -> {lt[~sky].mean():.3f} "
+            f"({100 * (lt[~sky].mean() / max(lr[~sky].mean(), 1e-6) - 1):+.1f} %)"
         )
     print(f"fine contrast (luma std in 4x4 blocks): {fine_contrast(lr):.4f} -> {fine_contrast(lt):.4f}")
     for k in (2, 4, 8):
         _, m = flip(box(ref, k), box(test, k))
-        print(f"{k}x box-averaged: FLIP {m:.3f}")
+        print(f"{k}x box-averaged: FLIP {m:.4f}")
 
 
 if __name__ == "__main__":

@@ -1106,7 +1106,9 @@ fn a_stand_drawn_as_impostors_keeps_the_brightness_of_full_detail_under_shadows(
     // Measured (impostors / full detail, 256×192), without that shade 1.050 1.025 1.008 |
     // 1.126 1.045 1.002 | 1.094 1.080 1.002 | 1.012 (off by 12.6 % at worst, 4.4 % on
     // average, when half of each crown also lay in its own caster's shadow), with it
-    // 1.017 0.998 0.992 | 1.061 1.016 0.991 | 1.033 1.033 0.988 | 0.979 (6.1 %, 2.1 %).
+    // (its mean over the leaves' depths, light reaching as deep as the shadow map's bias)
+    // 1.023 0.994 0.997 | 1.002 0.993 0.991 | 1.004 0.988 0.986 | 0.984 (2.3 %, 0.96 %;
+    // at one depth, half a free path, without the bias: 3.3 %, 1.24 %).
     let (mut full, mut spec) = stand(200, "calm");
     full.lighting.shadows = true;
     spec.lighting.shadows = true;
@@ -1138,5 +1140,5 @@ fn a_stand_drawn_as_impostors_keeps_the_brightness_of_full_detail_under_shadows(
     eprintln!("impostors / full detail under shadows: {ratios:.3?}");
     let worst = ratios.iter().map(|r| (r - 1.0).abs()).fold(0.0, f64::max);
     let mean = ratios.iter().map(|r| (r - 1.0).abs()).sum::<f64>() / ratios.len() as f64;
-    assert!(worst < 0.065 && mean < 0.03, "off by {worst:.3} at worst, {mean:.3} on average");
+    assert!(worst < 0.045 && mean < 0.02, "off by {worst:.3} at worst, {mean:.3} on average");
 }

@@ -56,22 +56,18 @@ pub const BAKE_FINEST: usize = 1;
 
 /// Sunlight's extinction in a crown per unit of leaf area density (m² of leaf per m³ of
 /// the crown's ellipsoid), for an impostor's shade on its own leaves (`crown_light` in
-/// far.wgsl) in the shadow map's near cascade (the far one takes half of it,
-/// `FAR_CASCADE_SHADE`). Leaves facing every way give 0.5 in a crown filled evenly; full
-/// detail's crowns are darker inside than that, their leaves on fewer, denser twigs than
-/// the ellipsoid's volume suggests and their wood casting shadow too. Matched against full
-/// detail's shadow map in a stand seen from several sides
-/// (`a_stand_drawn_as_impostors_keeps_the_brightness_of_full_detail_under_shadows`:
-/// impostors within 3.3 % of full detail's brightness at worst, 1.4 % on average, with
-/// the baked mean normals lengthened half way to unit length in far.wgsl, which
-/// brightens the crowns by a few percent). With the mean normals as they were, 0.6
-/// read 2.9 / 1.4 % (0.55 3.6 / 1.4 %, 0.65 2.5 / 1.4 %, 0.75 3.2 / 1.4 %) and scene C's
-/// error against full detail FLIP 0.081 in motion and 0.082 at rest, against 0.082 and
-/// 0.085 at 0.75. Before the depth map's empty texels held the depth beside them
-/// (`depth_mips`) 0.75 read 6.1 / 2.1 % and 0.7 6.5 / 2.2 %; before each impostor pixel
-/// followed its own line of sight 0.5 read 7.9 / 3.4 %, and 1.0 3.9 / 1.9 % but darkened
-/// scene C's impostors seen from outside the forest (FLIP 0.061 against 0.056).
-pub const CROWN_EXTINCTION: f32 = 0.9;
+/// far.wgsl, where sunlight reaches as deep into the crown unshaded as the shadow map's
+/// depth bias lets it into full detail's, `SHADOW_BIAS_TEXELS`). Leaves facing every way give 0.5
+/// in a crown filled evenly; full detail's crowns are darker inside than that, their leaves
+/// on fewer, denser twigs than the ellipsoid's volume suggests and their wood casting
+/// shadow too. Matched against full detail at rest in scenes B, C and D (mean FLIP /
+/// brightness of the canopy: 1.2 gives 0.0273 / -0.02 %, 0.0747 / -0.11 %, 0.0691 /
+/// -0.25 %; 1.5 gives 0.0273 / -0.05 %, 0.0749 / -0.17 %, 0.0692 / -0.27 %) and in a stand
+/// seen from several sides
+/// (`a_stand_drawn_as_impostors_keeps_the_brightness_of_full_detail_under_shadows`: with
+/// 1.2 off by 3.4 % at worst, 1.05 % on average; with 1.5 by 2.3 % and 0.96 %).
+/// docs/benchmarks.md, "A crown's shade as full detail's shadow map gives it".
+pub const CROWN_EXTINCTION: f32 = 1.5;
 
 /// The crown of leaf `clusters` as an ellipsoid about the trunk axis: centre height,
 /// horizontal and vertical radii (those of a uniformly filled ellipsoid with the clusters'

@@ -297,16 +297,21 @@ fn crown_chord(p: vec3<f32>, d: vec3<f32>) -> vec2<f32> {
 }
 
 // The crown's shade on its own leaves, which the shadow map does not give (the views are
-// baked unshadowed, and a leaf behind the tree's own caster is moved up to it): the leaf a
-// texel shows is taken to lie half a free path (0.5 / extinction) into the crown along the
-// line of sight `look` from where it enters the crown's ellipsoid (at most half-way
-// through), and the sunlight reaching it (towards `sun`, tree space) is dimmed by the
-// leaves between it and the ellipsoid's surface (Beer–Lambert). 1 where the line of sight
-// misses the ellipsoid, and without shadows (full detail then has none either). A stand
-// of impostors under shadows read up to 13 % brighter than full detail without it; with
-// it, within 6 % from every side measured (render test).
-fn crown_light(at: vec3<f32>, look: vec3<f32>, sun: vec3<f32>, share: f32) -> f32 {
-    let extinction = far.crown.w * share;
+// baked unshadowed, and a leaf behind the tree's own caster is moved up to it): the mean
+// sunlight on the leaves a texel may show. Along the line of sight `look` the first leaf
+// met lies at an exponentially distributed depth (mean one free path, 1 / extinction) from
+// where the line enters the crown's ellipsoid, cut off where it leaves it; the sunlight
+// reaching a leaf (towards `sun`, tree space) is dimmed by the leaves between it and the
+// ellipsoid's surface (Beer-Lambert), but for the first `lit` of that path: the shadow
+// map's depth bias (`SHADOW_BIAS_TEXELS`, here in tree units) lets full detail's leaves
+// that near the crown's sunlit surface see the sun. The mean is taken at the depths of the
+// distribution's first and third quartiles. 1 where the line of sight misses the
+// ellipsoid, and without shadows (full detail then has none either). At one depth (half a
+// free path, no bias) scenes C and D at rest read 2-3 % darker than full detail and FLIP
+// 0.078 and 0.075 against it, now within 0.3 % and 0.075 and 0.069 (docs/benchmarks.md,
+// "A crown's shade as full detail's shadow map gives it").
+fn crown_light(at: vec3<f32>, look: vec3<f32>, sun: vec3<f32>, lit: f32) -> f32 {
+    let extinction = far.crown.w;
     if (extinction <= 0.0 || globals.shadow_texel <= 0.0) {
         return 1.0;
     }
@@ -314,18 +319,33 @@ fn crown_light(at: vec3<f32>, look: vec3<f32>, sun: vec3<f32>, share: f32) -> f3
     if (seen.x >= seen.y) {
         return 1.0;
     }
-    let leaf = at + look * (seen.x + min(0.5 / extinction, 0.5 * (seen.y - seen.x)));
-    let to_sun = max(crown_chord(leaf, sun).y, 0.0);
-    return exp(-extinction * to_sun);
+    // The share of lines of sight a leaf inside the crown stops.
+    let met = 1.0 - exp(-extinction * (seen.y - seen.x));
+    var sum = 0.0;
+    for (var i = 0u; i < 2u; i++) {
+        let depth = -log(1.0 - (0.25 + 0.5 * f32(i)) * met) / extinction;
+        let leaf = at + look * (seen.x + depth);
+        let to_sun = max(crown_chord(leaf, sun).y - lit, 0.0);
+        sum += exp(-extinction * to_sun);
+    }
+    return 0.5 * sum;
 }
 
-// The crown's own shade in the far cascade against the near one's. Full detail's crowns
-// shade their own leaves less in the far cascade, whose texels (about a metre for a
-// camera looking 200 m or more ahead) blur a crown over a few of them. Scene C seen from
-// outside the forest (`sylva render --scene C --seconds 0.08`), FLIP against full detail:
-// 0.056 with half the near cascade's extinction of 0.7, 0.060 with all of it (and 0.053
-// with 0.35 in both, which leaves near impostors up to 10 % too bright).
-const FAR_CASCADE_SHADE: f32 = 0.5;
+// The shadow pass's depth bias along the sun's rays, in texels of the map: its slope
+// factor (`DepthBiasState::slope_scale` in shared.rs), the depth a tilted leaf card spans
+// across one texel counted twice. Sunlight reaches about that far into a full-detail
+// crown before its own leaves shade it: centimetres in a close view's near cascade, a
+// metre or more in a far view's far cascade. So the crown's shade on an impostor's leaves
+// follows the shadow map's resolution (`crown_light`).
+const SHADOW_BIAS_TEXELS: f32 = 2.0;
+
+// The side of a texel of the shadow map's cascade with clip-space matrix `m`, m: the
+// cascade spans 2 in clip space across its 1 / shadow_texel texels, and the matrix's first
+// row scales world metres into it.
+fn cascade_texel(m: mat4x4<f32>) -> f32 {
+    let row = vec3<f32>(m[0].x, m[1].x, m[2].x);
+    return 2.0 * globals.shadow_texel / max(length(row), 1e-9);
+}
 
 // Into the shadow map: where the view nearest the sun's azimuth shows the tree.
 @fragment
@@ -407,14 +427,15 @@ fn fs_main(in: FarOut) -> @location(0) vec4<f32> {
     let near = in.shadow_near + globals.sun_view_proj * vec4<f32>(to_leaf, 0.0);
     let far_c = in.shadow_far + globals.sun_view_proj_far * vec4<f32>(to_leaf, 0.0);
     // The crown's shade on its own leaves stands for what full detail's shadow map gives
-    // it, so it follows the map: its full extinction in the near cascade, FAR_CASCADE_SHADE
-    // of it in the far one (blended as `cascades_visibility` blends them), none beyond.
+    // it, so it follows the map: light reaches as deep as the bias of the cascade the point
+    // reads (the two blended as `cascades_visibility` blends them), none of it beyond.
     var near_w = 0.0;
     if (in_cascade(near)) {
         near_w = 1.0 - far_share(near);
     }
-    let share = mix(FAR_CASCADE_SHADE, 1.0, near_w);
-    let own = mix(1.0, crown_light(in.crown_at, look, rotate_z(globals.sun_dir, -in.yaw), share), cascades_reach(near, far_c));
+    let texel = mix(cascade_texel(globals.sun_view_proj_far), cascade_texel(globals.sun_view_proj), near_w);
+    let lit_depth = SHADOW_BIAS_TEXELS * texel / size;
+    let own = mix(1.0, crown_light(in.crown_at, look, rotate_z(globals.sun_dir, -in.yaw), lit_depth), cascades_reach(near, far_c));
     let sun = cascades_visibility(near, far_c, true) * own;
     let lit = albedo.rgb * tint * (lighting(n, sun) + sun * baked.a * in.glow);
     return vec4<f32>(finish(mix_fog(overlay(lit, in.tag), in.fog)).rgb, a);
