@@ -1106,9 +1106,9 @@ fn a_stand_drawn_as_impostors_keeps_the_brightness_of_full_detail_under_shadows(
     // Measured (impostors / full detail, 256×192), without that shade 1.050 1.025 1.008 |
     // 1.126 1.045 1.002 | 1.094 1.080 1.002 | 1.012 (off by 12.6 % at worst, 4.4 % on
     // average, when half of each crown also lay in its own caster's shadow), with it
-    // (its mean over the leaves' depths, light reaching as deep as the shadow map's bias)
-    // 1.023 0.994 0.997 | 1.002 0.993 0.991 | 1.004 0.988 0.986 | 0.984 (2.3 %, 0.96 %;
-    // at one depth, half a free path, without the bias: 3.3 %, 1.24 %).
+    // (its mean over the leaves' depths, the outer texel of the shadow map left lit)
+    // 1.016 0.987 0.993 | 0.995 0.987 0.987 | 0.999 0.983 0.982 | 0.978 (2.2 %, 1.25 %;
+    // at one depth, half a free path, nothing left lit: 3.3 %, 1.24 %).
     let (mut full, mut spec) = stand(200, "calm");
     full.lighting.shadows = true;
     spec.lighting.shadows = true;

@@ -56,17 +56,16 @@ pub const BAKE_FINEST: usize = 1;
 
 /// Sunlight's extinction in a crown per unit of leaf area density (m² of leaf per m³ of
 /// the crown's ellipsoid), for an impostor's shade on its own leaves (`crown_light` in
-/// far.wgsl, where sunlight reaches as deep into the crown unshaded as the shadow map's
-/// depth bias lets it into full detail's, `SHADOW_BIAS_TEXELS`). Leaves facing every way give 0.5
-/// in a crown filled evenly; full detail's crowns are darker inside than that, their leaves
-/// on fewer, denser twigs than the ellipsoid's volume suggests and their wood casting
-/// shadow too. Matched against full detail at rest in scenes B, C and D (mean FLIP /
-/// brightness of the canopy: 1.2 gives 0.0273 / -0.02 %, 0.0747 / -0.11 %, 0.0691 /
-/// -0.25 %; 1.5 gives 0.0273 / -0.05 %, 0.0749 / -0.17 %, 0.0692 / -0.27 %) and in a stand
-/// seen from several sides
-/// (`a_stand_drawn_as_impostors_keeps_the_brightness_of_full_detail_under_shadows`: with
-/// 1.2 off by 3.4 % at worst, 1.05 % on average; with 1.5 by 2.3 % and 0.96 %).
-/// docs/benchmarks.md, "A crown's shade as full detail's shadow map gives it".
+/// far.wgsl, which leaves unshaded the outer layer full detail's shadow map leaves lit,
+/// `SHADOW_BIAS_TEXELS`). Leaves facing every way give 0.5 in a crown filled evenly; full
+/// detail's crowns are darker inside than that, their leaves on fewer, denser twigs than
+/// the ellipsoid's volume suggests and their wood casting shadow too. Matched against full
+/// detail in scenes B, C and D at rest and B and C walking their paths (mean FLIP at rest
+/// C 0.0754, D 0.0695 with 1.5; 0.0749, 0.0690 with 1.2; in motion C 0.0799 with 1.5,
+/// 0.0803 with 1.2), and in a stand seen from several sides
+/// (`a_stand_drawn_as_impostors_keeps_the_brightness_of_full_detail_under_shadows`: off by
+/// 2.2 % at worst, 1.25 % on average). docs/benchmarks.md, "A crown's shade as full
+/// detail's shadow map gives it".
 pub const CROWN_EXTINCTION: f32 = 1.5;
 
 /// The crown of leaf `clusters` as an ellipsoid about the trunk axis: centre height,

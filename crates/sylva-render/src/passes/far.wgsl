@@ -302,14 +302,14 @@ fn crown_chord(p: vec3<f32>, d: vec3<f32>) -> vec2<f32> {
 // met lies at an exponentially distributed depth (mean one free path, 1 / extinction) from
 // where the line enters the crown's ellipsoid, cut off where it leaves it; the sunlight
 // reaching a leaf (towards `sun`, tree space) is dimmed by the leaves between it and the
-// ellipsoid's surface (Beer-Lambert), but for the first `lit` of that path: the shadow
-// map's depth bias (`SHADOW_BIAS_TEXELS`, here in tree units) lets full detail's leaves
-// that near the crown's sunlit surface see the sun. The mean is taken at the depths of the
-// distribution's first and third quartiles. 1 where the line of sight misses the
-// ellipsoid, and without shadows (full detail then has none either). At one depth (half a
-// free path, no bias) scenes C and D at rest read 2-3 % darker than full detail and FLIP
-// 0.078 and 0.075 against it, now within 0.3 % and 0.075 and 0.069 (docs/benchmarks.md,
-// "A crown's shade as full detail's shadow map gives it").
+// ellipsoid's surface (Beer-Lambert), but for the first `lit` of that path, which full
+// detail's shadow map leaves lit (`SHADOW_BIAS_TEXELS`, here in tree units). The mean is
+// taken at the depths of the distribution's first and third quartiles. 1 where the line of
+// sight misses the ellipsoid, and without shadows (full detail then has none either). At
+// one depth (half a free path, nothing left lit) scenes C and D at rest read 1.6 and 2.1 %
+// darker than full detail and FLIP 0.078 and 0.076 against it; now 1.1 and 1.4 % and
+// 0.075 and 0.070; walking B's and C's paths their error is as it was (C 0.0800, now
+// 0.0799; docs/benchmarks.md, "A crown's shade as full detail's shadow map gives it").
 fn crown_light(at: vec3<f32>, look: vec3<f32>, sun: vec3<f32>, lit: f32) -> f32 {
     let extinction = far.crown.w;
     if (extinction <= 0.0 || globals.shadow_texel <= 0.0) {
@@ -331,13 +331,16 @@ fn crown_light(at: vec3<f32>, look: vec3<f32>, sun: vec3<f32>, lit: f32) -> f32 
     return 0.5 * sum;
 }
 
-// The shadow pass's depth bias along the sun's rays, in texels of the map: its slope
-// factor (`DepthBiasState::slope_scale` in shared.rs), the depth a tilted leaf card spans
-// across one texel counted twice. Sunlight reaches about that far into a full-detail
-// crown before its own leaves shade it: centimetres in a close view's near cascade, a
-// metre or more in a far view's far cascade. So the crown's shade on an impostor's leaves
-// follows the shadow map's resolution (`crown_light`).
-const SHADOW_BIAS_TEXELS: f32 = 2.0;
+// How deep into a full-detail crown, in texels of the shadow map along the sun's rays,
+// sunlight reaches before the crown's own leaves shade it: the shadow pass's depth bias
+// (slope-scaled, `DepthBiasState` in shared.rs) and the comparison's filter both grow
+// with the texel, so a close view's near cascade (texels of 0.1 m) shades a crown almost
+// to its surface and a far view's (0.49 m in scenes B to D's last frames) leaves its outer
+// layer lit. The crown's shade on an impostor's leaves follows the shadow map's resolution
+// with it (`crown_light`). Matched against full detail at rest and in motion: 2 texels
+// made the canopy's brightness at rest exact (within 0.2 %) but raised C's error in wind
+// (FLIP 0.0800 to 0.0834), as full detail's leaves darken in wind more than an impostor's.
+const SHADOW_BIAS_TEXELS: f32 = 1.0;
 
 // The side of a texel of the shadow map's cascade with clip-space matrix `m`, m: the
 // cascade spans 2 in clip space across its 1 / shadow_texel texels, and the matrix's first

@@ -1,0 +1,110 @@
+//! A scene's frame with all its LODs from the camera at its path's end, as `sylva bench
+//! table3` renders it: at rest (`SCENE-still-all-LODs.png`, compared there with full
+//! detail at rest, `SCENE-still-full-detail.png`) or, with `--walk N`, after walking the
+//! path in N steps of 0.1 s (`SCENE-with-all-LODs.png` of a run with `--warmup 1 --frames
+//! N-1`, compared with `SCENE-full-detail.png`). Full detail of the large scenes takes many
+//! minutes a frame on a software rasteriser; this frame takes seconds, so a change to the
+//! impostors can be measured against the full-detail frames one table3 run wrote:
+//!
+//! `cargo run --release -p sylva-render --example lod_frame -- SCENE OUT.png [--walk N] [--time]`,
+//! then `tools/image_error.py out/table3/SCENE-still-full-detail.png OUT.png`.
+//!
+//! SCENE is a built-in scene (`A` … `D`) or a scene file; `--time` renders the frame five
+//! more times and prints the median rendering time.
+
+use sylva_forest::{Forest, FrameData, SceneSpec};
+use sylva_render::Headless;
+
+const W: u32 = 1024;
+const H: u32 = 768;
+
+fn main() {
+    if let Err(e) = run() {
+        eprintln!("lod_frame: {e}");
+        std::process::exit(1);
+    }
+}
+
+fn run() -> Result<(), Box<dyn std::error::Error>> {
+    let mut args: Vec<String> = std::env::args().skip(1).collect();
+    let time = take_flag(&mut args, "--time");
+    let walk = match take_value(&mut args, "--walk")? {
+        None => None,
+        Some(v) => match v.parse::<usize>() {
+            Ok(n) if n >= 2 => Some(n),
+            _ => return Err(format!("--walk {v}: a whole number of steps, at least 2").into()),
+        },
+    };
+    let [scene, out] = &args[..] else {
+        return Err("usage: lod_frame SCENE OUT.png [--walk N] [--time]".into());
+    };
+    let spec = SceneSpec::load(scene)?;
+    let mut forest = Forest::new(&spec)?;
+    let path = if spec.camera_path.is_empty() {
+        sylva_forest::default_camera_path(&spec, forest.radius)
+    } else {
+        spec.camera_path.clone()
+    };
+    let duration = path.last().map_or(0.0, |k| k.t);
+    let aspect = W as f32 / H as f32;
+    let mut gpu = Headless::new(&forest, W, H)?;
+    let mut frame = FrameData::default();
+    let camera = match walk {
+        None => {
+            let camera = forest.camera_at(duration);
+            forest.frame(&camera, aspect, &mut frame);
+            camera
+        }
+        Some(n) => {
+            // As table3: the path's cameras evenly spaced, the frame built for each of
+            // them last to first, then each step of 0.1 s followed by its frame.
+            let cameras: Vec<_> =
+                (0..n).map(|i| forest.camera_at(duration * i as f32 / (n - 1) as f32)).collect();
+            for camera in cameras.iter().rev() {
+                forest.frame(camera, aspect, &mut frame);
+            }
+            for camera in &cameras {
+                forest.step(0.1);
+                forest.frame(camera, aspect, &mut frame);
+            }
+            cameras[n - 1]
+        }
+    };
+    eprintln!(
+        "{}: {} trees drawn, {} impostors, {} triangles",
+        spec.name, frame.stats.drawn, frame.stats.impostors, frame.stats.triangles
+    );
+    let mut rgba = gpu.render(&frame, &camera)?;
+    if time {
+        let mut ms = Vec::new();
+        for _ in 0..5 {
+            let start = std::time::Instant::now();
+            rgba = gpu.render(&frame, &camera)?;
+            ms.push(start.elapsed().as_secs_f64() * 1e3);
+        }
+        ms.sort_by(f64::total_cmp);
+        eprintln!("rendering: {:.0} ms (median of 5), {:.0} … {:.0}", ms[2], ms[0], ms[4]);
+    }
+    let file = std::io::BufWriter::new(std::fs::File::create(out)?);
+    let mut e = png::Encoder::new(file, W, H);
+    e.set_color(png::ColorType::Rgba);
+    e.set_depth(png::BitDepth::Eight);
+    e.write_header()?.write_image_data(&rgba)?;
+    Ok(())
+}
+
+fn take_flag(args: &mut Vec<String>, name: &str) -> bool {
+    let before = args.len();
+    args.retain(|a| a != name);
+    args.len() != before
+}
+
+fn take_value(args: &mut Vec<String>, name: &str) -> Result<Option<String>, String> {
+    let Some(i) = args.iter().position(|a| a == name) else { return Ok(None) };
+    if i + 1 >= args.len() {
+        return Err(format!("{name} needs a value"));
+    }
+    let v = args.remove(i + 1);
+    args.remove(i);
+    Ok(Some(v))
+}
