@@ -16,7 +16,7 @@ use std::hash::{DefaultHasher, Hash, Hasher};
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
-use sylva_forest::{Forest, FrameData, SceneSpec, default_camera_path};
+use sylva_forest::{Forest, FrameData, SceneSpec};
 
 fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -42,7 +42,7 @@ fn main() -> Result<()> {
         Some(other) => bail!("{other:?}: time-only or nothing"),
     };
     let mut forest = Forest::new(&spec)?;
-    let duration = default_camera_path(&spec, forest.radius).last().map_or(12.0, |k| k.t);
+    let duration = forest.path_duration();
     let mut frame = FrameData::default();
     let (mut sim, mut build) = (Vec::new(), Vec::new());
     let mut hasher = DefaultHasher::new();

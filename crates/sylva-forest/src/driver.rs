@@ -1182,6 +1182,17 @@ impl Forest {
             if seconds.is_finite() { seconds.clamp(0.0, 10.0) } else { REGROUP_FADE };
     }
 
+    /// How long the scene's camera path lasts, s: its last key's time, or the default
+    /// fly-in's ([`crate::scene::default_camera_path`]) when the scene has none (12 s if
+    /// that has no keys either), the span [`Forest::camera_at`] follows.
+    pub fn path_duration(&self) -> f32 {
+        if self.spec.camera_path.is_empty() {
+            default_camera_path(&self.spec, self.radius).last().map_or(12.0, |k| k.t)
+        } else {
+            self.spec.camera_path.last().map_or(0.0, |k| k.t)
+        }
+    }
+
     /// The camera at time `t` on the scene's camera path, or on the default fly-in
     /// ([`crate::scene::default_camera_path`]) when the scene has none.
     pub fn camera_at(&self, t: f32) -> Camera {

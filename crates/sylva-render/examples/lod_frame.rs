@@ -40,12 +40,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     };
     let spec = SceneSpec::load(scene)?;
     let mut forest = Forest::new(&spec)?;
-    let path = if spec.camera_path.is_empty() {
-        sylva_forest::default_camera_path(&spec, forest.radius)
-    } else {
-        spec.camera_path.clone()
-    };
-    let duration = path.last().map_or(0.0, |k| k.t);
+    let duration = forest.path_duration();
     let aspect = W as f32 / H as f32;
     let mut gpu = Headless::new(&forest, W, H)?;
     let mut frame = FrameData::default();

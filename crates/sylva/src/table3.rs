@@ -277,15 +277,6 @@ fn command_line(a: &Table3Bench, (w, h): (u32, u32)) -> String {
     c
 }
 
-/// Length of the camera path the benchmark follows, s (the default fly-in: 12 s).
-fn path_duration(spec: &SceneSpec, forest: &Forest) -> f32 {
-    if spec.camera_path.is_empty() {
-        sylva_forest::default_camera_path(spec, forest.radius).last().map_or(12.0, |k| k.t)
-    } else {
-        spec.camera_path.last().map_or(0.0, |k| k.t)
-    }
-}
-
 fn run_config(
     spec: &SceneSpec,
     gpu: &mut Option<Headless>,
@@ -308,7 +299,7 @@ fn run_config(
     }
     let gpu = gpu.as_mut().context("renderer")?;
     let total = a.warmup + a.frames;
-    let duration = path_duration(&spec, &forest);
+    let duration = forest.path_duration();
     let dt = 0.1f32;
     let cameras: Vec<_> = (0..total)
         .map(|i| forest.camera_at(duration * i as f32 / (total - 1).max(1) as f32))
@@ -505,7 +496,7 @@ fn still_error(
         let spec = configure(spec, a, lods)?;
         let Ok(forest) = Forest::new(&spec) else { return Ok(None) };
         // The last timed frame's camera: the path's end (its start when one frame is run).
-        let last = if a.warmup + a.frames > 1 { path_duration(&spec, &forest) } else { 0.0 };
+        let last = if a.warmup + a.frames > 1 { forest.path_duration() } else { 0.0 };
         let camera = forest.camera_at(last);
         let mut frame = FrameData::default();
         forest.frame(&camera, w as f32 / h as f32, &mut frame);
