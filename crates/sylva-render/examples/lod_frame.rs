@@ -10,7 +10,9 @@
 //! then `tools/image_error.py out/table3/SCENE-still-full-detail.png OUT.png`.
 //!
 //! SCENE is a built-in scene (`A` … `D`) or a scene file; `--time` renders the frame five
-//! more times and prints the median rendering time.
+//! more times and prints the median rendering time. A copy of the scene's file with
+//! `[lod] geometry = false` and `animation = false` renders table3's full-detail frame
+//! itself (the wind-field LOD stays on: table3's reference keeps the instance groups).
 
 use sylva_forest::{Forest, FrameData, SceneSpec};
 use sylva_render::Headless;
