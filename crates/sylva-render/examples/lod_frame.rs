@@ -9,8 +9,12 @@
 //! `cargo run --release -p sylva-render --example lod_frame -- SCENE OUT.png [--walk N] [--time]`,
 //! then `tools/image_error.py out/table3/SCENE-still-full-detail.png OUT.png`.
 //!
-//! SCENE is a built-in scene (`A` … `D`) or a scene file; `--time` renders the frame five
-//! more times and prints the median rendering time. `--supersample N` renders the frame at
+//! SCENE is a built-in scene (`A` … `D`) or a scene file; `--at SECONDS` takes the camera
+//! at that time along the path instead of its end (at rest). `--time` renders the frame
+//! five more times and prints the median rendering time, then five more with the GPU's
+//! time in each part of the frame (where the adapter has timestamps inside passes; on
+//! lavapipe the split inside the image pass is not to be trusted, its sum is).
+//! `--supersample N` renders the frame at
 //! N times the width and height and averages each N × N block (in linear light) down to
 //! 1024 × 768: N² times the samples a pixel, a reference nearer the converged image than
 //! the 4× MSAA frame (the levels are chosen as at 1024 × 768: by the share of the image's
@@ -48,8 +52,21 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
             _ => return Err(format!("--walk {v}: a whole number of steps, at least 2").into()),
         },
     };
+    let at = match take_value(&mut args, "--at")? {
+        None => None,
+        Some(v) => match v.parse::<f32>() {
+            Ok(t) if t.is_finite() && t >= 0.0 => Some(t),
+            _ => return Err(format!("--at {v}: a time along the path, s, at least 0").into()),
+        },
+    };
+    if walk.is_some() && at.is_some() {
+        return Err("--walk ends at the path's end: give it or --at, not both".into());
+    }
     let [scene, out] = &args[..] else {
-        return Err("usage: lod_frame SCENE OUT.png [--walk N] [--time] [--supersample N]".into());
+        return Err(
+            "usage: lod_frame SCENE OUT.png [--walk N | --at SECONDS] [--time] [--supersample N]"
+                .into(),
+        );
     };
     let spec = SceneSpec::load(scene)?;
     let mut forest = Forest::new(&spec)?;
@@ -59,7 +76,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let mut frame = FrameData::default();
     let camera = match walk {
         None => {
-            let camera = forest.camera_at(duration);
+            let camera = forest.camera_at(at.unwrap_or(duration));
             forest.frame(&camera, aspect, &mut frame);
             camera
         }
@@ -92,6 +109,29 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         }
         ms.sort_by(f64::total_cmp);
         eprintln!("rendering: {:.0} ms (median of 5), {:.0} … {:.0}", ms[2], ms[0], ms[4]);
+        // Then five more with the GPU's timestamps between the frame's parts (their own
+        // frames: the queries add a little work).
+        if gpu.time_passes() {
+            let mut parts = vec![Vec::new(); sylva_render::PASS_PARTS.len()];
+            for _ in 0..5 {
+                gpu.draw(&frame, &camera)?;
+                if let Some(p) = gpu.pass_times()? {
+                    for (v, t) in parts.iter_mut().zip(p) {
+                        v.push(t);
+                    }
+                }
+            }
+            let medians: Vec<String> = parts
+                .iter_mut()
+                .zip(sylva_render::PASS_PARTS)
+                .filter(|(v, _)| !v.is_empty())
+                .map(|(v, name)| {
+                    v.sort_by(f64::total_cmp);
+                    format!("{name} {:.0}", v[v.len() / 2])
+                })
+                .collect();
+            eprintln!("GPU ms by part (medians): {}", medians.join(", "));
+        }
     }
     if ss > 1 {
         rgba = downsample(&rgba, ss);

@@ -81,8 +81,20 @@ fn impostor_parameters_match_their_wgsl_twin() {
     macro_rules! f {
         ($($n:ident),*) => { [$((stringify!($n), offset_of!(FarSpecies, $n))),*] };
     }
-    let fields =
-        f!(tip, extent, center, views, joint, rows, radius, height, row_step, depth_range, crown);
+    let fields = f!(
+        tip,
+        extent,
+        center,
+        views,
+        joint,
+        rows,
+        radius,
+        height,
+        row_step,
+        depth_range,
+        crown,
+        outline
+    );
     check_struct("far.wgsl", "FarSpecies", size_of::<FarSpecies>(), &fields);
 }
 

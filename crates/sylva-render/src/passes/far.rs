@@ -43,6 +43,12 @@ pub const ROWS: u32 = 3;
 pub const ROW_STEP_DEG: f32 = 30.0;
 /// Side of one view in the atlas, texels.
 pub const VIEW_SIZE: u32 = 256;
+/// Vectors of an impostor's outline per elevation row (`FarSpecies::outline`; far.wgsl's
+/// `OUTLINE_LEN` for all rows): its sides and its top and bottom. See [`outline`].
+pub const OUTLINE_PER_ROW: usize = 2;
+/// Vectors of the outline for all rows.
+pub const OUTLINE_LEN: usize = ROWS as usize * OUTLINE_PER_ROW;
+
 /// Impostors are rendered from a level with at most this many triangles (see
 /// [`bake_level`]).
 pub const BAKE_TRIANGLES: usize = 300_000;
@@ -372,6 +378,9 @@ impl FarPass {
             row_step: ROW_STEP_DEG.to_radians(),
             depth_range,
             crown: crown_ellipsoid(&level.clusters),
+            outline: outline(albedo, w, h, VIEWS, ROWS, VIEW_SIZE)
+                .try_into()
+                .expect("an outline of OUTLINE_LEN edges"),
         };
         let uniform =
             buffer(gpu, "impostor", bytemuck::bytes_of(&params), wgpu::BufferUsages::UNIFORM);
@@ -710,9 +719,204 @@ pub fn impostor_mips(
     (albedo_out, normal_out)
 }
 
+/// The trapezoid an impostor is drawn as, from its views' coverage (`albedo`, RGBA8,
+/// `w × h`, `views × rows` cells of `cell` texels a side), in a cell's coordinates (x across
+/// 0 … 1, y down 0 … 1): for each elevation row `r`, the smallest trapezoid with horizontal
+/// top and bottom that holds every texel any view of row `r` or `r + 1` covers (an
+/// instance between the two shows either), as its left and right sides `x = a + s·y`,
+/// `[a_left, s_left, a_right, s_right]`, then `[y_top, y_bottom, 0, 0]`. Still two
+/// triangles a tree, as the square of the cells was, but a conifer's is nearly a triangle
+/// and every tree's ends where its crown and trunk end. The shader clamps it to the square
+/// it replaces and does not widen it (what a coarse mip's texel spreads past the outline
+/// shows in a few hundred pixels of scene D's frame, each by a few levels: far.wgsl).
+pub fn outline(albedo: &[u8], w: u32, h: u32, views: u32, rows: u32, cell: u32) -> Vec<[f32; 4]> {
+    let (views, rows, cell) = (views.max(1), rows.max(1), cell.max(1));
+    // Per row and texel row of a cell: the covered columns' range over all the row's views.
+    let mut spans = vec![None::<(u32, u32)>; (rows * cell) as usize];
+    for r in 0..rows {
+        for y in 0..cell {
+            let ty = r * cell + y;
+            if ty >= h {
+                continue;
+            }
+            let span = &mut spans[(r * cell + y) as usize];
+            for k in 0..views {
+                for x in 0..cell {
+                    let tx = k * cell + x;
+                    if tx >= w || albedo[((ty * w + tx) * 4 + 3) as usize] == 0 {
+                        continue;
+                    }
+                    *span = Some(span.map_or((x, x), |(a, b)| (a.min(x), b.max(x))));
+                }
+            }
+        }
+    }
+    let mut out = Vec::with_capacity(rows as usize * OUTLINE_PER_ROW);
+    for r in 0..rows {
+        // The texel rows covered in row r or the next, with their covered range (texel
+        // edges, in a cell's units): (y top, y bottom, x left, x right).
+        let pair = [r, (r + 1).min(rows - 1)];
+        let covered: Vec<[f32; 4]> = (0..cell)
+            .filter_map(|y| {
+                let both = pair.map(|r| spans[(r * cell + y) as usize]);
+                let (a, b) =
+                    both.into_iter().flatten().reduce(|(a, b), (c, d)| (a.min(c), b.max(d)))?;
+                let c = cell as f32;
+                Some([y as f32 / c, (y + 1) as f32 / c, a as f32 / c, (b + 1) as f32 / c])
+            })
+            .collect();
+        let (Some(first), Some(last)) = (covered.first(), covered.last()) else {
+            // Nothing covered: the whole cell.
+            out.extend([[0.0, 0.0, 1.0, 0.0], [0.0, 1.0, 0.0, 0.0]]);
+            continue;
+        };
+        let (top, bottom) = (first[0], last[1]);
+        let mid = 0.5 * (top + bottom);
+        // Each side: of the slopes tried, the one whose line, moved out to the last covered
+        // texel, lies innermost at mid-height (the trapezoid's area is its height times
+        // its width there). A texel row is held where its top and bottom corners are.
+        let side = |left: bool| {
+            (-200..=200)
+                .map(|i| {
+                    let slope = i as f32 * 0.01;
+                    let offsets = covered.iter().flat_map(|c| {
+                        let x = if left { c[2] } else { c[3] };
+                        [x - slope * c[0], x - slope * c[1]]
+                    });
+                    let a = if left {
+                        offsets.fold(f32::INFINITY, f32::min)
+                    } else {
+                        offsets.fold(f32::NEG_INFINITY, f32::max)
+                    };
+                    (a, slope)
+                })
+                .max_by(|p, q| {
+                    let at = |(a, s): (f32, f32)| if left { a + s * mid } else { -(a + s * mid) };
+                    at(*p).total_cmp(&at(*q))
+                })
+                .unwrap_or((0.0, 0.0))
+        };
+        let (l, rt) = (side(true), side(false));
+        out.extend([[l.0, l.1, rt.0, rt.1], [top, bottom, 0.0, 0.0]]);
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Whether texel (x, y) of a `cell`-texel cell lies within row `r`'s trapezoid of
+    /// `outline` (its four corners inside, to rounding).
+    fn inside(outline: &[[f32; 4]], r: usize, x: u32, y: u32, cell: u32) -> bool {
+        let ([al, sl, ar, sr], [top, bottom, _, _]) = (outline[2 * r], outline[2 * r + 1]);
+        let c = cell as f32;
+        let eps = 1e-4;
+        [(x, y), (x + 1, y), (x, y + 1), (x + 1, y + 1)].iter().all(|&(px, py)| {
+            let (px, py) = (px as f32 / c, py as f32 / c);
+            py >= top - eps
+                && py <= bottom + eps
+                && px >= al + sl * py - eps
+                && px <= ar + sr * py + eps
+        })
+    }
+
+    #[test]
+    fn an_impostor_outline_holds_every_covered_texel_of_its_rows_and_hugs_a_cone() {
+        // Two views a row, three rows of 64-texel cells. Row 0 shows a cone (a conifer
+        // from the side: apex at the top, 40 texels wide at its foot) on a two-texel trunk;
+        // row 1 the same cone shifted 6 texels right in its second view (a view baked from
+        // a turned direction); row 2 a disc (the crown from above). Each row's trapezoid
+        // must hold every texel its own row and the next cover, and the side view's must be
+        // about the cone's area, not the square's.
+        let (views, rows, cell) = (2u32, 3u32, 64u32);
+        let (w, h) = (views * cell, rows * cell);
+        let mut albedo = vec![0u8; (w * h * 4) as usize];
+        let mut cover = |k: u32, r: u32, x: u32, y: u32| {
+            let i = (((r * cell + y) * w + k * cell + x) * 4 + 3) as usize;
+            albedo[i] = 200;
+        };
+        let cone = |x: i32, y: i32, shift: i32| {
+            // Apex at (32, 8), foot at y = 48, half-width 20 there; trunk below to 60.
+            let x = x - shift;
+            (8..48).contains(&y) && (x - 32).abs() * 40 <= 20 * (y - 8)
+                || (48..60).contains(&y) && (31..33).contains(&x)
+        };
+        for y in 0..cell {
+            for x in 0..cell {
+                let (xi, yi) = (x as i32, y as i32);
+                for k in 0..views {
+                    if cone(xi, yi, 0) {
+                        cover(k, 0, x, y);
+                    }
+                    if cone(xi, yi, if k == 1 { 6 } else { 0 }) {
+                        cover(k, 1, x, y);
+                    }
+                    if (xi - 32).pow(2) + (yi - 30).pow(2) <= 18 * 18 {
+                        cover(k, 2, x, y);
+                    }
+                }
+            }
+        }
+        let o = outline(&albedo, w, h, views, rows, cell);
+        assert_eq!(o.len(), rows as usize * OUTLINE_PER_ROW);
+        for r in 0..rows {
+            for shown in [r, (r + 1).min(rows - 1)] {
+                for k in 0..views {
+                    for y in 0..cell {
+                        for x in 0..cell {
+                            let i = (((shown * cell + y) * w + k * cell + x) * 4 + 3) as usize;
+                            if albedo[i] > 0 {
+                                assert!(
+                                    inside(&o, r as usize, x, y, cell),
+                                    "row {r}'s outline misses texel ({x}, {y}) of row {shown}"
+                                );
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        let area = |o: &[[f32; 4]], r: usize| {
+            let ([al, sl, ar, sr], [top, bottom, _, _]) = (o[2 * r], o[2 * r + 1]);
+            let mid = 0.5 * (top + bottom);
+            (bottom - top) * (ar + sr * mid - (al + sl * mid))
+        };
+        let texel = 1.0 / cell as f32;
+        // Row 2 alone (the disc, 37 texels across): its bounding box, no more.
+        let disc_box = (37.0 * texel) * (37.0 * texel);
+        assert!((area(&o, 2) / disc_box - 1.0).abs() < 0.05, "disc {} box {disc_box}", area(&o, 2));
+        // Rows 0 and 1: the two cones on their trunk. The trapezoid through the apexes and
+        // the feet's corners, extended down to the trunk's end (6 … 64 at y = 60, 6 texels
+        // wide at the top: 0.41 of the cell), not the box around them (46 × 52: 0.58).
+        assert!(area(&o, 0) < 0.43, "the cones' outline: {}", area(&o, 0));
+        // A cone alone, apex up: half its box, which the square of the cells draws whole.
+        let mut albedo = vec![0u8; (w * h * 4) as usize];
+        for r in 0..rows {
+            for y in 0..cell {
+                for x in 0..cell {
+                    if (8..48).contains(&(y as i32)) && cone(x as i32, y as i32, 0) {
+                        let i = (((r * cell + y) * w + x) * 4 + 3) as usize;
+                        albedo[i] = 255;
+                    }
+                }
+            }
+        }
+        let o = outline(&albedo, w, h, views, rows, cell);
+        let cone_box = 41.0 * 40.0 * texel * texel;
+        for r in 0..rows as usize {
+            assert!(area(&o, r) < 0.56 * cone_box, "row {r}: {} for a box {cone_box}", area(&o, r));
+        }
+    }
+
+    #[test]
+    fn an_impostor_with_nothing_baked_is_drawn_over_its_whole_cell() {
+        let (w, h) = (2 * 8, 3 * 8);
+        let o = outline(&vec![0u8; (w * h * 4) as usize], w, h, 2, 3, 8);
+        for r in 0..3 {
+            assert!(inside(&o, r, 0, 0, 8) && inside(&o, r, 7, 7, 8), "row {r}: {o:?}");
+        }
+    }
 
     #[test]
     fn impostors_are_baked_from_level_one_with_every_leaf_card_of_full_detail() {

@@ -1,5 +1,7 @@
 // Impostors: a far tree as one quad (two triangles) facing the camera, showing the view of
-// the tree nearest the direction it is seen from. The views are rendered once at start-up
+// the tree nearest the direction it is seen from; the quad is a trapezoid around what the
+// views show (`outline` in far.rs), as a software rasteriser's cost follows the pixels
+// covered, shaded or not. The views are rendered once at start-up
 // (far.rs) from `views` directions around the tree at each of `rows` elevations (0, 30°,
 // 60°): a tree below a camera looking down shows its crown from above, as full detail
 // does, not its side. The quad is centred on the tree's middle and perpendicular to the
@@ -43,7 +45,14 @@ struct FarSpecies {
     // The crown as an ellipsoid about the trunk axis (tree space): centre height,
     // horizontal and vertical radii, m; and the light's extinction in it, 1/m.
     crown: vec4<f32>,
+    // The trapezoid the quad is drawn as, per elevation row (far.rs, `outline`; in a
+    // cell's units, x across, y down): its sides x = a + s y as (a left, s left, a right,
+    // s right), then its top and bottom.
+    outline: array<vec4<f32>, OUTLINE_LEN>,
 };
+
+// Vectors of the outline for all rows (far.rs OUTLINE_LEN).
+const OUTLINE_LEN: u32 = 6u;
 
 @group(1) @binding(0) var far_albedo: texture_2d<f32>;
 @group(1) @binding(1) var far_normal: texture_2d<f32>;
@@ -213,7 +222,22 @@ fn vs_main(@builtin(vertex_index) vi: u32, inst: InstanceIn, lean: LeanIn) -> Fa
     // cells cost no fragments.
     let span = max(row_span(r0), row_span(r1));
     let half = 0.52 * min(vec2<f32>(2.0 * far.radius, span), vec2<f32>(far.extent));
-    let q = (corner - 0.5) * 2.0 * half;
+    // Within that square, the trapezoid around what the two rows' views cover (far.rs,
+    // `outline`). In scene D on lavapipe an impostor's pixels cost about the same whether
+    // shaded or discarded at once, and the trapezoid takes a fifth to a third off the
+    // frame (1.40 and 1.19 s a frame at two places on its path instead of 1.74 and 1.80).
+    // It is not widened: by two pixels and 2 % of the cell (for what a coarse mip or a
+    // view baked aside spreads past the outline) it saved only half as much, and without
+    // it the image error is the same to 0.0002 (docs/benchmarks.md, "Impostors drawn as
+    // trapezoids").
+    let sides = far.outline[min(r0, far.rows - 1u) * 2u];
+    let ends = far.outline[min(r0, far.rows - 1u) * 2u + 1u];
+    let y = select(ends.x, ends.y, corner.y > 0.5);
+    let x = vec2<f32>(sides.x + sides.y * y, sides.z + sides.w * y);
+    let across = select(x, vec2<f32>(0.5 * (x.x + x.y)), x.x > x.y);
+    let square = half / far.extent;
+    let cell_at = clamp(vec2<f32>(select(across.x, across.y, corner.x > 0.5), y), 0.5 - square, 0.5 + square);
+    let q = vec2<f32>(cell_at.x - 0.5, 0.5 - cell_at.y) * far.extent;
     let offset = (right * q.x + up * q.y) * inst.scale;
     // Sway: the trunk top's displacement and the crown's lean, sheared in with height above
     // the ground: in proportion to it, the trunk top's height moving by the shift (at most
