@@ -198,8 +198,9 @@ pub struct FarSpecies {
     /// The crown as an ellipsoid about the trunk axis, tree space: its centre's height,
     /// horizontal and vertical radii (m), and the light's extinction in it (1/m).
     pub crown: [f32; 4],
-    /// The outline the impostor is drawn within, per elevation row
-    /// ([`crate::passes::far::outline`]): its edges' left, right and height in a cell.
+    /// The trapezoid the impostor is drawn as, per elevation row
+    /// ([`crate::passes::far::outline`]), in a cell's units: its sides `x = a + s·y` as
+    /// `[a_left, s_left, a_right, s_right]`, then `[y_top, y_bottom, 0, 0]`.
     pub outline: [[f32; 4]; crate::passes::far::OUTLINE_LEN],
 }
 
