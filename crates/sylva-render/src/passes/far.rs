@@ -739,7 +739,7 @@ pub fn outline(albedo: &[u8], w: u32, h: u32, views: u32, rows: u32, cell: u32) 
             if ty >= h {
                 continue;
             }
-            let span = &mut spans[(r * cell + y) as usize];
+            let span = &mut spans[ty as usize];
             for k in 0..views {
                 for x in 0..cell {
                     let tx = k * cell + x;

@@ -230,8 +230,8 @@ fn vs_main(@builtin(vertex_index) vi: u32, inst: InstanceIn, lean: LeanIn) -> Fa
     // view baked aside spreads past the outline) it saved only half as much, and without
     // it the image error is the same to 0.0002 (docs/benchmarks.md, "Impostors drawn as
     // trapezoids").
-    let sides = far.outline[min(r0, far.rows - 1u) * 2u];
-    let ends = far.outline[min(r0, far.rows - 1u) * 2u + 1u];
+    let sides = far.outline[r0 * 2u];
+    let ends = far.outline[r0 * 2u + 1u];
     let y = select(ends.x, ends.y, corner.y > 0.5);
     let x = vec2<f32>(sides.x + sides.y * y, sides.z + sides.w * y);
     let across = select(x, vec2<f32>(0.5 * (x.x + x.y)), x.x > x.y);
