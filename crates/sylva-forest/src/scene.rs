@@ -197,7 +197,7 @@ pub struct SceneSpec {
     pub seed: u64,
     /// Number of trees (1 … 1 000 000).
     pub trees: usize,
-    /// Poisson-disk minimum distance between trunks, m (> 0). Default 7.
+    /// Poisson-disk minimum distance between trunks, m (> 0 … 1 000). Default 7.
     #[serde(default = "spacing")]
     pub spacing: f32,
     /// Species mix.
@@ -205,10 +205,10 @@ pub struct SceneSpec {
     /// Relative scale variation per tree: scale = 1 ± this (0 … 0.9). Default 0.15.
     #[serde(default = "scale_v")]
     pub scale_variation: f32,
-    /// Terrain: height amplitude, m (≥ 0). Default 2.
+    /// Terrain: height amplitude, m (0 … 1 000). Default 2.
     #[serde(default = "amp")]
     pub terrain_amplitude: f32,
-    /// Terrain: wavelength of the hills, m (> 0). Default 150.
+    /// Terrain: wavelength of the hills, m (1 … 1 000 000). Default 150.
     #[serde(default = "wavelength")]
     pub terrain_wavelength: f32,
     /// What lies around the forest (see [`Surround`]): `"open"` ground to the horizon
@@ -460,6 +460,14 @@ impl Lighting {
 fn spacing() -> f32 {
     7.0
 }
+/// The largest `spacing`, m: trees a kilometre apart are a scattering, not a forest.
+pub const MAX_SPACING: f32 = 1000.0;
+/// The largest `terrain_amplitude`, m.
+pub const MAX_TERRAIN_AMPLITUDE: f32 = 1000.0;
+/// The shortest `terrain_wavelength`, m.
+pub const MIN_TERRAIN_WAVELENGTH: f32 = 1.0;
+/// The longest `terrain_wavelength`, m.
+pub const MAX_TERRAIN_WAVELENGTH: f32 = 1.0e6;
 fn scale_v() -> f32 {
     0.15
 }
@@ -545,8 +553,11 @@ impl SceneSpec {
         if !(1..=1_000_000).contains(&self.trees) {
             return Err(bad("trees", self.trees.to_string(), "1 … 1000000"));
         }
-        if !(self.spacing > 0.0 && self.spacing.is_finite()) {
-            return Err(bad("spacing", self.spacing.to_string(), "> 0 m"));
+        // A bound above, not only finiteness: the layout's Poisson-disk test squares the
+        // spacing in f32, and past about 1e19 m that square is infinite, no second tree
+        // fits and the layout grows its square without end.
+        if !(self.spacing > 0.0 && self.spacing <= MAX_SPACING) {
+            return Err(bad("spacing", self.spacing.to_string(), "> 0 … 1000 m"));
         }
         if self.species.is_empty() {
             return Err(bad("species", "[]".into(), "at least one species"));
@@ -557,11 +568,17 @@ impl SceneSpec {
         if !(0.0..=0.9).contains(&self.scale_variation) {
             return Err(bad("scale_variation", self.scale_variation.to_string(), "0 … 0.9"));
         }
-        if !(self.terrain_amplitude >= 0.0 && self.terrain_amplitude.is_finite()) {
-            return Err(bad("terrain_amplitude", self.terrain_amplitude.to_string(), "≥ 0 m"));
+        if !(0.0..=MAX_TERRAIN_AMPLITUDE).contains(&self.terrain_amplitude) {
+            return Err(bad("terrain_amplitude", self.terrain_amplitude.to_string(), "0 … 1000 m"));
         }
-        if !(self.terrain_wavelength > 0.0 && self.terrain_wavelength.is_finite()) {
-            return Err(bad("terrain_wavelength", self.terrain_wavelength.to_string(), "> 0 m"));
+        // Below a metre the hills are finer than a tree's footprint, and a wavelength near
+        // zero makes the terrain's wavenumber infinite and its heights NaN.
+        if !(MIN_TERRAIN_WAVELENGTH..=MAX_TERRAIN_WAVELENGTH).contains(&self.terrain_wavelength) {
+            return Err(bad(
+                "terrain_wavelength",
+                self.terrain_wavelength.to_string(),
+                "1 … 1000000 m",
+            ));
         }
         let source = WindSource::parse(&self.wind).map_err(|_| {
             bad(

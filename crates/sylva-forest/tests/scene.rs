@@ -53,6 +53,54 @@ fn bad_scene_files_name_the_field() {
     assert!(e.to_string().contains("sprecies") && e.to_string().contains("line 4"), "{e}");
 }
 
+/// The ground and the spacing at the ends of their ranges still give a forest: every tree
+/// placed, on finite ground, the trunks at least the spacing apart. Past the ends the file
+/// is refused naming the field: a spacing of 1e30 m squared in f32 is infinite, so no
+/// second tree ever fitted and the layout grew its square without end; a wavelength of
+/// 1e-38 m made the terrain's wavenumber infinite, its heights NaN, and the wind sampled
+/// at NaN read outside its grid.
+#[test]
+fn the_ground_and_spacing_at_their_limits_lay_out_and_past_them_are_refused() {
+    use sylva_forest::scene::{
+        MAX_SPACING, MAX_TERRAIN_AMPLITUDE, MAX_TERRAIN_WAVELENGTH, MIN_TERRAIN_WAVELENGTH,
+    };
+    let file = |spacing: f32, amplitude: f32, wavelength: f32| {
+        format!(
+            "name = \"x\"\ntrees = 40\nspacing = {spacing:e}\nterrain_amplitude = {amplitude:e}\n\
+             terrain_wavelength = {wavelength:e}\nspecies = [{{ name = \"quaking_aspen\" }}]\n"
+        )
+    };
+    for (spacing, amplitude, wavelength) in [
+        (MAX_SPACING, MAX_TERRAIN_AMPLITUDE, MIN_TERRAIN_WAVELENGTH),
+        (MAX_SPACING, MAX_TERRAIN_AMPLITUDE, MAX_TERRAIN_WAVELENGTH),
+        (1e-3, 0.0, MIN_TERRAIN_WAVELENGTH),
+    ] {
+        let spec = SceneSpec::from_toml("x.toml", &file(spacing, amplitude, wavelength))
+            .expect("inside the ranges");
+        let trees = layout(&spec, &Terrain::new(&spec));
+        assert_eq!(trees.len(), 40, "spacing {spacing}, wavelength {wavelength}");
+        for (i, a) in trees.iter().enumerate() {
+            assert!(a.position.iter().all(|v| v.is_finite()), "tree {i} at {:?}", a.position);
+            assert!(a.position[2].abs() <= amplitude * 1.01 + 1e-3, "tree {i} at {:?}", a.position);
+            for b in &trees[..i] {
+                let d = (a.position[0] - b.position[0]).hypot(a.position[1] - b.position[1]);
+                assert!(d >= spacing * 0.999, "trunks {d} m apart, spacing {spacing}");
+            }
+        }
+    }
+    for (spacing, amplitude, wavelength, field) in [
+        (1e30, 2.0, 150.0, "`spacing`"),
+        (MAX_SPACING * 1.01, 2.0, 150.0, "`spacing`"),
+        (7.0, 1e30, 150.0, "`terrain_amplitude`"),
+        (7.0, 2.0, 1e-38, "`terrain_wavelength`"),
+        (7.0, 2.0, 1e38, "`terrain_wavelength`"),
+    ] {
+        let e = SceneSpec::from_toml("x.toml", &file(spacing, amplitude, wavelength))
+            .expect_err("past a range");
+        assert!(e.to_string().contains(field), "{field}: {e}");
+    }
+}
+
 #[test]
 fn frames_draw_every_visible_tree_once_with_valid_palettes_and_trees_move() {
     let spec = SceneSpec::builtin("small").expect("small");

@@ -176,11 +176,13 @@ pub struct FieldView<'a> {
     data: &'a [f32],
 }
 
-/// Position of `v` on a sorted axis: (lower index, fraction to the next), clamped.
+/// Position of `v` on a sorted axis: (lower index, fraction to the next), clamped; a NaN
+/// lies at the axis's start (no comparison holds for it, and the search below would
+/// return the index before the first).
 #[inline]
 pub(crate) fn locate(axis: &[f64], v: f64) -> (usize, f64) {
     let n = axis.len();
-    if n == 1 || v <= axis[0] {
+    if n == 1 || v <= axis[0] || v.is_nan() {
         return (0, 0.0);
     }
     if v >= axis[n - 1] {
@@ -379,6 +381,25 @@ mod tests {
             let want = f.data[f.index(t, c, 0, iy, ix)] as f64;
             assert!((got[c] - want).abs() < 1e-5, "component {c}: {} vs {want}", got[c]);
         }
+    }
+
+    /// A position that is not a number (a tree on ground whose height came out NaN) reads
+    /// the grid's first point, as one before the grid does, instead of an index before the
+    /// first one.
+    #[test]
+    fn sampling_at_a_position_that_is_not_a_number_reads_the_grids_edge() {
+        let f = small(4);
+        let v = f.view();
+        for p in [[f64::NAN, 4.0, 20.0], [5.0, f64::NAN, 20.0], [5.0, 4.0, f64::NAN]] {
+            let got = v.sample_wind_frame(p, 0.3);
+            let mut edge = p;
+            edge.iter_mut().filter(|c| c.is_nan()).for_each(|c| *c = -1e6);
+            let want = v.sample_wind_frame(edge, 0.3);
+            assert!(v.sample(p, 0.3).iter().all(|c| c.is_finite()), "world axes, at {p:?}");
+            assert_eq!(got, want, "at {p:?}");
+            assert!(got.iter().all(|c| c.is_finite()), "at {p:?}: {got:?}");
+        }
+        assert_eq!(locate(&[0.0, 1.0, 2.0], f64::NAN), (0, 0.0));
     }
 
     #[test]
