@@ -69,7 +69,6 @@ use std::time::Instant;
 
 use bytemuck::{Pod, Zeroable};
 use rayon::prelude::*;
-use sylva_core::rng::mix64;
 use sylva_sway::{
     CrownLean, IDENTITY, LANES, LeafParams, LeafSway, PaletteSlot, STATE_BYTES, SwayBatch,
     SwayParams, SwaySpecies,
@@ -77,16 +76,22 @@ use sylva_sway::{
 
 use sylva_tree::mesh::{LOD_LEVELS, TreeModel};
 use sylva_tree::{LodOrder, Species, lod_order};
-use sylva_wind::{FieldView, Grid, NearField, OwnedPyramid, SynthParams, WindField, WindParams};
+use sylva_wind::{NearField, OwnedPyramid};
 use thiserror::Error;
 
 use crate::camera::{Camera, ShadowBox, ShadowSweep, may_see_trees, may_shade_trees};
 use crate::groups::{assign_slots, morton, partition};
 use crate::lanes;
 use crate::scene::{
-    Placement, SceneSpec, Terrain, WindSource, camera_on_path, default_camera, default_camera_path,
-    layout,
+    Placement, SceneSpec, Terrain, camera_on_path, default_camera, default_camera_path, layout,
 };
+pub use crate::wind::{
+    MAX_NEAR_POINTS, MAX_WIND_POINTS, NEAR_BAND, NEAR_REACH, SceneWind, wind_field, wind_points,
+};
+use crate::wind::{steer, wind_near};
+
+mod palettes;
+use palettes::{Layout, PaletteCopy, copy_palettes, lay_out};
 
 /// A forest that could not be built.
 #[derive(Debug, Error)]
@@ -294,217 +299,6 @@ fn overwrite<T: Copy + Default>(buf: &mut Vec<T>, n: usize) -> &mut [T] {
         buf.resize(n, T::default());
     }
     &mut buf[..n]
-}
-
-/// How a lane group's palettes are laid out in a frame's buffer.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Layout {
-    /// Before the first step: every joint at rest, lanes side by side.
-    Rest,
-    /// As the batch holds them, lanes side by side (each joint's `used` lanes in a row).
-    Lanes,
-    /// Each simulation's own prefix in a row: where the lanes' prefixes differ or a lane
-    /// was stepped alone.
-    Rows,
-}
-
-/// One lane group's palettes in a frame: where they go and how.
-#[derive(Debug, Clone, Copy)]
-struct PaletteCopy {
-    species: u32,
-    group: u32,
-    /// First value in the frame's buffer, and values.
-    start: usize,
-    len: usize,
-    /// Joints of the group's finest prefix, and simulations copied (its used lanes).
-    joints: u32,
-    used: u32,
-    kind: Layout,
-}
-
-/// Where lane group `k` of species `s` (index `si`) puts its palettes, from `start` in the
-/// frame's buffer, given what each simulation's drawn trees read (`need`); `None` where
-/// none is drawn.
-fn lay_out(
-    s: &SpeciesRuntime,
-    si: usize,
-    k: usize,
-    need: &[u32],
-    start: usize,
-) -> Option<PaletteCopy> {
-    let n = s.batch.species().len();
-    // The batch pads its last lane group (to 16, or a narrow batch to its 4 or 8 lanes):
-    // only the simulated lanes are copied.
-    let used = (s.groups.len() - k * LANES).min(s.batch.width());
-    let need = &need[(s.lane_base + k) * LANES..][..used];
-    // The group's finest prefix: what the lane layout would send for each lane.
-    let joints = (need.iter().copied().max().unwrap_or(0) as usize).min(n);
-    if joints == 0 {
-        return None;
-    }
-    let first = k * LANES;
-    let simulated_in = |l: usize| s.batch.simulated(first + l);
-    let simulated = (0..used).map(simulated_in).min().unwrap_or(0);
-    let uniform = (0..used)
-        .all(|l| simulated_in(l) == simulated && s.batch.lane_palettes(first + l).is_none());
-    let own: usize = need.iter().map(|&m| (m as usize).min(n)).sum();
-    let (kind, len) = if !s.batch.has_stepped() {
-        (Layout::Rest, joints * 12 * used)
-    } else if own < joints * used || !uniform {
-        (Layout::Rows, 12 * own)
-    } else {
-        (Layout::Lanes, joints * 12 * used)
-    };
-    Some(PaletteCopy {
-        species: si as u32,
-        group: k as u32,
-        start,
-        len,
-        joints: joints as u32,
-        used: used as u32,
-        kind,
-    })
-}
-
-/// Values a thread copies at least, rather than split the copies further.
-const COPY_GRAIN: usize = 1 << 16;
-
-/// Write the palettes of `copies` (in buffer order, from `copies[0].start`) into `buf`:
-/// split near the middle value, the halves in parallel, down to [`COPY_GRAIN`] values; each
-/// lane group by one thread.
-fn copy_palettes(
-    species: &[SpeciesRuntime],
-    need: &[u32],
-    slots: &[PaletteSlot],
-    copies: &[PaletteCopy],
-    buf: &mut [f32],
-) {
-    if copies.len() > 1 && buf.len() > COPY_GRAIN {
-        let half = copies[0].start + buf.len() / 2;
-        let mid = copies.partition_point(|c| c.start < half).clamp(1, copies.len() - 1);
-        let (a, b) = buf.split_at_mut(copies[mid].start - copies[0].start);
-        rayon::join(
-            || copy_palettes(species, need, slots, &copies[..mid], a),
-            || copy_palettes(species, need, slots, &copies[mid..], b),
-        );
-        return;
-    }
-    let mut rest = buf;
-    for c in copies {
-        let (dst, after) = rest.split_at_mut(c.len);
-        rest = after;
-        copy_group(&species[c.species as usize], need, slots, c, dst);
-    }
-}
-
-/// Write one lane group's palettes (`c`) into `dst`, all `c.len` values of it, where the
-/// simulations' `slots` (set when it was laid out) say.
-fn copy_group(
-    s: &SpeciesRuntime,
-    need: &[u32],
-    slots: &[PaletteSlot],
-    c: &PaletteCopy,
-    dst: &mut [f32],
-) {
-    let (k, joints, used) = (c.group as usize, c.joints as usize, c.used as usize);
-    let n = s.batch.species().len();
-    // Per joint, its 12 elements × `width` lanes.
-    let width = s.batch.width();
-    let joint = 12 * width;
-    // The group stores (at least) the joints it simulates; those it does not are read at
-    // their anchors below.
-    let block = s.batch.group_palettes(k);
-    let need = &need[(s.lane_base + k) * LANES..][..used];
-    if c.kind == Layout::Rest {
-        // Before the first step the batch stores nothing: every joint at rest.
-        for joint in dst.chunks_exact_mut(12 * used) {
-            for (lanes, x) in joint.chunks_exact_mut(used).zip(IDENTITY) {
-                lanes.fill(x);
-            }
-        }
-        return;
-    }
-    // Joints drawn beyond what a lane simulates (the animation LOD by size) rest on their
-    // parents: each shows its nearest simulated ancestor's palette.
-    let first = k * LANES;
-    let simulated_in = |l: usize| s.batch.simulated(first + l);
-    if c.kind == Layout::Rows {
-        // A transpose of lanes and elements (`sylva_core::lanes`: eight lanes at a time in
-        // registers where the CPU has AVX), each joint's block read from memory once.
-        // Each simulation's run, from its slot.
-        let slots = &slots[(s.lane_base + k) * LANES..][..used];
-        let start = |l: usize| slots[l].base as usize - c.start;
-        // Each lane's own anchors where its simulated prefix is its own; lanes stepped
-        // alone keep their palettes in a row of their own.
-        let mut lane_src = [None; LANES];
-        for (l, a) in lane_src.iter_mut().enumerate().take(used) {
-            let sim = simulated_in(l);
-            *a = if joints > sim { s.batch.anchors(sim) } else { None };
-        }
-        // Each lane's run: the joints it shows as its own (within its simulated prefix)
-        // transposed out of the group's lanes in one pass; then the joints resting on an
-        // anchor, and the runs of lanes stepped alone, joint by joint.
-        let mut runs: [&mut [f32]; LANES] = Default::default();
-        let mut own = [0; LANES];
-        let dst_len = dst.len();
-        let mut rest = &mut *dst;
-        for (l, &m) in need.iter().enumerate() {
-            let m = (m as usize).min(n);
-            debug_assert_eq!(dst_len - rest.len(), start(l), "lane runs lie in lane order");
-            let (run, after) = std::mem::take(&mut rest).split_at_mut(12 * m);
-            rest = after;
-            own[l] = match (s.batch.lane_palettes(first + l), lane_src[l]) {
-                (Some(_), _) => 0,
-                (None, Some(_)) => m.min(simulated_in(l)),
-                (None, None) => m,
-            };
-            runs[l] = run;
-        }
-        {
-            let mut heads: [&mut [f32]; LANES] = Default::default();
-            for ((head, run), &o) in heads.iter_mut().zip(runs.iter_mut()).zip(&own) {
-                *head = &mut run[..12 * o];
-            }
-            sylva_core::lanes::lanes_to_rows(block, width, &mut heads[..used]);
-        }
-        for (l, run) in runs.iter_mut().enumerate().take(used) {
-            let src = |j: usize| lane_src[l].map_or(j, |a| a[j] as usize);
-            let tail = run.chunks_exact_mut(12).enumerate().skip(own[l]);
-            if let Some(row) = s.batch.lane_palettes(first + l) {
-                for (j, v) in tail {
-                    v.copy_from_slice(&row[12 * src(j)..][..12]);
-                }
-                continue;
-            }
-            for (j, v) in tail {
-                let lanes = &block[src(j) * joint..][..joint];
-                for (e, x) in v.iter_mut().enumerate() {
-                    *x = lanes[e * width + l];
-                }
-            }
-        }
-        return;
-    }
-    let simulated = (0..used).map(simulated_in).min().unwrap_or(0);
-    let anchors = if joints > simulated { s.batch.anchors(simulated) } else { None };
-    let src = |j: usize| anchors.map_or(j, |a| a[j] as usize);
-    let copied = joints.min(simulated);
-    let (head, tail) = dst.split_at_mut(copied * 12 * used);
-    if used == width {
-        head.copy_from_slice(&block[..copied * joint]);
-    } else {
-        for (to, lanes) in head.chunks_exact_mut(used).zip(block[..copied * joint].chunks(width)) {
-            to.copy_from_slice(&lanes[..used]);
-        }
-    }
-    let mut to = tail.chunks_exact_mut(used);
-    for j in copied..joints {
-        for lanes in block[src(j) * joint..][..joint].chunks(width) {
-            if let Some(v) = to.next() {
-                v.copy_from_slice(&lanes[..used]);
-            }
-        }
-    }
 }
 
 /// Backlash hysteresis: the previous value `prev` is kept while within `half_width` of the
@@ -2012,169 +1806,6 @@ fn tilt_along(shear: [f32; 2], t: [f32; 3]) -> [f32; 2] {
     let len = (shear[0] * shear[0] + shear[1] * shear[1]).sqrt();
     let along = if len > 1e-6 { (t[0] * shear[0] + t[1] * shear[1]) / len } else { 0.0 };
     [along, 1.0 - t[2]]
-}
-
-/// Wind at world point `p` and time `t` from the full-resolution `view`, blended with the
-/// `near` field by the horizontal distance from `centre`; and whether the near field
-/// counted.
-fn wind_near(
-    view: FieldView<'_>,
-    near: Option<&NearField>,
-    centre: [f32; 3],
-    p: [f64; 3],
-    t: f64,
-) -> ([f64; 3], bool) {
-    let Some(near) = near else { return (view.sample(p, t), false) };
-    let d = (p[0] - centre[0] as f64).hypot(p[1] - centre[1] as f64);
-    match near.weight(d) {
-        w if w <= 0.0 => (view.sample(p, t), false),
-        // Wholly within the tile: the coarse field is not read.
-        w if w >= 1.0 => (near.sample(p, t), true),
-        w => (near.blend(view.sample(p, t), p, t, w), true),
-    }
-}
-
-/// A field velocity `w` scaled by `gain` and turned by `turn` rad (the live controls).
-fn steer(w: [f64; 3], gain: f32, turn: f32) -> [f32; 3] {
-    let (s, c) = turn.sin_cos();
-    [
-        gain * (c * w[0] as f32 - s * w[1] as f32),
-        gain * (s * w[0] as f32 + c * w[1] as f32),
-        gain * w[2] as f32,
-    ]
-}
-
-/// Wind grid points per side: enough to resolve twice the tree spacing across the forest,
-/// within 32 … [`MAX_WIND_POINTS`].
-pub fn wind_points(spec: &SceneSpec, radius: f32) -> usize {
-    let half = (radius as f64 + 30.0) * std::f64::consts::SQRT_2;
-    ((2.0 * half / (2.0 * spec.spacing as f64)).ceil() as usize + 1).clamp(32, MAX_WIND_POINTS)
-}
-
-/// Cap on wind grid points per side (96² points × 2 heights × 3 components × 512 frames of
-/// f32: 113 MB).
-pub const MAX_WIND_POINTS: usize = 96;
-
-/// Radius around the camera within which the near field is read, m (its outer
-/// [`NEAR_BAND`] fading out), when the tile holds it.
-pub const NEAR_REACH: f64 = 160.0;
-
-/// Width of the near field's fade, as a fraction of its reach.
-pub const NEAR_BAND: f64 = 0.25;
-
-/// Cap on the near tile's points per side (64² points × 2 heights × 3 components × 512
-/// frames of f32: 50 MB); with trees closer than 5 m the reach shrinks to half the tile.
-pub const MAX_NEAR_POINTS: usize = 64;
-
-/// A scene's wind: the field over the whole forest, and where that field is coarser than
-/// the tree spacing, a fine tile read near the camera ([`NearField`]).
-#[derive(Debug, Clone)]
-pub struct SceneWind {
-    /// The field covering the forest.
-    pub field: WindField,
-    /// The near field, at the tree spacing; `None` where the field resolves the trees
-    /// already, and for steady winds and wind files.
-    pub near: Option<NearField>,
-}
-
-/// The scene's wind ([`WindSource`]): a preset (with the scene's U* when set) in the
-/// scene's direction over a grid covering the forest ([`wind_points`] a side, two heights),
-/// looping every 51.2 s; a steady uniform wind in the scene's direction; or a wind file,
-/// which tiles the forest periodically and keeps its own direction.
-///
-/// For a preset whose grid is coarser than the tree spacing (every scene but the smallest:
-/// the grid resolves twice the spacing, and has at most [`MAX_WIND_POINTS`] a side), a
-/// second realisation of the same model at the tree spacing is made as well, a tile of up to
-/// [`MAX_NEAR_POINTS`] a side (seed derived from the scene's) read within [`NEAR_REACH`] of
-/// the camera: near trees feel gusts of their own size rather than a bilinear mix of records
-/// tens of metres apart (in scene D, about three quarters of the model's variance against
-/// under half; in the middle of a 60 m cell the mix keeps a fifth of it).
-pub fn wind_field(spec: &SceneSpec, radius: f32) -> Result<SceneWind, ForestError> {
-    let field = coarse_wind_field(spec, radius)?;
-    let spacing = spec.spacing as f64;
-    let xs = &field.grid.xs;
-    let coarse = if xs.len() > 1 { xs[1] - xs[0] } else { f64::INFINITY };
-    let preset = matches!(spec.wind_source(), Ok(WindSource::Preset(_)));
-    if !preset || coarse <= 1.01 * spacing {
-        return Ok(SceneWind { field, near: None });
-    }
-    let points = ((2.0 * NEAR_REACH / spacing).ceil() as usize + 1).clamp(16, MAX_NEAR_POINTS);
-    let reach = NEAR_REACH.min(0.5 * spacing * (points - 1) as f64);
-    let synth = SynthParams { seed: mix64(spec.seed ^ NEAR_SEED), ..Default::default() };
-    let g = &field.grid;
-    let near = NearField::generate(
-        &field.params,
-        points,
-        spacing,
-        &g.zs,
-        g.frames,
-        g.dt,
-        synth,
-        reach,
-        NEAR_BAND * reach,
-    )
-    .map_err(|e| ForestError::Wind(format!("near field: {e}")))?;
-    Ok(SceneWind { field, near: Some(near) })
-}
-
-/// Salt of the near field's seed (ASCII "near").
-const NEAR_SEED: u64 = 0x6e65_6172;
-
-/// The field over the whole forest (see [`wind_field`]).
-fn coarse_wind_field(spec: &SceneSpec, radius: f32) -> Result<WindField, ForestError> {
-    let source = spec.wind_source().map_err(|e| ForestError::Wind(e.to_string()))?;
-    let preset = match source {
-        WindSource::Preset(p) => p,
-        WindSource::Steady(speed) => {
-            // Two points a side, two heights, four frames: every sample is the same vector,
-            // along the field's own x, which sampling turns to the scene's direction.
-            let grid = Grid::regular(2, 2, 1000.0, &[8.0, 22.0], 4, 0.1);
-            let per = grid.points();
-            let mut data = vec![0.0f32; per * 3 * grid.frames];
-            for frame in data.chunks_mut(3 * per) {
-                frame[..per].fill(speed as f32);
-            }
-            let params = WindParams {
-                direction_deg: spec.wind_direction_deg as f64,
-                ..WindParams::default()
-            };
-            return Ok(WindField {
-                grid,
-                params,
-                synth: SynthParams::default(),
-                data,
-                coherence_error: 0.0,
-            });
-        }
-        WindSource::File(path) => {
-            return sylva_wind::io::read_field(&path)
-                .map_err(|e| ForestError::Wind(format!("{}: {e}", path.display())));
-        }
-    };
-    let mut params =
-        WindParams { direction_deg: spec.wind_direction_deg as f64, ..preset.params() };
-    if let Some(u) = spec.u_star {
-        params.u_star = u;
-    }
-    if let Some(a) = spec.wind_advection {
-        params.advection = a;
-    }
-    if let Some(p) = spec.wind_profile {
-        params.profile = p;
-    }
-    let half = (radius as f64 + 30.0) * std::f64::consts::SQRT_2;
-    let n = wind_points(spec, radius);
-    let spacing = 2.0 * half / (n - 1) as f64;
-    let mut grid = Grid::regular(n, n, spacing, &[8.0, 22.0], 512, 0.1);
-    grid.xs = (0..n).map(|i| -half + spacing * i as f64).collect();
-    grid.ys = grid.xs.clone();
-    WindField::generate(
-        &params,
-        &grid,
-        SynthParams { seed: spec.seed, ..Default::default() },
-        &|_| {},
-    )
-    .map_err(|e| ForestError::Wind(e.to_string()))
 }
 
 #[cfg(test)]

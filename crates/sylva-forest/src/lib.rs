@@ -12,6 +12,7 @@ pub mod driver;
 mod groups;
 mod lanes;
 pub mod scene;
+pub mod wind;
 
 pub use camera::{Camera, Mat4, ShadowBox, ViewCone};
 pub use driver::{
