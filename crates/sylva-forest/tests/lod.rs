@@ -392,7 +392,7 @@ fn switching_one_lod_off_changes_only_its_own_figures() {
 #[test]
 fn each_draw_is_tagged_with_its_level_species_and_instance_group() {
     let spec = SceneSpec::builtin("A").expect("scene A");
-    let forest = Forest::new(&spec).expect("forest");
+    let mut forest = Forest::new(&spec).expect("forest");
     let mut frame = FrameData::default();
     forest.frame(&forest.default_camera(), 4.0 / 3.0, &mut frame);
     let mut levels = std::collections::BTreeSet::new();
@@ -547,7 +547,7 @@ fn draws_go_finest_level_first_and_nearest_tree_first_within_each() {
     // Drawn in this order, the near crowns fill the depth buffer before the trees they
     // hide, whose fragments the depth test then rejects unshaded.
     let spec = SceneSpec::builtin("A").expect("A");
-    let forest = Forest::new(&spec).expect("forest");
+    let mut forest = Forest::new(&spec).expect("forest");
     let mut cam = forest.default_camera();
     let mut f = FrameData::default();
     // Along a walk across the forest, and from every frame's own camera.

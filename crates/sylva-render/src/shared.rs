@@ -11,21 +11,34 @@ pub const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 const COMMON: &str = include_str!("common.wgsl");
 
 /// Every shader: (file name, source as on disk). `common.wgsl` is prepended to each
-/// pass's file.
+/// pass's file, and its [`SHADER_PARTS`] appended.
 pub const SHADERS: [(&str, &str); 6] = [
     ("common.wgsl", COMMON),
     ("sky.wgsl", include_str!("passes/sky.wgsl")),
     ("ground.wgsl", include_str!("passes/ground.wgsl")),
     ("branch.wgsl", include_str!("passes/branch.wgsl")),
     ("leaf.wgsl", include_str!("passes/leaf.wgsl")),
-    ("far.wgsl", include_str!("passes/far.wgsl")),
+    ("far.wgsl", include_str!("passes/far/far.wgsl")),
 ];
 
+/// Shader files that are parts of another: (file name, the shader it is appended to,
+/// source as on disk). The distant woodland is the ground's second half.
+pub const SHADER_PARTS: [(&str, &str, &str); 1] =
+    [("woodland.wgsl", "ground.wgsl", include_str!("passes/woodland.wgsl"))];
+
 /// The source the renderer compiles for shader file `name`: `common.wgsl` alone, or
-/// prepended to the pass's file.
+/// prepended to the pass's file with its parts appended.
 pub fn shader_source(name: &str) -> Option<String> {
     let (_, src) = SHADERS.iter().find(|(n, _)| *n == name)?;
-    Some(if name == "common.wgsl" { src.to_string() } else { format!("{COMMON}\n{src}") })
+    if name == "common.wgsl" {
+        return Some(src.to_string());
+    }
+    let mut out = format!("{COMMON}\n{src}");
+    for (_, _, part) in SHADER_PARTS.iter().filter(|(_, host, _)| *host == name) {
+        out.push('\n');
+        out.push_str(part);
+    }
+    Some(out)
 }
 
 /// Compile shader file `name` (with `common.wgsl`).

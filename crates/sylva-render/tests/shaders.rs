@@ -7,12 +7,12 @@ use std::path::Path;
 fn every_wgsl_file_is_used_and_validates() {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
     let mut files = Vec::new();
-    for dir in [src.clone(), src.join("passes")] {
+    for dir in [src.clone(), src.join("passes"), src.join("passes/far")] {
         for entry in std::fs::read_dir(&dir).expect("shader folder") {
             files.push(entry.expect("entry").path());
         }
     }
-    let mut found = 0;
+    let (mut found, mut parts) = (0, 0);
     for path in files {
         if path.extension().and_then(|e| e.to_str()) != Some("wgsl") {
             continue;
@@ -20,6 +20,14 @@ fn every_wgsl_file_is_used_and_validates() {
         found += 1;
         let name = path.file_name().and_then(|n| n.to_str()).expect("name");
         let on_disk = std::fs::read_to_string(&path).expect("read");
+        // A part of another shader: embedded as on disk, and compiled within its host.
+        if let Some((_, host, part)) = sylva_render::SHADER_PARTS.iter().find(|p| p.0 == name) {
+            assert_eq!(*part, on_disk, "{name}: embedded copy differs from the file");
+            let whole = sylva_render::shader_source(host).expect("host");
+            assert!(whole.ends_with(part), "{name} is not appended to {host}");
+            parts += 1;
+            continue;
+        }
         let listed = sylva_render::SHADERS.iter().find(|(n, _)| *n == name);
         let (_, embedded) = listed
             .unwrap_or_else(|| panic!("{name} is not in SHADERS: the renderer never compiles it"));
@@ -40,7 +48,8 @@ fn every_wgsl_file_is_used_and_validates() {
             );
         }
     }
-    assert_eq!(found, sylva_render::SHADERS.len(), "shader files on disk vs listed");
+    assert_eq!(found - parts, sylva_render::SHADERS.len(), "shader files on disk vs listed");
+    assert_eq!(parts, sylva_render::SHADER_PARTS.len(), "shader parts on disk vs listed");
 }
 
 #[test]

@@ -1,0 +1,551 @@
+//! Building a frame (see the `driver` module's documentation), in five passes:
+//!
+//! 1. [`Forest::classify`]: per tree, in runs in parallel, whether it is in view (or casts
+//!    into it), its level and cross-fade, the joints its simulation must show and step;
+//!    the draws go to per-run lists by bucket key.
+//! 2. [`FrameData::gather`]: the runs' draws into key order and their counts into the
+//!    frame's figures.
+//! 3. [`Forest::bucket`]: runs of equal keys into buckets, mesh buckets near to far.
+//! 4. [`Forest::lay_out_palettes`]: where each drawn simulation's palettes go, then the
+//!    copies.
+//! 5. [`Forest::write_instances`]: one instance per draw, in runs in parallel.
+
+use std::sync::atomic::Ordering;
+
+use rayon::prelude::*;
+use sylva_sway::{LANES, PaletteSlot};
+
+use super::frame_data::*;
+use super::lod::*;
+use super::palettes::{Layout, copy_palettes, lay_out};
+use super::{Forest, SpeciesRuntime};
+use crate::camera::{Camera, ShadowBox, ShadowSweep, ViewCone, may_see_trees, may_shade_trees};
+use crate::scene::Placement;
+
+/// What stays fixed over one frame's passes: the view, the shadow's reach, the layout of
+/// bucket keys and the LOD settings.
+struct View {
+    cone: ViewCone,
+    /// With shadows on, the sun's sweep that keeps trees out of view whose shadow may fall
+    /// in it.
+    sweep: Option<ShadowSweep>,
+    /// The shadow map's far cascade (nothing outside it takes a shadow) and the margin, two
+    /// of its texels for the renderer's snapping, that a tree out of view may cast within.
+    far_box: ShadowBox,
+    box_margin: f32,
+    /// Species (at least 1), keys of trees in view (levels 0 to the longest chain, its
+    /// impostor, for each species), and all keys (those again for shadow-only draws).
+    n_species: u32,
+    n_keys: usize,
+    all_keys: usize,
+    lod: LodSettings,
+    /// The animation LOD's coordinate less the geometry LOD's: the same for every tree.
+    ahead: f32,
+    /// The simulation time of the frame before in this view.
+    previous: f64,
+}
+
+impl View {
+    /// A bucket key's species and level.
+    fn split(&self, key: u32) -> (u32, u32) {
+        let key = key % self.n_keys as u32;
+        (key % self.n_species, key / self.n_species)
+    }
+}
+
+/// Where a tree's draws go and what its simulation is asked for: the per-run lists and
+/// counts, and the per-simulation maxima the runs raise together.
+struct RunOut<'a> {
+    run: &'a mut TreeRun,
+    need_max: &'a Maxima,
+    want_max: &'a Maxima,
+    seen_max: &'a Maxima,
+}
+
+impl Forest {
+    /// Fill `out` for `camera` and an image of `aspect` = width / height. Allocates only
+    /// while `out`'s arrays grow. `out` keeps the per-tree LOD history (hysteresis) of this
+    /// view: use one `FrameData` per view.
+    pub fn frame(&mut self, camera: &Camera, aspect: f32, out: &mut FrameData) {
+        self.eye = Some(camera.eye);
+        let previous = out.time;
+        out.time = self.time;
+        out.keys.clear();
+        if out.lod_state.len() != self.trees.len() {
+            out.lod_state.clear();
+            out.lod_state.resize(self.trees.len(), f32::NAN);
+        }
+        // A scene holds at most a million trees (`SceneSpec` refuses more).
+        debug_assert!(self.trees.len() <= TREE_BITS as usize, "too many trees to tag");
+        let sims = self.lane_groups * LANES;
+        out.need_max.reset(sims);
+        out.want_max.reset(sims);
+        out.seen_max.reset(sims);
+        let view = self.view(camera, aspect, previous);
+        let mut stats = FrameStats { trees: self.trees.len(), ..FrameStats::default() };
+        let runs = self.classify(&view, out);
+        out.gather(runs, view.all_keys, &mut stats);
+        self.bucket(&view, camera, out, &mut stats);
+        self.lay_out_palettes(out, &mut stats);
+        for (a, &v) in self.want.iter_mut().zip(&out.want) {
+            *a = v;
+        }
+        // What the trees in view show: joints beyond it that the next step drops go at
+        // once, whatever trees out of view cast with them.
+        for (a, m) in self.shown.iter_mut().zip(&out.seen_max.0) {
+            *a = m.load(Ordering::Relaxed);
+        }
+        self.write_instances(&view, out);
+        stats.uploaded_bytes =
+            4 * out.palettes.len() + std::mem::size_of::<Instance>() * out.instances.len();
+        stats.sim_ms = self.last_sim_ms;
+        let w = self.wind_at([0.0, 0.0, 20.0], self.time);
+        out.wind = w;
+        out.stats = stats;
+    }
+
+    /// What the frame's passes hold fixed for `camera`.
+    fn view(&self, camera: &Camera, aspect: f32, previous: f64) -> View {
+        let lod = self.lod;
+        let cone = camera.cone(aspect);
+        // Bucket keys: level-major, so the finest levels are drawn first.
+        let n_species = self.species.len().max(1) as u32;
+        let longest = self.species.iter().map(|s| s.model.lods.len()).max().unwrap_or(0);
+        let n_keys = (longest + 1) * n_species as usize;
+        let lighting = &self.spec.lighting;
+        let sweep = if lighting.shadows { ShadowSweep::new(lighting.sun_unit()) } else { None };
+        let far_box = ShadowBox::new(camera, aspect, camera.shadow_reach().1, lighting.sun_unit());
+        let box_margin = 4.0 * far_box.radius / ShadowBox::TEXELS as f32;
+        let all_keys = if sweep.is_some() { 2 * n_keys } else { n_keys };
+        let ahead = (ANIMATION_FRACTION / lod.fraction).ln() / 3f32.ln();
+        View { cone, sweep, far_box, box_margin, n_species, n_keys, all_keys, lod, ahead, previous }
+    }
+
+    /// Whether a tree of `species` at `level` is drawn as its impostor.
+    fn impostor(&self, lod: &LodSettings, species: u32, level: u32) -> bool {
+        let chain = self.species[species as usize].model.lods.len() as u32;
+        lod.geometry && level >= lod.far_level.min(chain)
+    }
+
+    /// Pass 1: the trees in runs of [`TREE_RUN`], the runs in parallel. Each fills its own
+    /// keys, merged afterwards in run order, and raises the per-simulation maxima (which do
+    /// not depend on order), so the frame is the same for any number of threads. Returns the
+    /// number of runs.
+    fn classify(&self, view: &View, out: &mut FrameData) -> usize {
+        let runs = self.trees.len().div_ceil(TREE_RUN);
+        if out.runs.len() < runs {
+            out.runs.resize_with(runs, TreeRun::default);
+        }
+        // Per species, the fraction below which a tree goes to its LOD cap.
+        let lod = view.lod;
+        let mut past_cap = std::mem::take(&mut out.past_cap);
+        past_cap.clear();
+        past_cap.extend(self.species.iter().map(|sp| {
+            let far = lod.far_level.min(sp.model.lods.len() as u32);
+            past_cap_fraction(lod.fraction, lod_cap(far), lod.hysteresis)
+        }));
+        let (need_max, want_max, seen_max) = (&out.need_max, &out.want_max, &out.seen_max);
+        out.runs[..runs]
+            .par_iter_mut()
+            .zip(out.lod_state.par_chunks_mut(TREE_RUN))
+            .zip(self.trees.par_chunks(TREE_RUN))
+            .enumerate()
+            .for_each(|(r, ((run, states), trees))| {
+                if run.by_key.len() < view.all_keys {
+                    run.by_key.resize_with(view.all_keys, Vec::new);
+                }
+                run.by_key.iter_mut().for_each(Vec::clear);
+                let (first, n) = (r * TREE_RUN, trees.len());
+                run.seen.resize(n, false);
+                let (cr, span) = (&self.crowns, first..first + n);
+                let (cx, cy) = (&cr.x[span.clone()], &cr.y[span.clone()]);
+                let (cz, ch) = (&cr.z[span.clone()], &cr.h[span]);
+                may_see_trees(&view.cone, cx, cy, cz, ch, &mut run.seen[..n]);
+                run.shade.resize(n, false);
+                match &view.sweep {
+                    Some(sw) => may_shade_trees(
+                        &view.cone,
+                        sw,
+                        cx,
+                        cy,
+                        cz,
+                        ch,
+                        &run.seen[..n],
+                        &mut run.shade[..n],
+                    ),
+                    None => run.shade[..n].fill(false),
+                }
+                run.stats = FrameStats::default();
+                let mut to = RunOut { run, need_max, want_max, seen_max };
+                for (k, ((p, g), state)) in trees.iter().zip(states).enumerate() {
+                    // The crown's height and centre, as the culling took them.
+                    let h = ch[k];
+                    let c = [cx[k], cy[k], cz[k] + 0.5 * h];
+                    let tree = Tree { i: first + k, p, group: *g, c, h };
+                    self.classify_tree(view, &past_cap, &tree, k, state, &mut to);
+                }
+            });
+        out.past_cap = past_cap;
+        runs
+    }
+
+    /// One tree of pass 1 (`k` its index in its run): culled, or its level, cross-fade and
+    /// simulation's needs recorded and its draws (one per level and instance group) listed.
+    fn classify_tree(
+        &self,
+        view: &View,
+        past_cap: &[f32],
+        tree: &Tree<'_>,
+        k: usize,
+        state: &mut f32,
+        to: &mut RunOut<'_>,
+    ) {
+        let (lod, cone) = (view.lod, &view.cone);
+        let (p, i, c, h) = (tree.p, tree.i, tree.c, tree.h);
+        let sp = &self.species[p.species as usize];
+        // Out of view: kept for the shadow map only where its swept crown may reach the
+        // view.
+        let shadow_only = !to.run.seen[k];
+        if shadow_only {
+            let Some(sw) = view.sweep.filter(|_| to.run.shade[k]) else { return };
+            let (r, len) = (0.75 * h, sw.length(h));
+            if !(view.far_box.may_take(c, r, len, view.box_margin)
+                && cone.may_see_shadow(c, r, sw.away, len))
+            {
+                return;
+            }
+        }
+        let key_base = if shadow_only { view.n_keys as u32 } else { 0 };
+        let chain = sp.model.lods.len() as u32;
+        let far = lod.far_level.min(chain);
+        // Joints level `l` draws (a prefix in LOD order).
+        let joints = |l: u32| {
+            if lod.geometry && l >= far { sp.order.trunk } else { sp.order.prefix[l as usize] }
+        };
+        // Joints a tree out of view casts its shadow at level `l` with.
+        let casts = |l: u32| {
+            if lod.geometry && l >= far {
+                sp.order.trunk
+            } else {
+                sp.order.prefix[shadow_level(l, chain) as usize]
+            }
+        };
+        let frac = || cone.screen_fraction(c, h);
+        let (a, b, sim, x) = if lod.geometry {
+            let before = *state;
+            let x = next_lod_state(
+                before,
+                || lod_coordinate(frac(), lod.fraction),
+                cone.fraction_below(c, h, past_cap[p.species as usize]),
+                lod.hysteresis,
+                lod_cap(far),
+            );
+            // Levels as `blend_levels` takes them (both are ≥ 0).
+            if !before.is_nan() && before as u32 != x as u32 {
+                to.run.stats.level_changes += 1;
+            }
+            *state = x;
+            let (a, b, _) = blend_levels(x, far, lod.band);
+            (a, b, blend_levels((x - SIM_MARGIN).max(0.0), far, 0.0).0, x)
+        } else {
+            (0, 0, 0, f32::NAN)
+        };
+        // Joints to simulate: the geometry's choice half a level ahead, or coarser by
+        // projected size (the joints it draws beyond are held, shown at rest on their
+        // parents).
+        let moving = if lod.geometry && sim >= far {
+            sp.order.trunk
+        } else {
+            // With the geometry LOD on, from its coordinate (and so its hysteresis), so the
+            // two agree wherever their thresholds do.
+            let by_size = if x.is_nan() {
+                lod_coordinate(frac(), ANIMATION_FRACTION)
+            } else {
+                x + view.ahead
+            } - SIM_MARGIN;
+            let level = sim.max(by_size.max(0.0) as u32) as usize;
+            sp.order.prefix[level.min(sp.order.prefix.len() - 1)]
+        };
+        // The tree's group, and the one it is fading out of after a regroup.
+        let switch = self.switches[i].fading(self.time, self.regroup_fade);
+        let sw = self.switches[i];
+        to.run.stats.group_changes +=
+            (!shadow_only && sw.from != u32::MAX && sw.at > view.previous && sw.at <= self.time)
+                as usize;
+        for (group, old) in [(tree.group, false)].into_iter().chain(switch.map(|(_, f)| (f, true)))
+        {
+            let own = sp.lane_base * LANES + sp.lane_of[group as usize] as usize;
+            // A tree cast only into the shadow map needs the joints of the level it casts
+            // and simulates nothing of its own beyond the trunk (every lane steps that), and
+            // what it shows does not hold joints the simulation drops: as it leaves the
+            // view, its crown's joints go at once, as when it was culled whole, and its
+            // shadow bends with the trunk alone (they blend in from rest when it comes back,
+            // as for any tree entering the view). This keeps lane groups of far trees
+            // stepping their trunks only (docs/decisions/0004-shadow-casters.md).
+            let (need, want) = if shadow_only {
+                (casts(a), sp.order.trunk)
+            } else {
+                to.seen_max.raise(own, joints(a) as u32);
+                (joints(a), moving)
+            };
+            to.need_max.raise(own, need as u32);
+            to.want_max.raise(own, want as u32);
+            for level in a..=b {
+                to.run.by_key[(key_base + level * view.n_species + p.species) as usize].push(
+                    i as u32
+                        | if switch.is_some() { REGROUPING } else { 0 }
+                        | if old { OLD_GROUP } else { 0 },
+                );
+            }
+        }
+        let stats = &mut to.run.stats;
+        if shadow_only {
+            stats.shadow_only += 1;
+            return;
+        }
+        stats.drawn += 1;
+        stats.regrouping += switch.is_some() as usize;
+        stats.fading += (a != b) as usize;
+        stats.impostors += (lod.geometry && b >= lod.far_level.min(chain)) as usize;
+    }
+
+    /// Pass 3: the draws into buckets. A run of equal keys is one species at one level, one
+    /// bucket (impostors are bucketed as level `chain`, one past the last mesh). Within each
+    /// bucket drawn as meshes, the trees nearest the camera first (the impostors, two
+    /// triangles each, are left in tree order).
+    fn bucket(&self, view: &View, camera: &Camera, out: &mut FrameData, stats: &mut FrameStats) {
+        out.buckets.clear();
+        let mut run = 0;
+        while run < out.keys.len() {
+            let key = out.keys[run].0;
+            let end = run + out.keys[run..].iter().take_while(|k| k.0 == key).count();
+            let (species, level) = view.split(key);
+            let shadow_only = key as usize >= view.n_keys;
+            let sp = &self.species[species as usize];
+            let far = self.impostor(&view.lod, species, level);
+            let bucket_lod = if far { sp.model.lods.len() as u32 } else { level };
+            let count = (end - run) as u32;
+            match out.buckets.last_mut() {
+                Some(b)
+                    if b.species == species
+                        && b.lod == bucket_lod
+                        && b.shadow_only == shadow_only =>
+                {
+                    b.count += count
+                }
+                _ => {
+                    stats.draw_calls += if shadow_only {
+                        0
+                    } else if far {
+                        1
+                    } else {
+                        2
+                    };
+                    out.buckets.push(Bucket {
+                        species,
+                        lod: bucket_lod,
+                        first: run as u32,
+                        count,
+                        shadow_only,
+                    })
+                }
+            }
+            if !shadow_only {
+                stats.triangles +=
+                    (end - run) * if far { 2 } else { sp.model.lods[level as usize].triangles() };
+            }
+            if !far {
+                self.sort_near_first(camera.eye, out, run..end);
+            }
+            run = end;
+        }
+    }
+
+    /// The draws `range` of a mesh bucket, nearest `eye` first, through the (squared
+    /// distance, tree) pairs of the distance-sort scratch: no allocation once it has grown.
+    /// Squared distances are non-negative, so their bits order as they do; equal distances
+    /// go by tree, then the old group's draw after the new one's: a total order.
+    fn sort_near_first(&self, eye: [f32; 3], out: &mut FrameData, range: std::ops::Range<usize>) {
+        out.sorted.clear();
+        out.sorted.extend(out.keys[range.clone()].iter().map(|&(_, tagged)| {
+            let p = self.trees[(tagged & TREE_BITS) as usize].0.position;
+            ((0..3).map(|k| (p[k] - eye[k]).powi(2)).sum::<f32>().to_bits(), tagged)
+        }));
+        out.sorted.sort_unstable_by_key(|&(d, tagged)| (d, tagged & !REGROUPING));
+        for (k, &(_, tagged)) in out.keys[range].iter_mut().zip(&out.sorted) {
+            k.1 = tagged;
+        }
+    }
+
+    /// Pass 4: palettes of the simulations that are drawn, the prefix of joints their
+    /// finest drawn level uses (a contiguous run: the batch lays palettes out joint-major).
+    /// First where each lane group's go and how they are laid out, then the copies, lane
+    /// groups in parallel over disjoint parts of the buffer. Written over the last frame's
+    /// palettes: only growth is zero-filled.
+    fn lay_out_palettes(&self, out: &mut FrameData, stats: &mut FrameStats) {
+        out.slots.clear();
+        out.slots.resize(self.lane_groups * LANES, PaletteSlot::default());
+        out.copies.clear();
+        let mut len = 0;
+        for (si, s) in self.species.iter().enumerate() {
+            for k in 0..s.batch.groups() {
+                let Some(copy) = lay_out(s, si, k, &out.need, len) else { continue };
+                let sims = s.lane_base * LANES + k * LANES..;
+                let slots = &mut out.slots[sims][..copy.used as usize];
+                match copy.kind {
+                    Layout::Rows => {
+                        // Each simulation's own prefix, in a row.
+                        let mut at = len;
+                        let need = &out.need[s.lane_base * LANES + k * LANES..][..slots.len()];
+                        for (&m, slot) in need.iter().zip(slots.iter_mut()) {
+                            *slot = PaletteSlot { base: at as u32, stride: 1 };
+                            at += 12 * (m as usize).min(s.batch.species().len());
+                        }
+                    }
+                    Layout::Rest | Layout::Lanes => {
+                        for (l, slot) in slots.iter_mut().enumerate() {
+                            *slot = PaletteSlot { base: (len + l) as u32, stride: copy.used };
+                        }
+                    }
+                }
+                len += copy.len;
+                out.copies.push(copy);
+            }
+            add_species_figures(stats, s);
+        }
+        let buf = overwrite(&mut out.palettes, len);
+        copy_palettes(&self.species, &out.need, &out.slots, &out.copies, buf);
+        out.palettes.truncate(len);
+    }
+
+    /// Pass 5: one instance per draw, in runs of [`INSTANCE_RUN`] in parallel.
+    fn write_instances(&self, view: &View, out: &mut FrameData) {
+        let (keys, states, slots) = (&out.keys, &out.lod_state, &out.slots);
+        let instances = overwrite(&mut out.instances, keys.len());
+        instances.par_chunks_mut(INSTANCE_RUN).zip(keys.par_chunks(INSTANCE_RUN)).for_each(
+            |(instances, keys)| {
+                // The key of the draws before (a bucket's draws are consecutive).
+                let mut bucket: Option<KeyOf<'_>> = None;
+                for (instance, &(key, tagged)) in instances.iter_mut().zip(keys) {
+                    let of = match bucket {
+                        Some(b) if b.key == key => b,
+                        _ => {
+                            let (species, level) = view.split(key);
+                            let sp = &self.species[species as usize];
+                            let last = view.lod.far_level.min(sp.model.lods.len() as u32);
+                            let far = self.impostor(&view.lod, species, level);
+                            *bucket.insert(KeyOf { key, species, level, sp, last, far })
+                        }
+                    };
+                    *instance = self.instance(&view.lod, &of, tagged, states, slots);
+                }
+            },
+        );
+        out.instances.truncate(out.keys.len());
+    }
+
+    /// The instance of one draw: tree `tagged` in bucket `of`.
+    fn instance(
+        &self,
+        lod: &LodSettings,
+        of: &KeyOf<'_>,
+        tagged: u32,
+        states: &[f32],
+        slots: &[PaletteSlot],
+    ) -> Instance {
+        let KeyOf { species, level, sp, last, far, .. } = *of;
+        let i = (tagged & TREE_BITS) as usize;
+        let (p, now) = self.trees[i];
+        // Share of the dither range this draw's group keeps: after a regroup the old group's
+        // draws keep [0, 1 − v) and the new one's [1 − v, 1).
+        let fading = if tagged & REGROUPING != 0 {
+            self.switches[i].fading(self.time, self.regroup_fade)
+        } else {
+            None
+        };
+        let (g, lo, hi) = match fading {
+            Some((v, from)) if tagged & OLD_GROUP != 0 => (from, 0.0, 1.0 - v),
+            Some((v, _)) => (now, 1.0 - v, 1.0),
+            None => (now, 0.0, 1.0),
+        };
+        let group = &sp.groups[g as usize];
+        // Within the group's share, two levels split it as [lo, lo + (1 − w)(hi − lo)) and
+        // the rest; a range reaching 1 is written open to 2.
+        let w = if lod.geometry {
+            let (a, b, w) = blend_levels(states[i], last, lod.band);
+            match (a == b, level == a) {
+                (true, _) => None,
+                (false, true) => Some((true, w)),
+                (false, false) => Some((false, w)),
+            }
+        } else {
+            None
+        };
+        let (lo, hi) = match w {
+            None => (lo, hi),
+            Some((true, w)) => (lo, lo + (1.0 - w) * (hi - lo)),
+            Some((false, w)) => (lo + (1.0 - w) * (hi - lo), hi),
+        };
+        let fade = [lo, if hi >= 1.0 { 2.0 } else { hi }];
+        Instance {
+            position: p.position,
+            yaw: group.yaw,
+            scale: p.scale,
+            palette: slots[sp.lane_base * LANES + sp.lane_of[g as usize] as usize],
+            leaf_phase: group.leaf.phase,
+            leaf_amplitude: group.leaf.amplitude,
+            fade,
+            lean: group.lean.map(|v| half::f16::from_f32(v).to_bits()),
+            tilt: group.tilt.map(|v| half::f16::from_f32(v).to_bits()),
+            tag: if far { 15 } else { level.min(14) } | (species.min(15) << 4) | (g << 8),
+        }
+    }
+}
+
+/// One tree as pass 1 takes it: its index, placement and instance group, and its crown's
+/// centre and height as the culling took them.
+struct Tree<'a> {
+    i: usize,
+    p: &'a Placement,
+    group: u32,
+    c: [f32; 3],
+    h: f32,
+}
+
+/// A species' simulation figures, added to the frame's.
+fn add_species_figures(stats: &mut FrameStats, s: &SpeciesRuntime) {
+    stats.simulated += s.groups.len();
+    stats.coarse_wind += s.coarse_wind;
+    stats.near_wind += s.near_wind;
+    stats.joints += s.batch.joint_updates();
+    stats.state_bytes += s.batch.stored_bytes();
+    stats.state_capped += s.capped;
+}
+
+impl FrameData {
+    /// Pass 2: the per-simulation maxima the runs raised into `need` and `want`, the runs'
+    /// counts into `stats`, and their draws into (level, species) order, trees in order
+    /// within each: key by key, each run's draws of that key in run order, as a stable sort
+    /// of the runs' draws by key would put them.
+    fn gather(&mut self, runs: usize, all_keys: usize, stats: &mut FrameStats) {
+        self.need.clear();
+        self.need.extend(self.need_max.0.iter().map(|m| m.load(Ordering::Relaxed)));
+        self.want.clear();
+        self.want.extend(self.want_max.0.iter().map(|m| m.load(Ordering::Relaxed)));
+        for run in &self.runs[..runs] {
+            let r = &run.stats;
+            stats.level_changes += r.level_changes;
+            stats.group_changes += r.group_changes;
+            stats.drawn += r.drawn;
+            stats.shadow_only += r.shadow_only;
+            stats.regrouping += r.regrouping;
+            stats.fading += r.fading;
+            stats.impostors += r.impostors;
+        }
+        for k in 0..all_keys {
+            for run in &self.runs[..runs] {
+                self.keys.extend(run.by_key[k].iter().map(|&tagged| (k as u32, tagged)));
+            }
+        }
+    }
+}

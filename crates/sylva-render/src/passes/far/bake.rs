@@ -1,0 +1,364 @@
+//! The bake: a species rendered at rest from every view of the atlas, read back, its mip
+//! chains built and uploaded with the parameters the shader places its quads with.
+
+use sylva_forest::{Instance, Lighting, PaletteSlot};
+use sylva_tree::mesh::TreeModel;
+
+use super::atlas::{depth_mips, impostor_mips};
+use super::outline::outline;
+use super::*;
+use crate::gpu::{Gpu, RenderError};
+use crate::layout::{FarSpecies, Globals};
+use crate::shared::{GlobalsBinding, Mesh, buffer, globals_group, palette_buffer, upload_mips};
+
+/// Where a tree's views are taken: the bounds' horizontal radius about the trunk axis and
+/// height range, the side every view covers, its centre height and the depth range.
+struct Frame {
+    radius: f32,
+    z0: f32,
+    z1: f32,
+    extent: f32,
+    center: f32,
+    depth_range: f32,
+}
+
+impl Frame {
+    fn of(level: &sylva_tree::mesh::TreeLod) -> Frame {
+        // Bounds: horizontal radius about the trunk axis and height range, billboards
+        // counted with their half diagonal.
+        let (mut radius, mut z0, mut z1) = (0.1f32, f32::INFINITY, f32::NEG_INFINITY);
+        for p in &level.branches.positions {
+            radius = radius.max(p[0].hypot(p[1]));
+            z0 = z0.min(p[2]);
+            z1 = z1.max(p[2]);
+        }
+        for c in &level.clusters {
+            let half = 0.71 * c.size;
+            radius = radius.max(c.center[0].hypot(c.center[1]) + half);
+            z0 = z0.min(c.center[2] - half);
+            z1 = z1.max(c.center[2] + half);
+        }
+        if !z0.is_finite() {
+            (z0, z1) = (0.0, 1.0);
+        }
+        // Every view is centred on the middle of the tree's bounds and covers them from any
+        // elevation: the bounding cylinder seen from elevation e is 2·radius wide and
+        // height·cos e + 2·radius·sin e tall, at most the hypotenuse below.
+        let extent = (2.0 * radius).max((z1 - z0).hypot(2.0 * radius)) * 1.04;
+        let center = 0.5 * (z0 + z1);
+        let depth_range = radius.hypot(0.5 * (z1 - z0)) + 1.0;
+        Frame { radius, z0, z1, extent, center, depth_range }
+    }
+}
+
+/// The atlas read back at level 0: albedo and normals (RGBA8) and depth (one byte a
+/// texel), `w × h`.
+struct Views {
+    albedo: Vec<u8>,
+    normal: Vec<u8>,
+    depth: Vec<u8>,
+}
+
+impl FarPass {
+    /// Bake `model`'s impostor: render its views, read them back, build the mip chains and
+    /// upload them. `textures` is the species' bark and leaf bind group; `meshes` its
+    /// branch and leaf meshes at [`bake_level`].
+    pub fn bake(
+        &self,
+        gpu: &Gpu,
+        ctx: &BakeContext<'_>,
+        model: &TreeModel,
+        textures: &wgpu::BindGroup,
+        meshes: (Option<&Mesh>, Option<&Mesh>),
+    ) -> Result<FarSpeciesGpu, RenderError> {
+        let level = &model.lods[bake_level(model)];
+        let fr = Frame::of(level);
+        let Frame { radius, z0, z1, extent, center, depth_range } = fr;
+        let views = render_views(gpu, ctx, model, textures, meshes, &fr)?;
+        let (w, h) = (VIEWS * VIEW_SIZE, ROWS * VIEW_SIZE);
+        let albedo = &views.albedo;
+        let (albedo_mips, normal_mips) = impostor_mips(albedo, &views.normal, w, h, (VIEWS, ROWS));
+        let depth_mips = depth_mips(&views.depth, albedo, w, h, VIEW_SIZE);
+        let av = upload_mips(gpu, &albedo_mips, w, h, BAKE_TARGETS[0], "impostor albedo");
+        let nv = upload_mips(gpu, &normal_mips, w, h, BAKE_TARGETS[1], "impostor normals");
+        let dv = upload_mips(gpu, &depth_mips, w, h, DEPTH_MAP, "impostor depth");
+        let sk = &model.tree.skeleton;
+        let top = sk.trunk_top();
+        let tip = sk.joints().get(top).map(|j| j.tip()).unwrap_or([0.0, 0.0, 1.0]);
+        let params = FarSpecies {
+            tip,
+            extent,
+            center,
+            views: VIEWS,
+            joint: top as u32,
+            rows: ROWS,
+            radius,
+            height: z1 - z0,
+            row_step: ROW_STEP_DEG.to_radians(),
+            depth_range,
+            crown: crown_ellipsoid(&level.clusters),
+            outline: outline(albedo, w, h, VIEWS, ROWS, VIEW_SIZE)
+                .try_into()
+                .expect("an outline of OUTLINE_LEN edges"),
+        };
+        let group = self.species_group(gpu, &params, (&av, &nv, &dv));
+        Ok(FarSpeciesGpu {
+            group,
+            params,
+            // The horizontal row: the atlas's first VIEW_SIZE rows of texels.
+            albedo: albedo_mips
+                .into_iter()
+                .next()
+                .map(|mut a| {
+                    a.truncate((w * VIEW_SIZE * 4) as usize);
+                    a
+                })
+                .unwrap_or_default(),
+        })
+    }
+
+    /// Group 1 of the impostor pipeline for one species: its albedo, normals and depth
+    /// views, and its parameters as a uniform.
+    fn species_group(
+        &self,
+        gpu: &Gpu,
+        params: &FarSpecies,
+        (av, nv, dv): (&wgpu::TextureView, &wgpu::TextureView, &wgpu::TextureView),
+    ) -> wgpu::BindGroup {
+        let dev = &gpu.device;
+        let uniform =
+            buffer(gpu, "impostor", bytemuck::bytes_of(params), wgpu::BufferUsages::UNIFORM);
+        dev.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("impostor"),
+            layout: &self.species_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::TextureView(av),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(nv),
+                },
+                wgpu::BindGroupEntry { binding: 2, resource: uniform.as_entire_binding() },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: wgpu::BindingResource::TextureView(dv),
+                },
+            ],
+        })
+    }
+}
+
+/// Render every view of `model` at rest into the atlas and read it back.
+fn render_views(
+    gpu: &Gpu,
+    ctx: &BakeContext<'_>,
+    model: &TreeModel,
+    textures: &wgpu::BindGroup,
+    meshes: (Option<&Mesh>, Option<&Mesh>),
+    fr: &Frame,
+) -> Result<Views, RenderError> {
+    let dev = &gpu.device;
+    // Rest pose: identity palettes, one instance at the origin.
+    let joints = model.tree.skeleton.len().max(1);
+    let identity: Vec<f32> = (0..joints)
+        .flat_map(|_| [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0])
+        .collect();
+    let palettes = palette_buffer(dev, (identity.len() * 4) as u64);
+    gpu.queue.write_buffer(&palettes, 0, bytemuck::cast_slice(&identity));
+    let instance = Instance {
+        scale: 1.0,
+        palette: PaletteSlot { base: 0, stride: 1 },
+        fade: [0.0, 2.0],
+        ..Default::default()
+    };
+    let instances =
+        buffer(gpu, "bake instance", bytemuck::bytes_of(&instance), wgpu::BufferUsages::VERTEX);
+    let groups = view_groups(gpu, ctx, fr, &palettes);
+    let (w, h) = (VIEWS * VIEW_SIZE, ROWS * VIEW_SIZE);
+    let target = |format, label| {
+        dev.create_texture(&wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        })
+    };
+    let albedo_tex = target(BAKE_TARGETS[0], "impostor albedo");
+    let normal_tex = target(BAKE_TARGETS[1], "impostor normals");
+    let depth_tex = target(crate::shared::DEPTH, "impostor depth");
+    let view = |t: &wgpu::Texture| t.create_view(&wgpu::TextureViewDescriptor::default());
+    let (av, nv, dv) = (view(&albedo_tex), view(&normal_tex), view(&depth_tex));
+    let mut enc =
+        dev.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("bake") });
+    {
+        let clear = |v| {
+            Some(wgpu::RenderPassColorAttachment {
+                view: v,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                    store: wgpu::StoreOp::Store,
+                },
+            })
+        };
+        // The depth is kept: it becomes the views' depth maps.
+        let depth = wgpu::RenderPassDepthStencilAttachment {
+            view: &dv,
+            depth_ops: Some(wgpu::Operations {
+                load: wgpu::LoadOp::Clear(1.0),
+                store: wgpu::StoreOp::Store,
+            }),
+            stencil_ops: None,
+        };
+        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("impostor bake"),
+            color_attachments: &[clear(&av), clear(&nv)],
+            depth_stencil_attachment: Some(depth),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_bind_group(1, textures, &[]);
+        pass.set_vertex_buffer(1, instances.slice(..));
+        for (cell, group) in groups.iter().enumerate() {
+            let (x, y) = ((cell as u32 % VIEWS) * VIEW_SIZE, (cell as u32 / VIEWS) * VIEW_SIZE);
+            pass.set_viewport(x as f32, y as f32, VIEW_SIZE as f32, VIEW_SIZE as f32, 0.0, 1.0);
+            pass.set_bind_group(0, group, &[]);
+            for (pipeline, mesh) in [(ctx.branch, meshes.0), (ctx.leaf, meshes.1)] {
+                if let Some(mesh) = mesh {
+                    pass.set_pipeline(pipeline);
+                    mesh.draw(&mut pass, 0..1);
+                }
+            }
+        }
+    }
+    // Depth32Float reads back as four bytes a texel, as RGBA8 does.
+    let read = read_back(gpu, enc, &[&albedo_tex, &normal_tex, &depth_tex], w, h)?;
+    // The bake's depth is linear along each view (orthographic): 0 … 1 across
+    // ±depth_range about the plane through the views' centre, nearest first.
+    let depth: Vec<u8> = read[2]
+        .chunks_exact(4)
+        .map(|b| {
+            let z = f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+            (z.clamp(0.0, 1.0) * 255.0).round() as u8
+        })
+        .collect();
+    let mut read = read;
+    let normal = read.swap_remove(1);
+    let albedo = read.swap_remove(0);
+    Ok(Views { albedo, normal, depth })
+}
+
+/// Per view of the atlas, group 0: an orthographic camera about the tree's centre looking
+/// along the view, with the rest-pose `palettes`.
+fn view_groups(
+    gpu: &Gpu,
+    ctx: &BakeContext<'_>,
+    fr: &Frame,
+    palettes: &wgpu::Buffer,
+) -> Vec<wgpu::BindGroup> {
+    let dev = &gpu.device;
+    let (extent, center, depth_range) = (fr.extent, fr.center, fr.depth_range);
+    let light = Lighting::default();
+    (0..ROWS * VIEWS)
+        .map(|cell| {
+            let (k, row) = (cell % VIEWS, cell / VIEWS);
+            let a = std::f32::consts::TAU * k as f32 / VIEWS as f32;
+            let (s, c) = a.sin_cos();
+            let (se, ce) = (row as f32 * ROW_STEP_DEG).to_radians().sin_cos();
+            // Looking along f (down by the elevation), right r, up u = r × f.
+            let f = [c * ce, s * ce, -se];
+            let r = [s, -c, 0.0];
+            let u = [c * se, s * se, ce];
+            let h = 0.5 * extent;
+            let zs = 1.0 / (2.0 * depth_range);
+            // Orthographic about (0, 0, center). Column-major: m[column][row].
+            let view_proj = [
+                [r[0] / h, u[0] / h, f[0] * zs, 0.0],
+                [r[1] / h, u[1] / h, f[1] * zs, 0.0],
+                [r[2] / h, u[2] / h, f[2] * zs, 0.0],
+                [0.0, -center * u[2] / h, 0.5 - center * f[2] * zs, 1.0],
+            ];
+            // The projection is orthographic, but leaf cards turn towards the eye
+            // point: placed far along the view, they turn as they do for a far viewer.
+            // At the near plane's distance the cards off the axis turned sideways and
+            // were seen foreshortened, and the baked crowns showed their bark between
+            // thinned-out leaves.
+            let eye = [-f[0] * FAR_EYE, -f[1] * FAR_EYE, center - f[2] * FAR_EYE];
+            let g = Globals::new(view_proj, eye, 0.0, &light);
+            let buf =
+                buffer(gpu, "bake globals", bytemuck::bytes_of(&g), wgpu::BufferUsages::UNIFORM);
+            let with = GlobalsBinding { globals: &buf, ..ctx.globals };
+            globals_group(dev, ctx.globals_layout, &with, palettes)
+        })
+        .collect()
+}
+
+/// Submit `enc` with copies of `textures` (RGBA8, `w × h`) and read them back, rows top
+/// first.
+pub(super) fn read_back(
+    gpu: &Gpu,
+    mut enc: wgpu::CommandEncoder,
+    textures: &[&wgpu::Texture],
+    w: u32,
+    h: u32,
+) -> Result<Vec<Vec<u8>>, RenderError> {
+    let padded = (w * 4).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
+    let buffers: Vec<wgpu::Buffer> = textures
+        .iter()
+        .map(|t| {
+            let b = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("bake readback"),
+                size: (padded * h) as u64,
+                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+                mapped_at_creation: false,
+            });
+            enc.copy_texture_to_buffer(
+                t.as_image_copy(),
+                wgpu::TexelCopyBufferInfo {
+                    buffer: &b,
+                    layout: wgpu::TexelCopyBufferLayout {
+                        offset: 0,
+                        bytes_per_row: Some(padded),
+                        rows_per_image: Some(h),
+                    },
+                },
+                wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+            );
+            b
+        })
+        .collect();
+    gpu.queue.submit([enc.finish()]);
+    let mut out = Vec::with_capacity(buffers.len());
+    for b in &buffers {
+        let slice = b.slice(..);
+        let (tx, rx) = std::sync::mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send(r);
+        });
+        gpu.device
+            .poll(wgpu::PollType::Wait { submission_index: None, timeout: None })
+            .map_err(|e| RenderError::Readback(e.to_string()))?;
+        rx.recv()
+            .map_err(|e| RenderError::Readback(e.to_string()))?
+            .map_err(|e| RenderError::Readback(e.to_string()))?;
+        let mut img = Vec::with_capacity((w * h * 4) as usize);
+        {
+            let data =
+                slice.get_mapped_range().map_err(|e| RenderError::Readback(e.to_string()))?;
+            for row in data.chunks(padded as usize) {
+                img.extend_from_slice(&row[..(w * 4) as usize]);
+            }
+        }
+        b.unmap();
+        out.push(img);
+    }
+    Ok(out)
+}
