@@ -20,7 +20,7 @@ and the co-coherence at several separations, plus the time each tool took. Run:
     pip install pyconturb matplotlib scipy   # next to the sylva_wind wheel
     python python/examples/compare_pyconturb.py [--points 64] [--frames 4096] [--plot out.png]
 
-It prints a Markdown table (the one in docs/python.md) and, with ``--plot``, draws the
+It prints a Markdown table (the one in docs/guide/python.md) and, with ``--plot``, draws the
 spectra and coherences.
 """
 

@@ -155,7 +155,8 @@ impl Renderer {
 
     /// Build the passes for a colour target of `format` and `width × height` texels, and
     /// upload the scene's tree models (meshes per LOD, textures with mip chains, impostors
-    /// rendered from each species) and ground.
+    /// rendered from each species) and ground. (About 160 lines: one pass or upload after
+    /// another, in the order their bind groups depend on one another.)
     pub fn new(
         gpu: &Gpu,
         assets: &SceneAssets<'_>,

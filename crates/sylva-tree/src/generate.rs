@@ -295,6 +295,9 @@ impl Gen<'_> {
         r.max(0.001 * r0).max(1e-4)
     }
 
+    /// Grow one stem from `s`: its segments, splits, children and leaves, in Weber & Penn's
+    /// order (long, about 160 lines, because the random draws must come in that order for a
+    /// seed to grow the same tree; the per-segment geometry is in the helpers above).
     fn stem(&mut self, s: StemSeed) {
         if self.overflow {
             return;

@@ -18,6 +18,12 @@ pub mod skeleton;
 pub mod species;
 pub mod texture;
 
+/// Fraction of a tree's height at which the one wind velocity that drives its simulation is
+/// read (an instance group's sample point, `tree animate`'s wind, the viewer's probe):
+/// within the crown, where most of the tree's drag acts. Kept as `f64` so that the `f32`
+/// uses (`as f32`) and the `f64` uses read exactly the literal 0.7.
+pub const WIND_SAMPLE_HEIGHT: f64 = 0.7;
+
 pub use generate::{Tree, TreeStats, shape_ratio};
 pub use mesh::{BranchMesh, LeafCluster, TreeLod, TreeModel};
 pub use order::{LodOrder, lod_order};

@@ -38,7 +38,7 @@
 //! picture of the foliage — which pixels the leaves cover, and how they move — is level
 //! 0's: a tree between a fifth and a fifteenth of the image tall drawn at level 1 instead
 //! of as an impostor reads nearly as full detail does (scene B: FLIP 0.031 against full
-//! detail instead of 0.062, docs/benchmarks.md), where merged cards change the pattern
+//! detail instead of 0.062, docs/decisions/0003-lod-thresholds.md), where merged cards change the pattern
 //! as much as an impostor does. The skeleton is shared: joint indices are valid at every
 //! level.
 

@@ -401,6 +401,10 @@ fn pair_line_variance(c: &[f64], o: &[f64], s: usize, a: f64, a_o: f64, gamma: f
 /// # Panics
 /// If `fields` is empty, the fields' grids differ or `iz` is outside the grid (a programming
 /// error, not input).
+///
+/// One function of about 200 lines: each table (σ, spectra, coherence by dx, dy, dz) pools
+/// the same per-seed Welch estimates in the same loop over the ensemble, and splitting the
+/// loop would estimate each spectrum once per table.
 pub fn ensemble_stats_at(fields: &[WindField], segment: Option<usize>, iz: usize) -> FieldStats {
     let field = &fields[0];
     assert!(fields.iter().all(|f| f.grid == field.grid), "ensemble fields must share a grid");

@@ -482,6 +482,10 @@ impl<'a, T: Sample> Emitter<'a, T> {
 /// Synthesise the fluctuations of one component into `out` (frame-major, layout described
 /// by `layout`), calling `progress` with the fraction of this component done. Returns the
 /// bound on the coherence error (0 for an exact synthesis; see `synth/embed.rs`).
+///
+/// Long (about 200 lines) because it is the one place the three methods share their
+/// blocking over x-columns, the phase hash and the FFT plan; each method's own work is in
+/// the row kernels it calls.
 fn synth_component<'a, T: Sample>(
     params: &WindParams,
     grid: &'a Grid,

@@ -174,6 +174,8 @@ fn fmt_tick(v: f64) -> String {
     }
 }
 
+/// Draw one panel at x offset `ox`: frame, ticks and labels, series, legend (about 140
+/// lines of pixel placement in drawing order).
 fn draw_panel(cv: &mut Canvas, ox: usize, p: &Panel) {
     let (l, r, t, b) = MARGIN;
     let (x0, x1, y0, y1) = ((ox + l) as f64, (ox + W - r) as f64, t as f64, (H - b) as f64);

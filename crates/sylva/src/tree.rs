@@ -192,55 +192,7 @@ pub fn run_tree(cmd: TreeCommand) -> anyhow::Result<()> {
                 "\nPer-level keys carry the level digit first: 0Length (trunk), 1DownAngle, …"
             );
         }
-        TreeCommand::Generate(a) => {
-            let sp = Species::load(&a.species)?;
-            if a.max_joints == 0 || a.max_joints > sylva_tree::gltf::MAX_GLTF_JOINTS {
-                bail!(
-                    "--max-joints {}: must be 1 … {}",
-                    a.max_joints,
-                    sylva_tree::gltf::MAX_GLTF_JOINTS
-                );
-            }
-            let model = sp.model(a.seed, sylva_tree::mesh::LOD_LEVELS)?;
-            let last = model.lods.len() - 1;
-            // (level, file) pairs.
-            let files: Vec<(usize, PathBuf)> = if a.lod == "all" {
-                let stem = a.out.file_stem().and_then(|s| s.to_str()).unwrap_or("tree");
-                (0..=last)
-                    .map(|l| (l, a.out.with_file_name(format!("{stem}.lod{l}.glb"))))
-                    .collect()
-            } else {
-                let l: usize =
-                    a.lod.parse().ok().filter(|&l| l <= last).with_context(|| {
-                        format!("--lod {}: a level 0 … {last}, or `all`", a.lod)
-                    })?;
-                vec![(l, a.out.clone())]
-            };
-            if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
-                std::fs::create_dir_all(dir)
-                    .with_context(|| format!("creating {}", dir.display()))?;
-            }
-            for (l, path) in files {
-                let opts = sylva_tree::gltf::GltfOptions {
-                    lods: vec![l],
-                    max_joints: a.max_joints,
-                    name: sp.name.clone(),
-                    animation: None,
-                };
-                let bytes = model.to_glb(&opts);
-                sylva_wind::io::atomic::write_atomic(&path, &bytes)
-                    .with_context(|| format!("writing {}", path.display()))?;
-                println!(
-                    "wrote {} (LOD {l}: {:.1} MB, skeleton of {} joints, at most {} exported, {} \
-                     triangles)",
-                    path.display(),
-                    bytes.len() as f64 / 1e6,
-                    model.tree.skeleton.len(),
-                    a.max_joints,
-                    model.lods[l].triangles()
-                );
-            }
-        }
+        TreeCommand::Generate(a) => generate(a)?,
         TreeCommand::Animate(a) => animate(a)?,
         TreeCommand::Textures(a) => {
             let sp = Species::load(&a.species)?;
@@ -262,54 +214,105 @@ pub fn run_tree(cmd: TreeCommand) -> anyhow::Result<()> {
             );
         }
         TreeCommand::Show { species } => print!("{}", Species::load(&species)?.to_toml()),
-        TreeCommand::Stats(a) => {
-            let sp = Species::load(&a.species)?;
-            let t0 = Instant::now();
-            let model = sp.model(a.seed, sylva_tree::mesh::LOD_LEVELS)?;
-            let secs = t0.elapsed().as_secs_f64();
-            let tree = &model.tree;
-            let sk = &tree.skeleton;
-            let s = tree.stats;
-            println!("species          {}", sp.name);
-            println!("levels           {}", sp.levels);
-            println!("stems            {}", s.stems);
-            println!("joints           {}", sk.len());
-            println!("leaves           {} ({:.1} m² one-sided)", s.leaves, s.leaf_area);
-            println!("height           {:.2} m", s.height);
-            println!(
-                "trunk            {:.2} m long, {:.1} cm base diameter, DBH {:.1} cm",
-                s.trunk_length,
-                200.0 * s.trunk_radius,
-                200.0 * sk.radius_at_height(1.3)
-            );
-            println!(
-                "crown width      {:.2} m × {:.2} m (leaf area index {:.1})",
-                s.crown_width[0],
-                s.crown_width[1],
-                s.leaf_area_index()
-            );
-            println!("mass             {:.0} kg", sk.carried_mass(0));
-            println!(
-                "generation       {:.2} ms (skeleton, meshes, LOD chain, textures)",
-                secs * 1e3
-            );
-            println!("LOD  triangles  branch tris  clusters  leaf area m²  min radius cm");
-            for l in &model.lods {
-                println!(
-                    "{:<4} {:>9}  {:>11}  {:>8}  {:>12.1}  {:>13.2}",
-                    l.level,
-                    l.triangles(),
-                    l.branches.triangles(),
-                    l.clusters.len(),
-                    l.leaf_area(),
-                    100.0 * l.min_radius
-                );
-            }
-        }
+        TreeCommand::Stats(a) => stats(a)?,
     }
     Ok(())
 }
 
+/// `sylva tree generate`: a tree written as glTF, one file per LOD asked for.
+fn generate(a: GenerateArgs) -> anyhow::Result<()> {
+    let sp = Species::load(&a.species)?;
+    if a.max_joints == 0 || a.max_joints > sylva_tree::gltf::MAX_GLTF_JOINTS {
+        bail!("--max-joints {}: must be 1 … {}", a.max_joints, sylva_tree::gltf::MAX_GLTF_JOINTS);
+    }
+    let model = sp.model(a.seed, sylva_tree::mesh::LOD_LEVELS)?;
+    let last = model.lods.len() - 1;
+    // (level, file) pairs.
+    let files: Vec<(usize, PathBuf)> = if a.lod == "all" {
+        let stem = a.out.file_stem().and_then(|s| s.to_str()).unwrap_or("tree");
+        (0..=last).map(|l| (l, a.out.with_file_name(format!("{stem}.lod{l}.glb")))).collect()
+    } else {
+        let l: usize = a
+            .lod
+            .parse()
+            .ok()
+            .filter(|&l| l <= last)
+            .with_context(|| format!("--lod {}: a level 0 … {last}, or `all`", a.lod))?;
+        vec![(l, a.out.clone())]
+    };
+    if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    for (l, path) in files {
+        let opts = sylva_tree::gltf::GltfOptions {
+            lods: vec![l],
+            max_joints: a.max_joints,
+            name: sp.name.clone(),
+            animation: None,
+        };
+        let bytes = model.to_glb(&opts);
+        sylva_wind::io::atomic::write_atomic(&path, &bytes)
+            .with_context(|| format!("writing {}", path.display()))?;
+        println!(
+            "wrote {} (LOD {l}: {:.1} MB, skeleton of {} joints, at most {} exported, {} \
+             triangles)",
+            path.display(),
+            bytes.len() as f64 / 1e6,
+            model.tree.skeleton.len(),
+            a.max_joints,
+            model.lods[l].triangles()
+        );
+    }
+    Ok(())
+}
+
+/// `sylva tree stats`: a tree grown and its figures printed, level by level.
+fn stats(a: StatsArgs) -> anyhow::Result<()> {
+    let sp = Species::load(&a.species)?;
+    let t0 = Instant::now();
+    let model = sp.model(a.seed, sylva_tree::mesh::LOD_LEVELS)?;
+    let secs = t0.elapsed().as_secs_f64();
+    let tree = &model.tree;
+    let sk = &tree.skeleton;
+    let s = tree.stats;
+    println!("species          {}", sp.name);
+    println!("levels           {}", sp.levels);
+    println!("stems            {}", s.stems);
+    println!("joints           {}", sk.len());
+    println!("leaves           {} ({:.1} m² one-sided)", s.leaves, s.leaf_area);
+    println!("height           {:.2} m", s.height);
+    println!(
+        "trunk            {:.2} m long, {:.1} cm base diameter, DBH {:.1} cm",
+        s.trunk_length,
+        200.0 * s.trunk_radius,
+        200.0 * sk.radius_at_height(1.3)
+    );
+    println!(
+        "crown width      {:.2} m × {:.2} m (leaf area index {:.1})",
+        s.crown_width[0],
+        s.crown_width[1],
+        s.leaf_area_index()
+    );
+    println!("mass             {:.0} kg", sk.carried_mass(0));
+    println!("generation       {:.2} ms (skeleton, meshes, LOD chain, textures)", secs * 1e3);
+    println!("LOD  triangles  branch tris  clusters  leaf area m²  min radius cm");
+    for l in &model.lods {
+        println!(
+            "{:<4} {:>9}  {:>11}  {:>8}  {:>12.1}  {:>13.2}",
+            l.level,
+            l.triangles(),
+            l.branches.triangles(),
+            l.clusters.len(),
+            l.leaf_area(),
+            100.0 * l.min_radius
+        );
+    }
+    Ok(())
+}
+
+/// `sylva tree animate`: a tree swayed in a wind and written as an animated glTF. (About
+/// 150 lines: the settings checked, the wind built, the clip recorded, looped and reduced,
+/// each step printing what it did, in the order a user reads them.)
 fn animate(a: AnimateArgs) -> anyhow::Result<()> {
     use sylva_forest::clip::{ClipSettings, PointWind, record};
     if a.max_joints == 0 || a.max_joints > sylva_tree::gltf::MAX_GLTF_JOINTS {
@@ -325,7 +328,7 @@ fn animate(a: AnimateArgs) -> anyhow::Result<()> {
         bail!("--lod {}: a level 0 … {last}", a.lod);
     }
     let sk = &model.tree.skeleton;
-    let crown = [0.0, 0.0, 0.7 * model.tree.stats.height as f64];
+    let crown = [0.0, 0.0, sylva_tree::WIND_SAMPLE_HEIGHT * model.tree.stats.height as f64];
     let started = Instant::now();
     let wind = PointWind::new(&a.wind, crown, a.seconds, a.seed, a.looped)?;
     let joints = model.exported_joints(a.lod, a.max_joints);
@@ -459,6 +462,7 @@ fn animate(a: AnimateArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// `sylva sway`: a tree's sway probed in a wind (a CSV of its motion, or its free decay).
 pub fn run_sway(cmd: SwayCommand) -> anyhow::Result<()> {
     let SwayCommand::Probe(a) = cmd;
     if !(a.seconds > 0.0 && a.fps > 0.0) {
@@ -467,7 +471,7 @@ pub fn run_sway(cmd: SwayCommand) -> anyhow::Result<()> {
     let species = Species::load(&a.species)?;
     let tree = species.generate(a.seed)?;
     let sk = &tree.skeleton;
-    let crown = [0.0, 0.0, 0.7 * tree.stats.height as f64];
+    let crown = [0.0, 0.0, sylva_tree::WIND_SAMPLE_HEIGHT * tree.stats.height as f64];
     let dt = 1.0 / a.fps;
     let steps = (a.seconds * a.fps).ceil() as usize;
     // Wind at the crown per step: steady, or sampled from a synthesised or read field.

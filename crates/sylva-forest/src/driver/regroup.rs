@@ -1,6 +1,8 @@
 //! Instance groups formed again as the camera travels: which trees share a simulation, and
 //! the cross-fade of a tree that changed group (see the `driver` module's documentation).
 
+use sylva_tree::WIND_SAMPLE_HEIGHT;
+
 use crate::groups::{assign_slots, partition};
 use crate::scene::Placement;
 
@@ -59,7 +61,7 @@ pub(super) fn regroup_species(
             let p = trees[t].0;
             c[0] += p.position[0] as f64;
             c[1] += p.position[1] as f64;
-            c[2] += (p.position[2] + 0.7 * height * p.scale) as f64;
+            c[2] += (p.position[2] + WIND_SAMPLE_HEIGHT as f32 * height * p.scale) as f64;
         }
         let k = (hi - lo).max(1) as f64;
         group.sample = [c[0] / k, c[1] / k, c[2] / k];

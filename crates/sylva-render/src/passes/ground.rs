@@ -83,8 +83,7 @@ pub struct Woodland {
 /// radius: its upper side is narrower. The shader gives the lighter crowns the albedo
 /// that keeps the mean over what the crowns show (`CONE_SHOWN` in ground.wgsl, the same
 /// value); set from the woodland's mean brightness in a low view over it, which this keeps
-/// within about 3 % of the spheroids' (see docs/benchmarks.md, "Conifers in the painted
-/// woodland").
+/// within about 3 % of the spheroids' (docs/decisions/0008-lighting-and-surround.md).
 pub const CONE_SHOWN: f32 = 0.6;
 
 /// The painted woodland's colours, from the forest's species: their mean albedo, and the

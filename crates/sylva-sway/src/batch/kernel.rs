@@ -41,7 +41,9 @@ impl SwayBatch {
         self.updates = self.lane_computed.iter().map(|&s| s as usize).sum();
     }
 
-    /// The step's groups, `W` (= [`SwayBatch::width`]) lanes each.
+    /// The step's groups, `W` (= [`SwayBatch::width`]) lanes each. (About 150 lines: the
+    /// borrow of every group's storage, plan and rows at once for the parallel loop is what
+    /// takes the room; the arithmetic is in `step_group` and `alone`.)
     fn step_lanes<const W: usize>(&mut self, blend: f32, rest: f32, wind: &[[f32; 3]]) {
         let sp = &self.species;
         let (tr, aero, budget, ni) =
@@ -241,7 +243,10 @@ pub(super) struct Group<'a, const W: usize> {
 }
 
 simd_kernel! {
-    /// Step one group, vectorised with the widest instruction set the CPU has.
+    /// Step one group, vectorised with the widest instruction set the CPU has. (About 130
+    /// lines: the three sweeps over the joints — loads inwards, springs, palettes outwards —
+    /// share the group's borrowed state and must stay in one compiled body for the
+    /// instruction set the macro picks.)
     pub(super) fn step_group<const W: usize>(
         sp: &SwaySpecies,
         tr: &[Transition],

@@ -57,32 +57,32 @@ pub(super) fn round_up(lumped: &[(usize, Vec<Lump>)], n: usize, joints: usize) -
     lumped.iter().map(|(q, _)| *q).filter(|&q| q >= joints).min().unwrap_or(n).min(n)
 }
 
-/// Relative cost of one joint of a group step at `width` lanes, against one lane alone
-/// (the narrow-batch figures of docs/benchmarks.md: a black tupelo steps 1.3, 3.9, 4.2 and
-/// 5.7 ms at 1, 4, 8 and 16 lanes on AVX-512) — what a wide group saves is memory traffic
-/// more than arithmetic.
+/// Relative cost of one joint of a group step at 4, 8 and 16 lanes, against one lane
+/// alone: what a wide group saves is memory traffic more than arithmetic. Defaults
+/// measured once with `sylva bench sway --instances N` (a black tupelo at 1, 4, 8 and 16
+/// lanes on an AVX-512 Xeon); the plan only compares costs, so they need to hold as
+/// ratios, not as times, and a machine where they differ steps the same trees with a
+/// slightly different split of lanes — never a different result.
+pub(super) const COST_AT_4_LANES: f32 = 3.0;
+pub(super) const COST_AT_8_LANES: f32 = 3.2;
+pub(super) const COST_AT_16_LANES: f32 = 4.4;
+
+/// Relative cost of one joint of a group step at `width` lanes (see [`COST_AT_4_LANES`]).
 pub(super) fn width_cost(width: usize) -> f32 {
     match width {
         0..=1 => 1.0,
-        2..=4 => 3.0,
-        5..=8 => 3.2,
-        _ => 4.4,
+        2..=4 => COST_AT_4_LANES,
+        5..=8 => COST_AT_8_LANES,
+        _ => COST_AT_16_LANES,
     }
 }
 
-/// A lane stepped alone cost one lane's step and the copies of its angles, rates and
-/// weights in and out, strided across its group's lanes: in scene D's forest a black
-/// tupelo's whole skeleton stepped in about 1.8 ms alone in its group of eight, against
-/// 1.1–1.3 ms in a batch of its own (docs/benchmarks.md). A lane alone now keeps its state
-/// in its row from step to step (see `Row`), so it pays for the copies only when it goes
-/// alone or rejoins.
-///
-/// These costs predate the single-lane kernel (`alone`), which made a lane alone about 30 %
-/// cheaper (a tupelo now steps in 0.77, 3.4, 3.9 and 4.3 ms at 1, 4, 8 and 16 lanes, and
-/// alone in a group of 8 or 16 in 1.3 or 1.6 times its batch-of-one time). Refitted to
-/// those figures, scenes A and D stepped the same within the noise, and a group of three
-/// lanes needing the same few joints went all alone, each with a row of palettes, at a
-/// tie in cost: the older, more cautious figures are kept.
+/// Relative cost of one joint of a lane stepped alone within its group, against a batch
+/// of one: one lane's step, and the copies of its state into its row when it goes alone
+/// and back when it rejoins (see `Row`). A default measured as [`COST_AT_4_LANES`] (a
+/// black tupelo alone in a group of eight against a batch of its own), on the cautious
+/// side: a lower figure sends more lanes alone, each with a row of palettes, for no
+/// measured gain.
 pub(super) const ALONE_COST: f32 = 1.7;
 
 /// Which lanes of a group to step alone: (the prefix the group steps every lane to, a bit

@@ -158,7 +158,7 @@ pub(super) fn local_palette(ph: [f32; 3], o: [f32; 3], s: f32, c: f32) -> Palett
 
 /// The same palettes through glam's `Affine3A` (the comparison behind the choice of a small
 /// math module over glam: `cargo run --release -p sylva --features sylva-sway/glam -- bench
-/// sway`, figures in docs/benchmarks.md). Same rotation formula; glam builds, composes and
+/// sway`; docs/decisions/0011-vectors-and-simd.md). Same rotation formula; glam builds, composes and
 /// stores the matrices, one lane at a time as its types require.
 #[cfg(feature = "glam")]
 #[inline(always)]

@@ -171,6 +171,9 @@ pub(super) fn command_line(a: &Table3Bench, (w, h): (u32, u32)) -> String {
     c
 }
 
+/// One configuration of one scene along its path: warm-up, timed frames (waited for, and
+/// with `--overlapped` in flight), and the last frame kept for the image error. (About 125
+/// lines: the timing loop and what it records per frame belong together.)
 pub(super) fn run_config(
     spec: &SceneSpec,
     gpu: &mut Option<Headless>,

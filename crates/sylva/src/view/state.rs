@@ -651,7 +651,11 @@ impl Viewer {
     pub fn probe(&self) -> [f64; 3] {
         if let Some(p) = self.selected.and_then(|t| self.forest.placement(t)) {
             let h = self.selected.and_then(|t| self.forest.tree_info(t)).map_or(15.0, |i| i.height);
-            return [p.position[0] as f64, p.position[1] as f64, (p.position[2] + 0.7 * h) as f64];
+            return [
+                p.position[0] as f64,
+                p.position[1] as f64,
+                (p.position[2] + sylva_tree::WIND_SAMPLE_HEIGHT as f32 * h) as f64,
+            ];
         }
         let [x, y, _] = self.orbit.target;
         [x as f64, y as f64, (self.forest.terrain.height(x, y) + 20.0) as f64]

@@ -125,14 +125,10 @@ fn view_axes(k: u32, r: u32) -> mat3x3<f32> {
     );
 }
 
-// Steps following a line of sight into a view's depth map. A stand of 120 trees seen from
-// 40° above, crowns 100 to 150 pixels tall (`impostor_stand`): FLIP against full detail
-// 0.084 with none (the view's pixel at the pixel's place on the quad), 0.085 with the
-// point only projected into the view, 0.081 with one step, two or four, when every texel
-// over nothing held one depth. Now that such texels hold the depth of what is beside them
-// (far.rs, `depth_mips`), a second step finds the surface a first one only nears: at 70 /
-// 110 / 170 m, 0.222 / 0.171 / 0.072 with one step, 0.215 / 0.165 / 0.070 with two
-// (docs/benchmarks.md).
+// Steps following a line of sight into a view's depth map. Texels over nothing hold the
+// depth of what is beside them (far/atlas.rs, `depth_mips`), so a second step finds the
+// surface a first one only nears; more steps change nothing measurable
+// (docs/decisions/0005-impostors.md).
 const SURFACE_STEPS: i32 = 2;
 
 // Place in the cell of the view with `axes` (0 … 1) of point `p` (tree space, from the
@@ -223,13 +219,10 @@ fn vs_main(@builtin(vertex_index) vi: u32, inst: InstanceIn, lean: LeanIn) -> Fa
     let span = max(row_span(r0), row_span(r1));
     let half = 0.52 * min(vec2<f32>(2.0 * far.radius, span), vec2<f32>(far.extent));
     // Within that square, the trapezoid around what the two rows' views cover (far.rs,
-    // `outline`). In scene D on lavapipe an impostor's pixels cost about the same whether
-    // shaded or discarded at once, and the trapezoid takes a fifth to a third off the
-    // frame (1.40 and 1.19 s a frame at two places on its path instead of 1.74 and 1.80).
-    // It is not widened: by two pixels and 2 % of the cell (for what a coarse mip or a
-    // view baked aside spreads past the outline) it saved only half as much, and without
-    // it the image error is the same to 0.0002 (docs/benchmarks.md, "Impostors drawn as
-    // trapezoids").
+    // `outline`): on lavapipe an impostor's pixels cost about the same whether shaded or
+    // discarded, so the pixels the trapezoid leaves out are what it saves
+    // (docs/decisions/0005-impostors.md). It is not widened: the image error is the same
+    // without a margin.
     let sides = far.outline[r0 * 2u];
     let ends = far.outline[r0 * 2u + 1u];
     let y = select(ends.x, ends.y, corner.y > 0.5);
@@ -329,11 +322,9 @@ fn crown_chord(p: vec3<f32>, d: vec3<f32>) -> vec2<f32> {
 // ellipsoid's surface (Beer-Lambert), but for the first `lit` of that path, which full
 // detail's shadow map leaves lit (`SHADOW_BIAS_TEXELS`, here in tree units). The mean is
 // taken at the depths of the distribution's first and third quartiles. 1 where the line of
-// sight misses the ellipsoid, and without shadows (full detail then has none either). At
-// one depth (half a free path, nothing left lit) scenes C and D at rest read 1.6 and 2.1 %
-// darker than full detail and FLIP 0.078 and 0.076 against it; now 1.1 and 1.4 % and
-// 0.075 and 0.070; walking B's and C's paths their error is as it was (C 0.0800, now
-// 0.0799; docs/benchmarks.md, "A crown's shade as full detail's shadow map gives it").
+// sight misses the ellipsoid, and without shadows (full detail then has none either).
+// Taken at one depth only, crowns read darker than full detail's
+// (docs/decisions/0005-impostors.md).
 fn crown_light(at: vec3<f32>, look: vec3<f32>, sun: vec3<f32>, lit: f32) -> f32 {
     let extinction = far.crown.w;
     if (extinction <= 0.0 || globals.shadow_texel <= 0.0) {

@@ -33,12 +33,9 @@ pub use atlas::{depth_mips, impostor_mips};
 pub use outline::outline;
 
 /// Views baked around each tree, at each elevation: 22.5° apart, so a far tree is shown
-/// from at most 11.25° off the direction it is seen from. A stand of 120 trees of scene B's
-/// mix, 100–150 pixels tall at rest, read FLIP 0.039 against full detail with sixteen,
-/// 0.042 with eight (full detail a quarter pixel aside: 0.022); twice the views doubled
-/// the bake (4.2 to 9.8 s for B's five species on lavapipe), and neither twice the texels
-/// a view (0.042) nor elevations 15° apart instead of 30° (0.041) helped as much
-/// (docs/benchmarks.md, "Sixteen impostor views").
+/// from at most 11.25° off the direction it is seen from. Fewer views show more error
+/// against full detail; more double the start-up bake for less gain than they cost
+/// (docs/decisions/0005-impostors.md).
 pub const VIEWS: u32 = 16;
 /// Elevations the views are baked at: 0, [`ROW_STEP_DEG`], 2·[`ROW_STEP_DEG`] … (rows of the
 /// atlas).
@@ -57,11 +54,8 @@ pub const OUTLINE_LEN: usize = ROWS as usize * OUTLINE_PER_ROW;
 /// [`bake_level`]).
 pub const BAKE_TRIANGLES: usize = 300_000;
 /// The finest level impostors are rendered from: level 1, which keeps full detail's leaf
-/// cards, card for card, on a third of its wood. The stand of `impostor_stand` (scene B's
-/// mix, 100–150 pixels tall) reads the same FLIP against full detail baked from level 1
-/// as from level 0 (0.0388 and 0.0387; as brightness within 0.1 %), and the bake of B's
-/// five species takes about a fifth less time on lavapipe (6.4 s against 8.3, medians of
-/// four; docs/benchmarks.md, "Baked from level 1").
+/// cards, card for card, on a third of its wood: impostors baked from it look as those
+/// baked from level 0 (the `impostor_stand` example measures both), for a shorter bake.
 pub const BAKE_FINEST: usize = 1;
 
 /// Sunlight's extinction in a crown per unit of leaf area density (m² of leaf per m³ of
@@ -70,12 +64,9 @@ pub const BAKE_FINEST: usize = 1;
 /// `SHADOW_BIAS_TEXELS`). Leaves facing every way give 0.5 in a crown filled evenly; full
 /// detail's crowns are darker inside than that, their leaves on fewer, denser twigs than
 /// the ellipsoid's volume suggests and their wood casting shadow too. Matched against full
-/// detail in scenes B, C and D at rest and B and C walking their paths (mean FLIP at rest
-/// C 0.0754, D 0.0695 with 1.5; 0.0749, 0.0690 with 1.2; in motion C 0.0799 with 1.5,
-/// 0.0803 with 1.2), and in a stand seen from several sides
-/// (`a_stand_drawn_as_impostors_keeps_the_brightness_of_full_detail_under_shadows`: off by
-/// 2.2 % at worst, 1.25 % on average). docs/benchmarks.md, "A crown's shade as full
-/// detail's shadow map gives it".
+/// detail in scenes B, C and D and in a stand seen from several sides
+/// (`a_stand_drawn_as_impostors_keeps_the_brightness_of_full_detail_under_shadows` holds
+/// the stand's brightness to full detail's; docs/decisions/0005-impostors.md).
 pub const CROWN_EXTINCTION: f32 = 1.5;
 
 /// The crown of leaf `clusters` as an ellipsoid about the trunk axis: centre height,
