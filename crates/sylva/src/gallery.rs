@@ -11,7 +11,7 @@ use sylva_forest::{Camera, Forest, FrameData, SceneSpec};
 use sylva_render::Headless;
 use sylva_tree::PRESETS;
 
-use crate::render::{parse_size, shrink, write_png};
+use sylva_frames::render::{parse_size, shrink, write_png};
 
 #[derive(Debug, Args)]
 pub struct GalleryArgs {

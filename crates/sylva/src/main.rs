@@ -4,38 +4,16 @@
 //! Arguments are parsed in two stages (raw clap flags -> validated settings in `wind.rs`),
 //! so every check happens once, at the edge, with an error that names the flag.
 
-mod bench;
 mod forest;
 mod gallery;
-mod plot;
-mod render;
-mod table3;
 mod tree;
-mod view;
 mod wind;
 
+use sylva_bench as bench;
+use sylva_frames::{available_memory, finite, render};
+use sylva_viewer as view;
+
 use clap::{Parser, Subcommand};
-
-/// The value parser of every floating-point flag: a finite number. NaN and ±∞ parse as
-/// floats but are never meaningful input; clap names the flag in the error.
-pub(crate) fn finite<T>(s: &str) -> Result<T, String>
-where
-    T: std::str::FromStr + Copy + Into<f64>,
-    T::Err: std::fmt::Display,
-{
-    let v: T = s.trim().parse().map_err(|e| format!("`{s}` is not a number ({e})"))?;
-    if v.into().is_finite() { Ok(v) } else { Err(format!("`{s}` is not a finite number")) }
-}
-
-/// A count flag of at least 1 (`--frames 0` is an error naming the flag, not one frame in
-/// silence).
-pub(crate) fn at_least_one(s: &str) -> Result<usize, String> {
-    match s.trim().parse::<usize>() {
-        Ok(0) => Err("must be at least 1".into()),
-        Ok(v) => Ok(v),
-        Err(e) => Err(format!("`{s}` is not a count ({e})")),
-    }
-}
 
 /// Forests in wind: wind-engineering wind fields, Weber–Penn trees, swaying branches, rendered.
 #[derive(Debug, Parser)]
@@ -122,14 +100,6 @@ fn demo(a: DemoArgs) -> anyhow::Result<()> {
     let r = render::render(&args, 0)?;
     render::print_report(&args, &r);
     Ok(())
-}
-
-/// Memory the kernel reports as available (MemAvailable), bytes; `None` where unknown.
-pub fn available_memory() -> Option<f64> {
-    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb * 1024.0)
 }
 
 fn main() -> std::process::ExitCode {

@@ -202,7 +202,7 @@ pub fn run_tree(cmd: TreeCommand) -> anyhow::Result<()> {
             let atlas = sylva_tree::texture::leaf_atlas(&sp, a.seed, sylva_tree::mesh::ATLAS_SIZE);
             for (name, img) in [("bark.png", &bark), ("leaves.png", &atlas.image)] {
                 let path = a.out.join(name);
-                crate::render::write_png(&path, img.width, img.height, &img.rgba)?;
+                sylva_frames::render::write_png(&path, img.width, img.height, &img.rgba)?;
                 println!("wrote {}", path.display());
             }
             println!(

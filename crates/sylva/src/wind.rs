@@ -13,7 +13,7 @@ use sylva_wind::{
     WindParams, io,
 };
 
-use crate::plot::write_stats_plots;
+use sylva_frames::plot::write_stats_plots;
 
 #[derive(Debug, Subcommand)]
 pub enum WindCommand {

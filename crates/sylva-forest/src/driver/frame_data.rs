@@ -53,8 +53,6 @@ pub struct Instance {
     pub tilt: [u16; 2],
 }
 
-/// The geometry-LOD switch and thresholds (see the module documentation).
-
 /// A run of instances of one species at one LOD: one instanced draw.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Bucket {

@@ -30,7 +30,7 @@ pub const FAR_WIND_LEVEL: usize = 2;
 /// shadow pass; a tree past the last mesh level casts its last one). Two levels: scene A's
 /// image differs from one level's by 1.7 grey levels on average, for about 6 % less
 /// rendering time on lavapipe. A tree drawn into the shadow map only
-/// ([`Bucket::shadow_only`]) needs just the joints of the level it casts, and
+/// ([`Bucket::shadow_only`](super::Bucket::shadow_only)) needs just the joints of the level it casts, and
 /// simulates only its trunk.
 pub const SHADOW_COARSER: u32 = 2;
 

@@ -37,8 +37,8 @@
 //! dither: the two draws keep complementary pixel sets ([`Instance::fade`]), so no frame
 //! shows a tree jump from one level to the next. Trees outside the view cone are culled,
 //! except, with shadows on, those whose shadow may fall in view: their crown swept away
-//! from the sun ([`ShadowSweep`]) may reach the cone, and it may cast into the shadow
-//! map's far cascade ([`ShadowBox`]; outside it nothing takes a shadow). They are drawn
+//! from the sun ([`ShadowSweep`](crate::camera::ShadowSweep)) may reach the cone, and it may cast into the shadow
+//! map's far cascade ([`ShadowBox`](crate::camera::ShadowBox); outside it nothing takes a shadow). They are drawn
 //! into the shadow map only ([`Bucket::shadow_only`]), at the level their size gives, so
 //! a long shadow neither appears when its tree comes into view nor changes level then
 //! (its crown's sway blends in, as for any tree entering the view).

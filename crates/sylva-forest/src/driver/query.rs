@@ -89,7 +89,7 @@ impl Forest {
     }
 
     /// The near field read around the camera, if the scene's field is coarser than its
-    /// trees (see [`wind_field`]).
+    /// trees (see [`wind_field`](crate::wind::wind_field)).
     pub fn near_field(&self) -> Option<&NearField> {
         self.near.as_ref()
     }
@@ -148,7 +148,7 @@ impl Forest {
     }
 
     /// Palettes (rest → animated, tree space) of joints `joints` of tree `t`'s simulation
-    /// — its instance group's — in its species' joint numbering ([`SpeciesRuntime::model`],
+    /// — its instance group's — in its species' joint numbering ([`SpeciesRuntime::model`](super::SpeciesRuntime::model),
     /// in LOD order). Empty for an unknown tree; a joint past the skeleton reads identity.
     pub fn tree_palettes(&self, t: usize, joints: &[usize]) -> Vec<sylva_sway::Palette> {
         let Some(&(p, g)) = self.trees.get(t) else { return Vec::new() };
@@ -159,7 +159,7 @@ impl Forest {
         joints.iter().map(|&j| if j < n { s.batch.palette(lane, j) } else { IDENTITY }).collect()
     }
 
-    /// Replace the wind (e.g. one [`wind_field`] synthesised in the background for a changed
+    /// Replace the wind (e.g. one [`wind_field`](crate::wind::wind_field) synthesised in the background for a changed
     /// scene wind); time, sway state and live controls carry on.
     pub fn set_wind_field(&mut self, wind: SceneWind) {
         self.wind = OwnedPyramid::new(wind.field);

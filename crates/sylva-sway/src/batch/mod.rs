@@ -78,6 +78,7 @@ mod storage;
 #[cfg(test)]
 mod tests;
 
+#[cfg(not(feature = "glam"))]
 use kernel::*;
 use plan::*;
 use rotation::*;

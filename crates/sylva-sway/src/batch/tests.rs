@@ -69,6 +69,7 @@ fn any_angle_matches_f64_within_3e_7() {
     }
 }
 
+use super::kernel::*;
 use super::*;
 
 #[test]

@@ -31,7 +31,7 @@ use clap::Args;
 use sylva_forest::{Camera, Forest, FrameData, SceneSpec};
 use sylva_render::Headless;
 
-use crate::render::{median, parse_size, write_png};
+use sylva_frames::render::{median, parse_size, write_png};
 
 mod measure;
 mod metrics;
@@ -58,27 +58,27 @@ pub struct Table3Bench {
     size: String,
     /// Frames timed per configuration (after the warm-up), spread along the camera path
     /// (at least 1).
-    #[arg(long, default_value_t = 6, value_parser = crate::at_least_one)]
+    #[arg(long, default_value_t = 6, value_parser = sylva_frames::at_least_one)]
     frames: usize,
     /// Warm-up frames, not timed.
     #[arg(long, default_value_t = 2)]
     warmup: usize,
     /// Configurations drawing more triangles per frame are timed on the CPU side only.
-    #[arg(value_parser = crate::finite::<f64>, long, default_value_t = MAX_TRIANGLES)]
+    #[arg(value_parser = sylva_frames::finite::<f64>, long, default_value_t = MAX_TRIANGLES)]
     max_triangles: f64,
     /// Their last frame is still rendered for the image error below this many triangles.
-    #[arg(value_parser = crate::finite::<f64>, long, default_value_t = MAX_IMAGE_TRIANGLES)]
+    #[arg(value_parser = sylva_frames::finite::<f64>, long, default_value_t = MAX_IMAGE_TRIANGLES)]
     max_image_triangles: f64,
     /// First LOD level drawn as an impostor (1 … 6; default: the scene's).
     #[arg(long)]
     far_level: Option<u32>,
     /// Geometry-LOD threshold h₀ (default: the scene's).
-    #[arg(value_parser = crate::finite::<f32>, long)]
+    #[arg(value_parser = sylva_frames::finite::<f32>, long)]
     lod_fraction: Option<f32>,
     /// Memory the animation state may take, GB (default: the scene's cap, at most three
     /// quarters of the free memory). Over it, lane groups are kept at coarser prefixes (a
     /// note says how many); without the animation LOD the forest is refused.
-    #[arg(value_parser = crate::finite::<f64>, long)]
+    #[arg(value_parser = sylva_frames::finite::<f64>, long)]
     max_memory: Option<f64>,
     /// Run only the configuration with all LODs, and its image error against full detail
     /// (without the motion floor's second full-detail frame): how a threshold or level
@@ -120,7 +120,7 @@ pub struct Table3Bench {
 pub fn run(a: Table3Bench) -> anyhow::Result<()> {
     let (w, h) = parse_size(&a.size)?;
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
-    let machine = crate::bench::machine();
+    let machine = crate::machine();
     println!("machine: {machine}");
     let names: Vec<String> = a.scenes.split(',').map(|s| s.trim().to_string()).collect();
     let mut results: Vec<(String, usize, Vec<Cell>)> = Vec::new();
@@ -160,7 +160,7 @@ pub fn run(a: Table3Bench) -> anyhow::Result<()> {
                     cell.note
                 );
                 if let Some(p) = cell.pass_medians() {
-                    println!("    GPU ms by part: {}", crate::render::parts_text(&p));
+                    println!("    GPU ms by part: {}", sylva_frames::render::parts_text(&p));
                 }
                 rounds[k].push(cell);
             }

@@ -1,12 +1,14 @@
 //! `sylva bench …`: scene-scale benchmarks. Figures are medians of several runs, measured
 //! side by side in one process, printed with the machine they ran on.
 
+pub mod table3;
+
 use std::time::Instant;
 
 use anyhow::Context;
 use clap::{Args, Subcommand};
 
-use crate::render::median;
+use sylva_frames::render::median;
 use sylva_wind::{CoherenceSpeed, Grid, Method, SynthParams, WindField, WindParams};
 
 #[derive(Debug, Subcommand)]
@@ -32,7 +34,7 @@ pub enum BenchCommand {
 #[derive(Debug, Args)]
 pub struct TreeBench {
     /// Runs per preset (the median is reported; at least 1).
-    #[arg(long, default_value_t = 7, value_parser = crate::at_least_one)]
+    #[arg(long, default_value_t = 7, value_parser = sylva_frames::at_least_one)]
     runs: usize,
     /// Seed of the generated trees.
     #[arg(long, default_value_t = 1)]
@@ -48,17 +50,17 @@ pub struct RenderBench {
     #[arg(long, default_value = "1024x768")]
     size: String,
     /// Frames timed (after one warm-up frame; at least 1).
-    #[arg(long, default_value_t = 10, value_parser = crate::at_least_one)]
+    #[arg(long, default_value_t = 10, value_parser = sylva_frames::at_least_one)]
     frames: usize,
     /// Geometry-LOD threshold h₀ (see `sylva render --help`; default: the scene's).
-    #[arg(value_parser = crate::finite::<f32>, long)]
+    #[arg(value_parser = sylva_frames::finite::<f32>, long)]
     lod_fraction: Option<f32>,
     /// Also the GPU's time in each part of the frame (timestamp queries between the
     /// renderer's passes: shadows, trees, impostors, ground, sky), medians.
     #[arg(long)]
     gpu_passes: bool,
     #[command(flatten)]
-    lod: crate::render::LodArgs,
+    lod: sylva_frames::render::LodArgs,
 }
 
 fn tree(a: TreeBench) -> anyhow::Result<()> {
@@ -113,7 +115,7 @@ fn tree(a: TreeBench) -> anyhow::Result<()> {
 }
 
 fn render_bench(a: RenderBench) -> anyhow::Result<()> {
-    let args = crate::render::RenderArgs {
+    let args = sylva_frames::render::RenderArgs {
         scene: a.scene,
         seconds: (a.frames + 1) as f64 / 10.0,
         fps: 10.0,
@@ -127,7 +129,7 @@ fn render_bench(a: RenderBench) -> anyhow::Result<()> {
         lod: a.lod,
     };
     println!("machine: {}", machine());
-    let r = crate::render::render(&args, 1)?;
+    let r = sylva_frames::render::render(&args, 1)?;
     println!(
         "{} frames at {}: simulation {:.1} ms (sway step {:.1} ms) + rendering {:.1} ms per frame (medians; rendering = upload, draw, read back), {:.2} M triangles per frame, {} simulated trees, {} joints per step, adapter {}",
         r.frames,
@@ -140,7 +142,7 @@ fn render_bench(a: RenderBench) -> anyhow::Result<()> {
         r.joints,
         r.adapter
     );
-    if let Some(line) = crate::render::passes_line(&r) {
+    if let Some(line) = sylva_frames::render::passes_line(&r) {
         println!("{line}");
     }
     Ok(())
@@ -149,10 +151,10 @@ fn render_bench(a: RenderBench) -> anyhow::Result<()> {
 #[derive(Debug, Args)]
 pub struct SwayBench {
     /// Instances of each species stepped together (at least 1).
-    #[arg(long, default_value_t = 1000, value_parser = crate::at_least_one)]
+    #[arg(long, default_value_t = 1000, value_parser = sylva_frames::at_least_one)]
     instances: usize,
     /// Steps timed per species (the median step is reported; at least 1).
-    #[arg(long, default_value_t = 10, value_parser = crate::at_least_one)]
+    #[arg(long, default_value_t = 10, value_parser = sylva_frames::at_least_one)]
     steps: usize,
     /// Species to run, comma-separated (default: every preset).
     #[arg(long, value_delimiter = ',')]
@@ -161,7 +163,7 @@ pub struct SwayBench {
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// Mean wind speed, m/s (instances get this plus 0 … 4 m/s, and a small cross-wind).
-    #[arg(value_parser = crate::finite::<f32>, long, default_value_t = 6.0)]
+    #[arg(value_parser = sylva_frames::finite::<f32>, long, default_value_t = 6.0)]
     wind: f32,
 }
 
@@ -214,7 +216,7 @@ fn sway(a: SwayBench) -> anyhow::Result<()> {
 #[derive(Debug, Args)]
 pub struct WindBench {
     /// Repetitions of each timed case (the median is reported; at least 1).
-    #[arg(long, default_value_t = 5, value_parser = crate::at_least_one)]
+    #[arg(long, default_value_t = 5, value_parser = sylva_frames::at_least_one)]
     runs: usize,
     /// Also run 1000×1000 cells × 3 components × 1024 frames (about 12 GiB of output).
     #[arg(long)]

@@ -9,7 +9,7 @@ use sylva_forest::{Camera, Forest, FrameData, FrameStats, SceneSpec};
 use sylva_render::Headless;
 
 use super::Table3Bench;
-use crate::render::median;
+use sylva_frames::render::median;
 
 /// Median and maximum of `v` (NaN when empty).
 fn median_max(v: &mut [f64]) -> (f64, f64) {

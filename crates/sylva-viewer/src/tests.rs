@@ -368,7 +368,7 @@ fn the_panel_renders_headless_like_its_golden_image() {
     assert!(left as u32 > H / 2 && right == 0, "panel rows {left}, rows changed right {right}");
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/golden/panel.png");
     if std::env::var_os("SYLVA_BLESS").is_some() {
-        crate::render::write_png(&path, W, H, &img).expect("bless");
+        sylva_frames::render::write_png(&path, W, H, &img).expect("bless");
     }
     let want = read_png(&path).expect("tests/golden/panel.png (SYLVA_BLESS=1 writes it)");
     let mean =
@@ -379,7 +379,8 @@ fn the_panel_renders_headless_like_its_golden_image() {
         .filter(|(a, b)| (0..3).any(|c| a[c].abs_diff(b[c]) > 48))
         .count();
     if mean > 3.0 || far as f64 > 0.02 * (W * H) as f64 {
-        let _ = crate::render::write_png(&path.with_file_name("panel-actual.png"), W, H, &img);
+        let _ =
+            sylva_frames::render::write_png(&path.with_file_name("panel-actual.png"), W, H, &img);
         panic!(
             "panel image off its golden: mean |Δ| {mean:.2}, {far} pixels far off (panel-actual.png)"
         );

@@ -63,7 +63,7 @@ pub(super) const PARTS: usize = sylva_render::PASS_PARTS.len();
 impl Cell {
     /// The median GPU time of each part of the frame, ms (`--gpu-passes`).
     pub(super) fn pass_medians(&self) -> Option<[f64; PARTS]> {
-        crate::render::part_medians(&self.passes)
+        sylva_frames::render::part_medians(&self.passes)
     }
 
     /// Pool the rounds `cells` (in order) into one: medians over all their timed frames,
@@ -124,7 +124,7 @@ pub(super) fn configure(
         anyhow::ensure!(h0 > 0.0 && h0 <= 100.0, "--lod-fraction {h0}: must be in (0, 100]");
         spec.lod.fraction = h0;
     }
-    crate::render::apply_max_memory(&mut spec, a.max_memory)?;
+    sylva_frames::render::apply_max_memory(&mut spec, a.max_memory)?;
     Ok(spec)
 }
 

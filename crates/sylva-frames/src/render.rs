@@ -178,6 +178,7 @@ pub fn shrink(rgba: &[u8], w: u32, h: u32, k: u32) -> (Vec<u8>, u32, u32) {
 }
 
 /// What a render run measured.
+#[derive(Debug)]
 pub struct RenderReport {
     pub frames: usize,
     pub sim_ms: f64,
@@ -205,6 +206,17 @@ pub struct ClipWriter {
     gif: Option<gif::Encoder<AtomicFile>>,
     frames: usize,
     seconds: f64,
+}
+
+impl std::fmt::Debug for ClipWriter {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ClipWriter")
+            .field("dir", &self.dir)
+            .field("size", &(self.w, self.h))
+            .field("frames", &self.frames)
+            .field("seconds", &self.seconds)
+            .finish_non_exhaustive()
+    }
 }
 
 impl ClipWriter {

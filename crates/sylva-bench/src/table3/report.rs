@@ -263,7 +263,7 @@ fn chart(a: &Table3Bench, results: &[SceneCells]) -> anyhow::Result<()> {
     let series = CONFIGS
         .iter()
         .enumerate()
-        .map(|(row, (label, ..))| crate::plot::Series {
+        .map(|(row, (label, ..))| sylva_frames::plot::Series {
             label: label.to_uppercase(),
             color: colours[row],
             points: results
@@ -276,7 +276,7 @@ fn chart(a: &Table3Bench, results: &[SceneCells]) -> anyhow::Result<()> {
     let paper = CONFIGS
         .iter()
         .enumerate()
-        .map(|(row, (label, ..))| crate::plot::Series {
+        .map(|(row, (label, ..))| sylva_frames::plot::Series {
             label: label.to_uppercase(),
             color: colours[row],
             points: [1000.0, 3000.0, 10000.0, 50000.0]
@@ -288,7 +288,7 @@ fn chart(a: &Table3Bench, results: &[SceneCells]) -> anyhow::Result<()> {
         })
         .collect();
     let panels = [
-        crate::plot::Panel {
+        sylva_frames::plot::Panel {
             title: "FPS HERE".into(),
             x_label: "TREES".into(),
             y_label: "FRAMES PER SECOND".into(),
@@ -297,7 +297,7 @@ fn chart(a: &Table3Bench, results: &[SceneCells]) -> anyhow::Result<()> {
             y_range: None,
             series,
         },
-        crate::plot::Panel {
+        sylva_frames::plot::Panel {
             title: "FPS IN THE PAPER".into(),
             x_label: "TREES".into(),
             y_label: "FRAMES PER SECOND".into(),
@@ -307,6 +307,6 @@ fn chart(a: &Table3Bench, results: &[SceneCells]) -> anyhow::Result<()> {
             series: paper,
         },
     ];
-    crate::plot::write_png(&a.out.join("table3.png"), &panels)?;
+    sylva_frames::plot::write_png(&a.out.join("table3.png"), &panels)?;
     Ok(())
 }

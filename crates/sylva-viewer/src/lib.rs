@@ -39,7 +39,7 @@ pub struct ViewArgs {
     /// Geometry-LOD threshold h₀ (see `sylva render --help`). Default: the scene's on a
     /// GPU, 1 on a software rasteriser such as lavapipe (only trees filling the image at
     /// full detail, the rest impostors).
-    #[arg(value_parser = crate::finite::<f32>, long)]
+    #[arg(value_parser = sylva_frames::finite::<f32>, long)]
     pub lod_fraction: Option<f32>,
     /// Wind instead of the scene's: a preset (calm, breeze, strong, storm), a steady speed
     /// in m/s, or a wind file (.swf, .npy, .zarr).
@@ -53,7 +53,7 @@ pub struct ViewArgs {
     #[arg(long)]
     pub camera_path: Option<std::path::PathBuf>,
     #[command(flatten)]
-    pub lod: crate::render::LodArgs,
+    pub lod: sylva_frames::render::LodArgs,
 }
 
 /// Whether a window can be opened here (a display server is named in the environment).
@@ -91,7 +91,7 @@ impl Drop for Surface {
 /// A clip being recorded: its own offscreen renderer and `sylva render`'s writer.
 struct Clip {
     headless: sylva_render::Headless,
-    writer: crate::render::ClipWriter,
+    writer: sylva_frames::render::ClipWriter,
     dir: std::path::PathBuf,
 }
 
@@ -262,7 +262,7 @@ impl App {
                 let started = sylva_render::Headless::new(&v.forest, w, h)
                     .map_err(anyhow::Error::from)
                     .and_then(|headless| {
-                        let writer = crate::render::ClipWriter::new(&dir, w, h, true)?;
+                        let writer = sylva_frames::render::ClipWriter::new(&dir, w, h, true)?;
                         Ok(Clip { headless, writer, dir: dir.clone() })
                     });
                 match started {
@@ -312,7 +312,7 @@ fn screenshot(v: &Viewer, w: u32, h: u32) -> anyhow::Result<String> {
     let mut headless = sylva_render::Headless::new(&v.forest, w, h)?;
     let rgba = headless.render(&v.frame, &v.orbit.camera())?;
     let path = format!("sylva-{:08}.png", (v.forest.time() * 1e3).round() as u64);
-    crate::render::write_png(std::path::Path::new(&path), w, h, &rgba)?;
+    sylva_frames::render::write_png(std::path::Path::new(&path), w, h, &rgba)?;
     Ok(path)
 }
 
