@@ -60,6 +60,12 @@ use crate::spectrum;
 type C64 = Complex<f64>;
 
 mod embed;
+mod estimate;
+
+pub use estimate::{
+    CHOLESKY_FLOPS_PER_S, CholeskyEstimate, check_config, cholesky_estimate, memory_estimate,
+    streaming_memory_estimate,
+};
 
 /// Synthesis method.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -711,90 +717,6 @@ fn cholesky_lower(a: &mut [f64], n: usize) -> Result<(), usize> {
     Ok(())
 }
 
-/// What the dense Cholesky method will cost on a grid, estimated before it starts.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct CholeskyEstimate {
-    /// Peak working memory beside the output, bytes: the n × n matrix and the coefficients.
-    pub bytes: f64,
-    /// Floating-point operations of the factorisations, all lines and components.
-    pub flops: f64,
-    /// Time at [`CHOLESKY_FLOPS_PER_S`], s.
-    pub seconds: f64,
-}
-
-/// Throughput the dense factorisation reaches on one core (it runs on one), flop/s; measured
-/// on a 2-core AMD EPYC (800 points, 256 frames: 6.6e10 flops in 57 s, 1.2e9) and rounded down.
-pub const CHOLESKY_FLOPS_PER_S: f64 = 1.0e9;
-
-impl std::fmt::Display for CholeskyEstimate {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{:.0} MB of memory and about {:.0} s", self.bytes / 1e6, self.seconds.ceil())
-    }
-}
-
-/// Estimate the dense Cholesky method's memory and time on `grid`: per component and line,
-/// n³/3 flops for the factor and n² for the matrix; memory n² f64 plus n (M/2 + 1) complex.
-pub fn cholesky_estimate(grid: &Grid) -> CholeskyEstimate {
-    let n = grid.points() as f64;
-    let lines = (grid.frames / 2).saturating_sub(1) as f64;
-    let flops = 3.0 * lines * (n * n * n / 3.0 + 4.0 * n * n);
-    let bytes = 8.0 * n * n + 16.0 * n * (grid.frames / 2 + 1) as f64;
-    CholeskyEstimate { bytes, flops, seconds: flops / CHOLESKY_FLOPS_PER_S }
-}
-
-/// Peak memory of [`crate::WindField::generate`] on `grid` with `method`, bytes: the f32
-/// output (3 components × points × frames) plus the method's working set — a few columns
-/// for the separable method, every point's coefficients (16 bytes × points × (M/2 + 1)) for
-/// the embedding and the dense Cholesky, plus the latter's n × n matrix.
-pub fn memory_estimate(grid: &Grid, method: Method) -> f64 {
-    let n = grid.points() as f64;
-    let nc = (grid.frames / 2 + 1) as f64;
-    let output = 12.0 * n * grid.frames as f64;
-    let column = (grid.nz() * grid.ny()) as f64;
-    let working = match method {
-        Method::Separable => {
-            32.0 * column * nc + 4.0 * EMIT_COLUMNS as f64 * column * grid.frames as f64
-        }
-        Method::Embedding => 16.0 * n * nc,
-        Method::Cholesky => cholesky_estimate(grid).bytes,
-    };
-    output + working
-}
-
-/// Check that the parameters, grid and method can be synthesised together.
-pub fn check_config(params: &WindParams, grid: &Grid, synth: SynthParams) -> Result<(), WindError> {
-    params.validate()?;
-    grid.validate()?;
-    if synth.method == Method::Separable
-        && params.coherence_speed == CoherenceSpeed::PairMean
-        && grid.nz() > 1
-    {
-        return Err(WindError::Unsupported(
-            "pair-mean coherence speed on several heights needs --method embedding (or \
-             cholesky); the separable method uses one reference speed"
-                .into(),
-        ));
-    }
-    if synth.method == Method::Embedding
-        && (Grid::regular_spacing(&grid.xs).is_none() || Grid::regular_spacing(&grid.ys).is_none())
-    {
-        return Err(WindError::Unsupported(
-            "the embedding method needs regularly spaced x and y; use --method cholesky on \
-             small uneven grids"
-                .into(),
-        ));
-    }
-    if synth.method == Method::Cholesky && grid.points() > CHOLESKY_MAX_POINTS {
-        return Err(WindError::Unsupported(format!(
-            "the Cholesky method is limited to {CHOLESKY_MAX_POINTS} points; this grid has {} \
-             (estimated {})",
-            grid.points(),
-            cholesky_estimate(grid)
-        )));
-    }
-    Ok(())
-}
-
 /// Synthesise the fluctuations of one component in f64, layout (frame, z, y, x), with no
 /// mean added: the reference path for checking the methods against each other.
 pub fn synthesize_component_f64(
@@ -847,16 +769,6 @@ pub(crate) fn synthesize_into(
 /// columns, records laid out (column, point p = iz·ny + iy, frame)).
 pub type ColumnSink<'a> = dyn FnMut(Component, usize, usize, &[f32]) -> Result<(), WindError> + 'a;
 
-/// Peak working memory of [`synthesize_streaming`], bytes: the staged block of
-/// [`EMIT_COLUMNS`] columns of f32 records, two coefficient columns and the per-line factors
-/// — independent of nx, so of the output's size.
-pub fn streaming_memory_estimate(grid: &Grid) -> f64 {
-    let column = (grid.nz() * grid.ny()) as f64;
-    let nc = (grid.frames / 2 + 1) as f64;
-    let cols = EMIT_COLUMNS.min(grid.nx()) as f64;
-    4.0 * cols * column * grid.frames as f64 + 2.0 * 16.0 * column * nc + 64.0 * column * nc
-}
-
 /// Synthesise all three components without holding the field: every block of up to
 /// [`EMIT_COLUMNS`] x-columns of one component is handed to `emit` as soon as it is ready,
 /// as (component, first column x0, columns, records laid out (column, point p = iz·ny + iy,
@@ -890,70 +802,4 @@ pub fn synthesize_streaming(
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn phasors_are_unit_and_uniform_in_angle() {
-        let key = line_key(7, Component::U, 3);
-        let n = 200_000;
-        let mut hist = [0usize; 16];
-        for k in 0..n {
-            let p = phasor(key, k as u64);
-            // The remainder's sine and cosine are f32 polynomials: unit to f32 precision.
-            assert!((p.norm() - 1.0).abs() < 1e-7);
-            let a = p.im.atan2(p.re) + PI;
-            hist[((a / (2.0 * PI) * 16.0) as usize).min(15)] += 1;
-        }
-        // Each bin expects n/16 = 12500 with σ ≈ 108: 6σ bounds.
-        for h in hist {
-            assert!((h as f64 - 12_500.0).abs() < 650.0, "{hist:?}");
-        }
-    }
-
-    #[test]
-    fn vectorised_kernels_give_the_scalar_bits() {
-        // The widest kernel the CPU has must agree bit for bit with the scalar phasor, so
-        // the field does not depend on the machine's vector units.
-        let keys: Vec<u64> = (0..301).map(|j| line_key(3, Component::V, j)).collect();
-        let rho: Vec<f64> = (0..301).map(|j| (-(j as f64) * 0.01).exp()).collect();
-        let s: Vec<f64> = rho.iter().map(|r| (1.0 - r * r).sqrt()).collect();
-        for k in [0u64, 7, 123_456] {
-            let mut v: Vec<C64> = (0..301).map(|j| C64::new(j as f64, -1.0)).collect();
-            let want: Vec<C64> = v
-                .iter()
-                .zip(&keys)
-                .zip(rho.iter().zip(&s))
-                .map(|((o, key), (r, s))| {
-                    let e = phasor(*key, k);
-                    C64::new(o.re * r + e.re * s, o.im * r + e.im * s)
-                })
-                .collect();
-            phasor_row(&keys, k, &mut v, Some((&rho, &s)));
-            for (a, b) in v.iter().zip(&want) {
-                assert_eq!((a.re.to_bits(), a.im.to_bits()), (b.re.to_bits(), b.im.to_bits()));
-            }
-        }
-    }
-
-    #[test]
-    fn cholesky_factor_reproduces_the_matrix() {
-        let n = 5;
-        let full: Vec<f64> = (0..n * n)
-            .map(|k| {
-                let (i, j) = (k / n, k % n);
-                0.7f64.powi((i as i32 - j as i32).abs()) + if i == j { 0.1 } else { 0.0 }
-            })
-            .collect();
-        let mut l = full.clone();
-        cholesky_lower(&mut l, n).expect("positive definite");
-        for i in 0..n {
-            for j in 0..=i {
-                let s: f64 = (0..=j).map(|k| l[i * n + k] * l[j * n + k]).sum();
-                assert!((s - full[i * n + j]).abs() < 1e-12);
-            }
-        }
-        let mut bad = vec![1.0, 0.0, 2.0, 1.0];
-        assert_eq!(cholesky_lower(&mut bad, 2), Err(1));
-    }
-}
+mod tests;

@@ -1,0 +1,67 @@
+//! The methods against each other and the phases against their definition.
+
+use super::*;
+
+#[test]
+fn phasors_are_unit_and_uniform_in_angle() {
+    let key = line_key(7, Component::U, 3);
+    let n = 200_000;
+    let mut hist = [0usize; 16];
+    for k in 0..n {
+        let p = phasor(key, k as u64);
+        // The remainder's sine and cosine are f32 polynomials: unit to f32 precision.
+        assert!((p.norm() - 1.0).abs() < 1e-7);
+        let a = p.im.atan2(p.re) + PI;
+        hist[((a / (2.0 * PI) * 16.0) as usize).min(15)] += 1;
+    }
+    // Each bin expects n/16 = 12500 with σ ≈ 108: 6σ bounds.
+    for h in hist {
+        assert!((h as f64 - 12_500.0).abs() < 650.0, "{hist:?}");
+    }
+}
+
+#[test]
+fn vectorised_kernels_give_the_scalar_bits() {
+    // The widest kernel the CPU has must agree bit for bit with the scalar phasor, so
+    // the field does not depend on the machine's vector units.
+    let keys: Vec<u64> = (0..301).map(|j| line_key(3, Component::V, j)).collect();
+    let rho: Vec<f64> = (0..301).map(|j| (-(j as f64) * 0.01).exp()).collect();
+    let s: Vec<f64> = rho.iter().map(|r| (1.0 - r * r).sqrt()).collect();
+    for k in [0u64, 7, 123_456] {
+        let mut v: Vec<C64> = (0..301).map(|j| C64::new(j as f64, -1.0)).collect();
+        let want: Vec<C64> = v
+            .iter()
+            .zip(&keys)
+            .zip(rho.iter().zip(&s))
+            .map(|((o, key), (r, s))| {
+                let e = phasor(*key, k);
+                C64::new(o.re * r + e.re * s, o.im * r + e.im * s)
+            })
+            .collect();
+        phasor_row(&keys, k, &mut v, Some((&rho, &s)));
+        for (a, b) in v.iter().zip(&want) {
+            assert_eq!((a.re.to_bits(), a.im.to_bits()), (b.re.to_bits(), b.im.to_bits()));
+        }
+    }
+}
+
+#[test]
+fn cholesky_factor_reproduces_the_matrix() {
+    let n = 5;
+    let full: Vec<f64> = (0..n * n)
+        .map(|k| {
+            let (i, j) = (k / n, k % n);
+            0.7f64.powi((i as i32 - j as i32).abs()) + if i == j { 0.1 } else { 0.0 }
+        })
+        .collect();
+    let mut l = full.clone();
+    cholesky_lower(&mut l, n).expect("positive definite");
+    for i in 0..n {
+        for j in 0..=i {
+            let s: f64 = (0..=j).map(|k| l[i * n + k] * l[j * n + k]).sum();
+            assert!((s - full[i * n + j]).abs() < 1e-12);
+        }
+    }
+    let mut bad = vec![1.0, 0.0, 2.0, 1.0];
+    assert_eq!(cholesky_lower(&mut bad, 2), Err(1));
+}
