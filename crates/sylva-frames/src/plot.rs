@@ -174,8 +174,7 @@ fn fmt_tick(v: f64) -> String {
     }
 }
 
-/// Draw one panel at x offset `ox`: frame, ticks and labels, series, legend (about 140
-/// lines of pixel placement in drawing order).
+/// Draw one panel at x offset `ox`: frame, ticks and labels, series, then its legend.
 fn draw_panel(cv: &mut Canvas, ox: usize, p: &Panel) {
     let (l, r, t, b) = MARGIN;
     let (x0, x1, y0, y1) = ((ox + l) as f64, (ox + W - r) as f64, t as f64, (H - b) as f64);
@@ -272,8 +271,17 @@ fn draw_panel(cv: &mut Canvas, ox: usize, p: &Panel) {
             }
         }
     }
-    // The legend, over the lines on a white box, in the corner the series cross least
-    // (top right where none does).
+    draw_legend(cv, p, &lines, (x0, x1, y0, y1));
+}
+
+/// The legend of panel `p`, over its `lines` (in pixels) on a white box, in the corner of
+/// the plot area `(x0, x1, y0, y1)` the series cross least (top right where none does).
+fn draw_legend(
+    cv: &mut Canvas,
+    p: &Panel,
+    lines: &[Vec<(f64, f64)>],
+    (x0, x1, y0, y1): (f64, f64, f64, f64),
+) {
     let labels = p.series.iter().map(|s| s.label.chars().count()).max().unwrap_or(0);
     if labels == 0 {
         return;

@@ -155,8 +155,7 @@ impl Renderer {
 
     /// Build the passes for a colour target of `format` and `width × height` texels, and
     /// upload the scene's tree models (meshes per LOD, textures with mip chains, impostors
-    /// rendered from each species) and ground. (About 160 lines: one pass or upload after
-    /// another, in the order their bind groups depend on one another.)
+    /// rendered from each species) and ground.
     pub fn new(
         gpu: &Gpu,
         assets: &SceneAssets<'_>,
@@ -212,60 +211,7 @@ impl Renderer {
         };
         let mut species = Vec::with_capacity(assets.models.len());
         for m in assets.models {
-            let texture = |img: &sylva_tree::texture::Image, label| {
-                let mips = box_mips(&img.rgba, img.width, img.height);
-                let format = wgpu::TextureFormat::Rgba8UnormSrgb;
-                upload_mips(gpu, &mips, img.width, img.height, format, label)
-            };
-            let bark = texture(&m.bark, "bark");
-            // Leaves: opacity-weighted colour and coverage-preserving alpha in the mips, so
-            // far crowns keep their leaves instead of fading out under the alpha test.
-            let img = &m.leaves.image;
-            let cells = (m.leaves.cells, m.leaves.cells);
-            let (mips, _) = crate::passes::far::impostor_mips(
-                &img.rgba, &img.rgba, img.width, img.height, cells,
-            );
-            let srgb = wgpu::TextureFormat::Rgba8UnormSrgb;
-            // Mips stop at cells of 4 × 4 texels: a cell of one texel cannot show a card's
-            // partial coverage (it would be all leaf or, as rounded, nothing), so cards
-            // seen smaller than that take the sparse 4 × 4 pattern and overlap into crowns.
-            let cell0 = (img.width / m.leaves.cells.max(1)).max(1);
-            let keep = (cell0.max(4).ilog2() - 1) as usize;
-            let mips = &mips[..mips.len().min(keep)];
-            let leaves = upload_mips(gpu, mips, img.width, img.height, srgb, "leaf atlas");
-            let textures = dev.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("species textures"),
-                layout: &species_layout,
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: wgpu::BindingResource::TextureView(&bark),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: wgpu::BindingResource::TextureView(&leaves),
-                    },
-                ],
-            });
-            let lods: Vec<(Option<Mesh>, Option<Mesh>)> = m
-                .lods
-                .iter()
-                .map(|l| (branch::mesh(gpu, l), leaf::mesh(gpu, l, m.leaves.cells)))
-                .collect();
-            let baked = lods.get(bake_level(m));
-            let meshes = baked.map(|(b, l)| (b.as_ref(), l.as_ref())).unwrap_or((None, None));
-            let far = far.bake(gpu, &bake, m, &textures, meshes)?;
-            let mut joints_read: Vec<usize> = m
-                .lods
-                .iter()
-                .map(|l| {
-                    let b = l.branches.joints.iter().flatten().copied().max().unwrap_or(0);
-                    let c = l.clusters.iter().map(|c| c.joint).max().unwrap_or(0);
-                    b.max(c) as usize + 1
-                })
-                .collect();
-            joints_read.push(far.params.joint as usize + 1);
-            species.push(SpeciesGpu { lods, joints_read, textures, far });
+            species.push(upload_species(gpu, m, &species_layout, &far, &bake)?);
         }
         // The woodland around the forest takes the colour of the forest's own impostors.
         let woodland = assets.woodland.as_ref().map(|w| {
@@ -727,4 +673,66 @@ fn targets(
     };
     let msaa = (samples > 1).then(|| make(format, "msaa colour"));
     (msaa, make(DEPTH, "depth"))
+}
+
+/// One species on the GPU: its bark and leaf textures (the leaf atlas with opacity-weighted,
+/// coverage-preserving mips), its meshes at every level, and its impostor baked.
+fn upload_species(
+    gpu: &Gpu,
+    m: &TreeModel,
+    species_layout: &wgpu::BindGroupLayout,
+    far: &FarPass,
+    bake: &BakeContext<'_>,
+) -> Result<SpeciesGpu, RenderError> {
+    let dev = &gpu.device;
+    let texture = |img: &sylva_tree::texture::Image, label| {
+        let mips = box_mips(&img.rgba, img.width, img.height);
+        let format = wgpu::TextureFormat::Rgba8UnormSrgb;
+        upload_mips(gpu, &mips, img.width, img.height, format, label)
+    };
+    let bark = texture(&m.bark, "bark");
+    // Leaves: opacity-weighted colour and coverage-preserving alpha in the mips, so
+    // far crowns keep their leaves instead of fading out under the alpha test.
+    let img = &m.leaves.image;
+    let cells = (m.leaves.cells, m.leaves.cells);
+    let (mips, _) =
+        crate::passes::far::impostor_mips(&img.rgba, &img.rgba, img.width, img.height, cells);
+    let srgb = wgpu::TextureFormat::Rgba8UnormSrgb;
+    // Mips stop at cells of 4 × 4 texels: a cell of one texel cannot show a card's
+    // partial coverage (it would be all leaf or, as rounded, nothing), so cards
+    // seen smaller than that take the sparse 4 × 4 pattern and overlap into crowns.
+    let cell0 = (img.width / m.leaves.cells.max(1)).max(1);
+    let keep = (cell0.max(4).ilog2() - 1) as usize;
+    let mips = &mips[..mips.len().min(keep)];
+    let leaves = upload_mips(gpu, mips, img.width, img.height, srgb, "leaf atlas");
+    let textures = dev.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("species textures"),
+        layout: species_layout,
+        entries: &[
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::TextureView(&bark),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: wgpu::BindingResource::TextureView(&leaves),
+            },
+        ],
+    });
+    let lods: Vec<(Option<Mesh>, Option<Mesh>)> =
+        m.lods.iter().map(|l| (branch::mesh(gpu, l), leaf::mesh(gpu, l, m.leaves.cells))).collect();
+    let baked = lods.get(bake_level(m));
+    let meshes = baked.map(|(b, l)| (b.as_ref(), l.as_ref())).unwrap_or((None, None));
+    let far = far.bake(gpu, bake, m, &textures, meshes)?;
+    let mut joints_read: Vec<usize> = m
+        .lods
+        .iter()
+        .map(|l| {
+            let b = l.branches.joints.iter().flatten().copied().max().unwrap_or(0);
+            let c = l.clusters.iter().map(|c| c.joint).max().unwrap_or(0);
+            b.max(c) as usize + 1
+        })
+        .collect();
+    joints_read.push(far.params.joint as usize + 1);
+    Ok(SpeciesGpu { lods, joints_read, textures, far })
 }

@@ -295,9 +295,8 @@ impl Gen<'_> {
         r.max(0.001 * r0).max(1e-4)
     }
 
-    /// Grow one stem from `s`: its segments, splits, children and leaves, in Weber & Penn's
-    /// order (long, about 160 lines, because the random draws must come in that order for a
-    /// seed to grow the same tree; the per-segment geometry is in the helpers above).
+    /// Grow one stem from `s`: its segments, children, leaves and splits, in Weber & Penn's
+    /// order (the random draws must come in that order for a seed to grow the same tree).
     fn stem(&mut self, s: StemSeed) {
         if self.overflow {
             return;
@@ -310,10 +309,6 @@ impl Gen<'_> {
         let side = s.side;
         let mut pos = s.origin;
         let mut parent = s.parent_joint;
-        // Random curvature per stem; a negative nCurveV makes a helix (constant twist).
-        let curve_v = lp.curve_v.abs().to_radians();
-        let helix = lp.curve_v < 0.0;
-        let helix_step = if helix { curve_v / res as f32 } else { 0.0 };
         // Children of this stem, spaced along it. Leaves grow on the last level that has
         // stems (a last level of zero length leaves them on the one above).
         let last_level = s.level + 1 >= self.levels;
@@ -337,44 +332,7 @@ impl Gen<'_> {
         let mut share = s.share;
         let mut leaf_carry = 0.0f32;
         for seg in s.first_segment..res {
-            // Curvature of this segment.
-            let half = res as f32 / 2.0;
-            let bend = if lp.curve_back == 0.0 {
-                lp.curve / res as f32
-            } else if (seg as f32) < half {
-                lp.curve / half
-            } else {
-                lp.curve_back / half
-            };
-            let mut angle = bend.to_radians();
-            if !helix {
-                angle += curve_v / res as f32 * self.rng.sym();
-            }
-            if seg > 0 || s.level == 0 {
-                let axis = norm(cross(dir, side));
-                if seg > 0 {
-                    dir = norm(rotate(dir, axis, angle));
-                }
-                if helix {
-                    dir = norm(rotate(dir, s.dir, helix_step));
-                }
-            }
-            if s.level >= 2 && self.sp.attraction_up != 0.0 {
-                // WP95: bend towards (AttractionUp > 0) or away from (< 0) the vertical in
-                // proportion to the segment's declination. A positive angle about
-                // dir × z turns `dir` towards +z; the turn stops at the vertical (up or
-                // down) instead of passing it.
-                let decl = dir[2].clamp(-1.0, 1.0).acos();
-                let horiz = norm(cross(dir, [0.0, 0.0, 1.0]));
-                if dot(horiz, horiz) > 0.5 {
-                    let up = (self.sp.attraction_up * decl / res as f32).clamp(-0.5, 0.5);
-                    let up = up.clamp(-(PI - decl), decl);
-                    dir = norm(rotate(dir, horiz, up));
-                }
-            }
-            if s.level >= 1 {
-                dir = self.above_ground(pos, dir, seg_len);
-            }
+            dir = self.segment_direction(&s, seg, dir, (pos, seg_len));
             let z0 = seg as f32 / res as f32;
             let r = self.radius_at(s.level, s.radius, s.length, z0 + 0.5 / res as f32);
             let leaf_here = {
@@ -424,41 +382,118 @@ impl Gen<'_> {
             }
             pos = add(pos, scale(dir, seg_len));
             parent = me;
-            // Splits: base splits on the trunk's first segment, else the error-carrying rule.
-            let splits = if s.level == 0 && seg == 0 && self.sp.base_splits > 0 {
-                self.sp.base_splits as f32
-            } else {
-                let want = lp.seg_splits + self.split_error[s.level];
-                let n = want.round();
-                self.split_error[s.level] = want - n;
-                n
-            };
-            if splits >= 1.0 && seg + 1 < res {
-                let clones = splits as usize;
-                share /= clones as f32 + 1.0;
-                let spread = (lp.split_angle + lp.split_angle_v * self.rng.sym()).to_radians();
-                for c in 0..clones {
-                    let around =
-                        2.0 * PI * (c as f32 + 1.0) / (clones as f32 + 1.0) + self.rng.sym() * 0.3;
-                    let axis = norm(rotate(norm(cross(dir, side)), dir, around));
-                    let cdir = norm(rotate(dir, axis, spread));
-                    let clone = StemSeed {
-                        origin: pos,
-                        dir: cdir,
-                        side: norm(cross(axis, cdir)),
-                        parent_joint: me,
-                        first_segment: seg + 1,
-                        radius: s.radius / (clones as f32 + 1.0).sqrt(),
-                        share,
-                        ..s
-                    };
-                    self.stem(clone);
-                }
-                // The original bends the other way by half the angle.
-                let axis = norm(cross(dir, side));
-                dir = norm(rotate(dir, axis, -0.5 * spread));
+            dir = self.split(&s, seg, (pos, dir), me, &mut share);
+        }
+    }
+
+    /// The direction of segment `seg` of stem `s`, turned from the last segment's `dir`:
+    /// its curvature (nCurve, nCurveBack, nCurveV or a helix), the pull towards or away from
+    /// the vertical (AttractionUp), and kept above the ground from `pos` over `seg_len`.
+    fn segment_direction(
+        &mut self,
+        s: &StemSeed,
+        seg: u32,
+        mut dir: V3,
+        (pos, seg_len): (V3, f32),
+    ) -> V3 {
+        let lp = self.sp.level[s.level];
+        let res = lp.curve_res.max(1);
+        let side = s.side;
+        // Random curvature per stem; a negative nCurveV makes a helix (constant twist).
+        let curve_v = lp.curve_v.abs().to_radians();
+        let helix = lp.curve_v < 0.0;
+        let helix_step = if helix { curve_v / res as f32 } else { 0.0 };
+        // Curvature of this segment.
+        let half = res as f32 / 2.0;
+        let bend = if lp.curve_back == 0.0 {
+            lp.curve / res as f32
+        } else if (seg as f32) < half {
+            lp.curve / half
+        } else {
+            lp.curve_back / half
+        };
+        let mut angle = bend.to_radians();
+        if !helix {
+            angle += curve_v / res as f32 * self.rng.sym();
+        }
+        if seg > 0 || s.level == 0 {
+            let axis = norm(cross(dir, side));
+            if seg > 0 {
+                dir = norm(rotate(dir, axis, angle));
+            }
+            if helix {
+                dir = norm(rotate(dir, s.dir, helix_step));
             }
         }
+        if s.level >= 2 && self.sp.attraction_up != 0.0 {
+            // WP95: bend towards (AttractionUp > 0) or away from (< 0) the vertical in
+            // proportion to the segment's declination. A positive angle about
+            // dir × z turns `dir` towards +z; the turn stops at the vertical (up or
+            // down) instead of passing it.
+            let decl = dir[2].clamp(-1.0, 1.0).acos();
+            let horiz = norm(cross(dir, [0.0, 0.0, 1.0]));
+            if dot(horiz, horiz) > 0.5 {
+                let up = (self.sp.attraction_up * decl / res as f32).clamp(-0.5, 0.5);
+                let up = up.clamp(-(PI - decl), decl);
+                dir = norm(rotate(dir, horiz, up));
+            }
+        }
+        if s.level >= 1 {
+            dir = self.above_ground(pos, dir, seg_len);
+        }
+        dir
+    }
+
+    /// After segment `seg` of stem `s` ends at `pos` going `dir`: its splits (base splits on
+    /// the trunk's first segment, else nSegSplits with the error carried along the level),
+    /// each clone grown as a stem of its own with its `share` of children and leaves, and the
+    /// direction the original goes on in (bent the other way by half the split angle).
+    fn split(
+        &mut self,
+        s: &StemSeed,
+        seg: u32,
+        (pos, mut dir): (V3, V3),
+        me: u32,
+        share: &mut f32,
+    ) -> V3 {
+        let lp = self.sp.level[s.level];
+        let res = lp.curve_res.max(1);
+        let side = s.side;
+        // Splits: base splits on the trunk's first segment, else the error-carrying rule.
+        let splits = if s.level == 0 && seg == 0 && self.sp.base_splits > 0 {
+            self.sp.base_splits as f32
+        } else {
+            let want = lp.seg_splits + self.split_error[s.level];
+            let n = want.round();
+            self.split_error[s.level] = want - n;
+            n
+        };
+        if splits >= 1.0 && seg + 1 < res {
+            let clones = splits as usize;
+            *share /= clones as f32 + 1.0;
+            let spread = (lp.split_angle + lp.split_angle_v * self.rng.sym()).to_radians();
+            for c in 0..clones {
+                let around =
+                    2.0 * PI * (c as f32 + 1.0) / (clones as f32 + 1.0) + self.rng.sym() * 0.3;
+                let axis = norm(rotate(norm(cross(dir, side)), dir, around));
+                let cdir = norm(rotate(dir, axis, spread));
+                let clone = StemSeed {
+                    origin: pos,
+                    dir: cdir,
+                    side: norm(cross(axis, cdir)),
+                    parent_joint: me,
+                    first_segment: seg + 1,
+                    radius: s.radius / (clones as f32 + 1.0).sqrt(),
+                    share: *share,
+                    ..*s
+                };
+                self.stem(clone);
+            }
+            // The original bends the other way by half the angle.
+            let axis = norm(cross(dir, side));
+            dir = norm(rotate(dir, axis, -0.5 * spread));
+        }
+        dir
     }
 
     fn child_count(&mut self, s: &StemSeed) -> f32 {

@@ -401,37 +401,105 @@ fn pair_line_variance(c: &[f64], o: &[f64], s: usize, a: f64, a_o: f64, gamma: f
 /// # Panics
 /// If `fields` is empty, the fields' grids differ or `iz` is outside the grid (a programming
 /// error, not input).
-///
-/// One function of about 200 lines: each table (σ, spectra, coherence by dx, dy, dz) pools
-/// the same per-seed Welch estimates in the same loop over the ensemble, and splitting the
-/// loop would estimate each spectrum once per table.
 pub fn ensemble_stats_at(fields: &[WindField], segment: Option<usize>, iz: usize) -> FieldStats {
-    let field = &fields[0];
-    assert!(fields.iter().all(|f| f.grid == field.grid), "ensemble fields must share a grid");
-    let g = &field.grid;
-    assert!(iz < g.nz(), "height index {iz} outside the grid");
-    let m = g.frames;
-    let welch = Welch::new(segment.unwrap_or((m / 8).max(32)).min(m), g.dt);
-    let seg = welch.segment();
-    let freqs = welch.freqs();
-    let bands = log_bands(&freqs, 8.0);
-    let z = g.zs[iz];
-    let p = &field.params;
-    let u_local = p.mean_speed(z);
-    let u_same = match p.coherence_speed {
-        CoherenceSpeed::Reference => synth::reference_speed(p, g),
-        CoherenceSpeed::PairMean => u_local,
-    };
-    let df = 1.0 / (m as f64 * g.dt);
-    let per_bin = m as f64 / seg as f64;
-    let nfields = fields.len() as f64;
-    let x_mid = g.x_mid();
-    let band_rows = |meas: &[f64],
-                     model: &[f64],
-                     keep: &dyn Fn(f64) -> bool,
-                     scatter: &dyn Fn(&[usize], f64) -> f64| {
+    let e = Ensemble::new(fields, segment, iz);
+    let components = Component::ALL.into_iter().map(|comp| e.component(comp)).collect();
+    FieldStats {
+        height: e.z,
+        height_index: iz,
+        fields: fields.len(),
+        coherence_speed: e.u_same,
+        segment: e.welch.segment(),
+        components,
+    }
+}
+
+/// What every table of [`ensemble_stats_at`] shares: the fields at one height, the Welch
+/// estimator and its bands, and the model's speeds there.
+struct Ensemble<'a> {
+    fields: &'a [WindField],
+    g: &'a crate::grid::Grid,
+    p: &'a crate::params::WindParams,
+    iz: usize,
+    m: usize,
+    welch: Welch,
+    freqs: Vec<f64>,
+    bands: Vec<Vec<usize>>,
+    z: f64,
+    u_local: f64,
+    u_same: f64,
+    df: f64,
+    per_bin: f64,
+    nfields: f64,
+    x_mid: f64,
+    per_field: usize,
+}
+
+/// One component's estimates and the model's line powers, shared by its tables.
+struct ComponentEstimate<'a> {
+    e: &'a Ensemble<'a>,
+    comp: Component,
+    cc: crate::params::CoherenceConstants,
+    specs: Vec<Segments>,
+    /// Scatter of each line's power over realisations (pooled fields are independent).
+    line_var: Vec<f64>,
+    expected_auto: Vec<f64>,
+}
+
+impl<'a> Ensemble<'a> {
+    fn new(fields: &'a [WindField], segment: Option<usize>, iz: usize) -> Ensemble<'a> {
+        let field = &fields[0];
+        assert!(fields.iter().all(|f| f.grid == field.grid), "ensemble fields must share a grid");
+        let g = &field.grid;
+        assert!(iz < g.nz(), "height index {iz} outside the grid");
+        let m = g.frames;
+        let welch = Welch::new(segment.unwrap_or((m / 8).max(32)).min(m), g.dt);
+        let seg = welch.segment();
+        let freqs = welch.freqs();
+        let bands = log_bands(&freqs, 8.0);
+        let z = g.zs[iz];
+        let p = &field.params;
+        let u_local = p.mean_speed(z);
+        let u_same = match p.coherence_speed {
+            CoherenceSpeed::Reference => synth::reference_speed(p, g),
+            CoherenceSpeed::PairMean => u_local,
+        };
+        let df = 1.0 / (m as f64 * g.dt);
+        let per_bin = m as f64 / seg as f64;
+        let nfields = fields.len() as f64;
+        let x_mid = g.x_mid();
+        let per_field = g.nx() * g.ny();
+        Ensemble {
+            fields,
+            g,
+            p,
+            iz,
+            m,
+            welch,
+            freqs,
+            bands,
+            z,
+            u_local,
+            u_same,
+            df,
+            per_bin,
+            nfields,
+            x_mid,
+            per_field,
+        }
+    }
+
+    /// Rows of measured against model per band, the bands where `keep` holds of the model.
+    fn band_rows(
+        &self,
+        meas: &[f64],
+        model: &[f64],
+        keep: &dyn Fn(f64) -> bool,
+        scatter: &dyn Fn(&[usize], f64) -> f64,
+    ) -> Vec<BandRow> {
+        let (bands, freqs) = (&self.bands, &self.freqs);
         let mut rows = Vec::new();
-        for b in &bands {
+        for b in bands {
             let mv = b.iter().map(|&k| model[k]).sum::<f64>() / b.len() as f64;
             if !keep(mv) {
                 continue;
@@ -441,27 +509,32 @@ pub fn ensemble_stats_at(fields: &[WindField], segment: Option<usize>, iz: usize
             rows.push(BandRow { f, measured: me, model: mv, scatter: scatter(b, mv) });
         }
         rows
-    };
-    let per_field = g.nx() * g.ny();
-    let records = |comp: Component, level: usize| -> Vec<Vec<f64>> {
-        fields
+    }
+
+    /// Every field's record of `comp` at height index `level`, point by point.
+    fn records(&self, comp: Component, level: usize) -> Vec<Vec<f64>> {
+        let g = self.g;
+        self.fields
             .iter()
             .flat_map(|f| {
-                (0..per_field).map(move |q| f.record(comp, level, q / g.nx(), q % g.nx()))
+                (0..self.per_field).map(move |q| f.record(comp, level, q / g.nx(), q % g.nx()))
             })
             .collect()
-    };
-    let mut components = Vec::new();
-    for comp in Component::ALL {
-        let recs = records(comp, iz);
+    }
+
+    /// The statistics of one component: σ against its target, the spectrum by band, and
+    /// the co-coherence along x, y and one step up.
+    fn component(&self, comp: Component) -> ComponentStats {
+        let (g, p, m, z) = (self.g, self.p, self.m, self.z);
+        let welch = &self.welch;
+        let recs = self.records(comp, self.iz);
         let n = (recs.len() * m) as f64;
         let mean = recs.iter().flatten().sum::<f64>() / n;
         let var = recs.iter().flatten().map(|x| (x - mean).powi(2)).sum::<f64>() / n;
         let specs: Vec<Segments> = recs.par_iter().map(|r| welch.spectra(r)).collect();
         let psd = welch.psd(&specs);
-        let line = |j: usize| spectrum::one_sided(p, comp, j as f64 * df, z) * df;
-        // Scatter of each line's power over realisations (pooled fields are independent).
         let cc = p.coherence[comp.index()];
+        let (df, nfields, u_same) = (self.df, self.nfields, self.u_same);
         let line_var: Vec<f64> = (0..m / 2)
             .map(|j| {
                 if j == 0 {
@@ -471,33 +544,77 @@ pub fn ensemble_stats_at(fields: &[WindField], segment: Option<usize>, iz: usize
                 }
             })
             .collect();
-        // The synthesised lines a band of Welch bins sees, each with the power it brings to
-        // the band through the window (the Hann main lobe spans ±2 bins, so the slow, strong
-        // lines just below a band weigh on it).
-        let band_lines = |b: &[usize]| -> Vec<(usize, f64)> {
-            let lo = ((b[0] as f64 - 4.0) * per_bin).floor().max(1.0) as usize;
-            let hi = (((b[b.len() - 1] as f64 + 4.0) * per_bin).ceil() as usize).min(m / 2);
-            (lo..hi)
-                .map(|j| {
-                    let c = j as f64 / per_bin;
-                    (j, line(j) * b.iter().map(|&k| welch.hann_gain(k as f64 - c)).sum::<f64>())
-                })
-                .collect()
-        };
-        let weighted_scatter = |w: &[(usize, f64)], var: &dyn Fn(usize) -> f64| -> f64 {
-            let pw: f64 = w.iter().map(|p| p.1).sum();
-            let v: f64 = w.iter().map(|&(j, p)| p * p * var(j)).sum();
-            if pw > 0.0 { v.sqrt() / pw } else { 0.0 }
-        };
-        let band_scatter = |b: &[usize]| weighted_scatter(&band_lines(b), &|j| line_var[j]);
-        let all_lines: Vec<(usize, f64)> = (1..m / 2).map(|j| (j, line(j))).collect();
+        let line = |j: usize| spectrum::one_sided(p, comp, j as f64 * df, z) * df;
         let expected_auto = welch.expected(m, &line);
-        let spectrum = band_rows(&psd, &expected_auto, &|_| true, &|b, _| band_scatter(b));
-        // Two heights at the same points: the classic (1 − γ²)/√(2n), n the band's effective
-        // number of independent samples.
-        let coh_scatter = |b: &[usize], gamma: f64| {
-            (1.0 - gamma * gamma).max(0.0) * band_scatter(b) / std::f64::consts::SQRT_2
-        };
+        let est = ComponentEstimate { e: self, comp, cc, specs, line_var, expected_auto };
+        let all_lines: Vec<(usize, f64)> = (1..m / 2).map(|j| (j, est.line(j))).collect();
+        let spectrum =
+            self.band_rows(&psd, &est.expected_auto, &|_| true, &|b, _| est.band_scatter(b));
+        let mut coherence = est.xy_coherence();
+        coherence.extend(est.z_coherence());
+        let cap = self.fields[0].captured();
+        let sigma_target = spectrum::discrete_variance(p, comp, z, m, g.dt).sqrt();
+        let sigma = var.sqrt();
+        ComponentStats {
+            component: comp.name().into(),
+            sigma,
+            sigma_target,
+            sigma_error: sigma / sigma_target - 1.0,
+            variance_error: var / (sigma_target * sigma_target) - 1.0,
+            sigma_scatter: 0.5 * weighted_scatter(&all_lines, &|j| est.line_var[j]),
+            sigma_model: cap.sigma_model[comp.index()],
+            mean,
+            spectrum,
+            coherence,
+        }
+    }
+}
+
+/// The scatter of a sum of line powers `w` (line, power), each line's power scattering by
+/// `var(line)`, relative to the sum.
+fn weighted_scatter(w: &[(usize, f64)], var: &dyn Fn(usize) -> f64) -> f64 {
+    let pw: f64 = w.iter().map(|p| p.1).sum();
+    let v: f64 = w.iter().map(|&(j, p)| p * p * var(j)).sum();
+    if pw > 0.0 { v.sqrt() / pw } else { 0.0 }
+}
+
+impl ComponentEstimate<'_> {
+    /// The model's power in synthesised line `j`.
+    fn line(&self, j: usize) -> f64 {
+        let e = self.e;
+        spectrum::one_sided(e.p, self.comp, j as f64 * e.df, e.z) * e.df
+    }
+
+    /// The synthesised lines a band of Welch bins sees, each with the power it brings to
+    /// the band through the window (the Hann main lobe spans ±2 bins, so the slow, strong
+    /// lines just below a band weigh on it).
+    fn band_lines(&self, b: &[usize]) -> Vec<(usize, f64)> {
+        let (m, per_bin) = (self.e.m, self.e.per_bin);
+        let lo = ((b[0] as f64 - 4.0) * per_bin).floor().max(1.0) as usize;
+        let hi = (((b[b.len() - 1] as f64 + 4.0) * per_bin).ceil() as usize).min(m / 2);
+        (lo..hi)
+            .map(|j| {
+                let c = j as f64 / per_bin;
+                (
+                    j,
+                    self.line(j)
+                        * b.iter().map(|&k| self.e.welch.hann_gain(k as f64 - c)).sum::<f64>(),
+                )
+            })
+            .collect()
+    }
+
+    fn band_scatter(&self, b: &[usize]) -> f64 {
+        weighted_scatter(&self.band_lines(b), &|j| self.line_var[j])
+    }
+
+    /// Pooled co-coherence at 1, 2 and 4 grid steps along x and along y.
+    fn xy_coherence(&self) -> Vec<CoherenceRow> {
+        let e = self.e;
+        let (g, p, m, comp, cc) = (e.g, e.p, e.m, self.comp, self.cc);
+        let (df, nfields, u_same, u_local) = (e.df, e.nfields, e.u_same, e.u_local);
+        let (fields, per_field, welch, specs) = (e.fields, e.per_field, &e.welch, &self.specs);
+        let line = |j: usize| self.line(j);
         let mut coherence = Vec::new();
         for (axis, coords, n_axis) in [("x", &g.xs, g.nx()), ("y", &g.ys, g.ny())] {
             for steps in [1usize, 2, 4] {
@@ -526,7 +643,7 @@ pub fn ensemble_stats_at(fields: &[WindField], segment: Option<usize>, iz: usize
                 };
                 let cross = welch.expected(m, &|j| line(j) * model(j as f64 * df));
                 let expected: Vec<f64> =
-                    cross.iter().zip(&expected_auto).map(|(c, a)| c / a).collect();
+                    cross.iter().zip(&self.expected_auto).map(|(c, a)| c / a).collect();
                 let (along, across, c_along, c_across) = if axis == "x" {
                     (&g.xs, &g.ys, cc.cx, cc.cy)
                 } else {
@@ -538,71 +655,61 @@ pub fn ensemble_stats_at(fields: &[WindField], segment: Option<usize>, iz: usize
                         let (a, a_o) = (f * c_along / u_same, f * c_across / u_same);
                         pair_line_variance(along, across, steps, a, a_o, gamma) / nfields
                     };
-                    weighted_scatter(&band_lines(b), &var)
+                    weighted_scatter(&self.band_lines(b), &var)
                 };
-                let bands = band_rows(&coh, &expected, &|mv| mv > 0.02, &pair_scatter);
+                let bands = e.band_rows(&coh, &expected, &|mv| mv > 0.02, &pair_scatter);
                 coherence.push(CoherenceRow { axis: axis.into(), steps, metres, bands });
             }
         }
-        if iz + 1 < g.nz() {
-            // One step up: every point with the point above it.
-            let z2 = g.zs[iz + 1];
-            let upper: Vec<Segments> =
-                records(comp, iz + 1).par_iter().map(|r| welch.spectra(r)).collect();
-            let coh = welch.pooled_cocoherence(specs.iter().zip(&upper));
-            let u_up = p.mean_speed(z2);
-            let um = match p.coherence_speed {
-                CoherenceSpeed::Reference => u_same,
-                CoherenceSpeed::PairMean => 0.5 * (u_local + u_up),
-            };
-            let shear = 1.0 / u_local - 1.0 / u_up;
-            let model = |f: f64| {
-                let c = spectrum::coherence(p, comp, f, [0.0, 0.0, z2 - z], um);
-                if p.advection {
-                    let w = 2.0 * PI * f;
-                    c * g.xs.iter().map(|x| (w * (x - x_mid) * shear).cos()).sum::<f64>()
-                        / g.nx() as f64
-                } else {
-                    c
-                }
-            };
-            // The two heights have different spectra: the expected pooled co-coherence is
-            // the cross term over the geometric mean of the two auto terms.
-            let line_up = |j: usize| spectrum::one_sided(p, comp, j as f64 * df, z2) * df;
-            let cross =
-                welch.expected(m, &|j| (line(j) * line_up(j)).sqrt() * model(j as f64 * df));
-            let auto_up = welch.expected(m, &line_up);
-            let expected: Vec<f64> = cross
-                .iter()
-                .zip(expected_auto.iter().zip(&auto_up))
-                .map(|(c, (a, b))| c / (a * b).sqrt())
-                .collect();
-            let bands = band_rows(&coh, &expected, &|mv| mv > 0.02, &coh_scatter);
-            coherence.push(CoherenceRow { axis: "z".into(), steps: 1, metres: z2 - z, bands });
-        }
-        let cap = field.captured();
-        let sigma_target = spectrum::discrete_variance(p, comp, z, m, g.dt).sqrt();
-        let sigma = var.sqrt();
-        components.push(ComponentStats {
-            component: comp.name().into(),
-            sigma,
-            sigma_target,
-            sigma_error: sigma / sigma_target - 1.0,
-            variance_error: var / (sigma_target * sigma_target) - 1.0,
-            sigma_scatter: 0.5 * weighted_scatter(&all_lines, &|j| line_var[j]),
-            sigma_model: cap.sigma_model[comp.index()],
-            mean,
-            spectrum,
-            coherence,
-        });
+        coherence
     }
-    FieldStats {
-        height: z,
-        height_index: iz,
-        fields: fields.len(),
-        coherence_speed: u_same,
-        segment: seg,
-        components,
+
+    /// Pooled co-coherence of every point with the point one height above it, if any.
+    fn z_coherence(&self) -> Option<CoherenceRow> {
+        let e = self.e;
+        let (g, p, m, comp, z, iz) = (e.g, e.p, e.m, self.comp, e.z, e.iz);
+        let (df, u_same, u_local, x_mid, welch) = (e.df, e.u_same, e.u_local, e.x_mid, &e.welch);
+        if iz + 1 >= g.nz() {
+            return None;
+        }
+        let line = |j: usize| self.line(j);
+        // Two heights at the same points: the classic (1 − γ²)/√(2n), n the band's effective
+        // number of independent samples.
+        let coh_scatter = |b: &[usize], gamma: f64| {
+            (1.0 - gamma * gamma).max(0.0) * self.band_scatter(b) / std::f64::consts::SQRT_2
+        };
+        let z2 = g.zs[iz + 1];
+        let upper: Vec<Segments> =
+            e.records(comp, iz + 1).par_iter().map(|r| welch.spectra(r)).collect();
+        let coh = welch.pooled_cocoherence(self.specs.iter().zip(&upper));
+        let u_up = p.mean_speed(z2);
+        let um = match p.coherence_speed {
+            CoherenceSpeed::Reference => u_same,
+            CoherenceSpeed::PairMean => 0.5 * (u_local + u_up),
+        };
+        let shear = 1.0 / u_local - 1.0 / u_up;
+        let model = |f: f64| {
+            let c = spectrum::coherence(p, comp, f, [0.0, 0.0, z2 - z], um);
+            if p.advection {
+                let w = 2.0 * PI * f;
+                c * g.xs.iter().map(|x| (w * (x - x_mid) * shear).cos()).sum::<f64>()
+                    / g.nx() as f64
+            } else {
+                c
+            }
+        };
+        // The two heights have different spectra: the expected pooled co-coherence is the
+        // cross term over the geometric mean of the two auto terms.
+        let line_up = |j: usize| spectrum::one_sided(p, comp, j as f64 * df, z2) * df;
+        let cross = welch.expected(m, &|j| (line(j) * line_up(j)).sqrt() * model(j as f64 * df));
+        let auto_up = welch.expected(m, &line_up);
+        let expected: Vec<f64> = cross
+            .iter()
+            .zip(self.expected_auto.iter().zip(&auto_up))
+            .map(|(c, (a, b))| c / (a * b).sqrt())
+            .collect();
+        let bands = e.band_rows(&coh, &expected, &|mv| mv > 0.02, &coh_scatter);
+        Some(CoherenceRow { axis: "z".into(), steps: 1, metres: z2 - z, bands })
     }
 }
 

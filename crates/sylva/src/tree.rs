@@ -310,9 +310,7 @@ fn stats(a: StatsArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// `sylva tree animate`: a tree swayed in a wind and written as an animated glTF. (About
-/// 150 lines: the settings checked, the wind built, the clip recorded, looped and reduced,
-/// each step printing what it did, in the order a user reads them.)
+/// `sylva tree animate`: a tree swayed in a wind and written as an animated glTF.
 fn animate(a: AnimateArgs) -> anyhow::Result<()> {
     use sylva_forest::clip::{ClipSettings, PointWind, record};
     if a.max_joints == 0 || a.max_joints > sylva_tree::gltf::MAX_GLTF_JOINTS {
@@ -380,85 +378,100 @@ fn animate(a: AnimateArgs) -> anyhow::Result<()> {
         started.elapsed().as_secs_f64()
     );
     if let Some(path) = &a.samples {
-        // The trunk top and the ends of the three heaviest exported stems: their joint
-        // nodes' world positions, M_j · o_j, in glTF's axes (x, z, −y).
-        let exported: std::collections::HashSet<usize> = joints.iter().copied().collect();
-        let mut picks = vec![sk.trunk_top()];
-        let mut stems: Vec<usize> =
-            joints.iter().copied().filter(|&j| j > 0 && !sk.joints()[j].continues).collect();
-        stems.sort_by(|&x, &y| sk.carried_mass(y).total_cmp(&sk.carried_mass(x)));
-        for s in stems.into_iter().take(3) {
-            // The stem's last joint, or its nearest exported ancestor.
-            let mut e = sk.stem_end(s);
-            while !exported.contains(&e) {
-                e = sk.joints()[e].parent as usize;
-            }
-            picks.push(e);
-        }
-        picks.retain(|j| exported.contains(j));
-        picks.dedup();
-        let slot = |j: usize| joints.iter().position(|&x| x == j);
-        let series: Vec<serde_json::Value> = picks
-            .iter()
-            .filter_map(|&j| {
-                let k = slot(j)?;
-                let o = sk.joints()[j].origin;
-                let pos: Vec<[f32; 3]> = clip
-                    .palettes
-                    .iter()
-                    .map(|s| {
-                        let p = transform(&s[k], o);
-                        [p[0], p[2], -p[1]]
-                    })
-                    .collect();
-                Some(serde_json::json!({ "node": format!("joint{j}"), "positions": pos }))
-            })
-            .collect();
-        // Four leaf-card corners on exported joints: where the file's flutter targets and
-        // skin put them (the first-order flutter of sylva_tree::gltf::FLUTTER_TARGETS).
-        let clusters = &model.lods[a.lod].clusters;
-        let on_exported: Vec<usize> = (0..clusters.len())
-            .filter(|&c| exported.contains(&(clusters[c].joint as usize)))
-            .collect();
-        let leaves: Vec<serde_json::Value> = (0..4)
-            .filter_map(|i| {
-                let c = *on_exported.get(i * on_exported.len() / 4)?;
-                let cl = &clusters[c];
-                let k = slot(cl.joint as usize)?;
-                let (corners, _) = sylva_tree::gltf::leaf_quad(cl);
-                let [d0, d1] = sylva_tree::gltf::flutter_displacements(cl, &corners);
-                let pos: Vec<[f32; 3]> = clip
-                    .palettes
-                    .iter()
-                    .zip(&clip.flutter)
-                    .map(|(s, l)| {
-                        let (sn, cs) = l.phase.sin_cos();
-                        let (w0, w1) = (l.amplitude * sn, l.amplitude * cs);
-                        let q: [f32; 3] =
-                            std::array::from_fn(|e| corners[0][e] + w0 * d0[0][e] + w1 * d1[0][e]);
-                        let p = transform(&s[k], q);
-                        [p[0], p[2], -p[1]]
-                    })
-                    .collect();
-                Some(serde_json::json!({ "vertex": 4 * c, "positions": pos }))
-            })
-            .collect();
-        let doc = serde_json::json!({
-            "times": clip.times,
-            "max_error_m": a.max_error_mm / 1000.0,
-            "joints": series,
-            "leaves": leaves
-        });
-        sylva_wind::io::atomic::write_atomic(path, doc.to_string().as_bytes())
-            .with_context(|| format!("writing {}", path.display()))?;
-        println!(
-            "wrote {} ({} joints' and {} leaf corners' positions at {} times)",
-            path.display(),
-            picks.len(),
-            leaves.len(),
-            clip.times.len()
-        );
+        write_samples(path, &model, a.lod, &joints, &clip, a.max_error_mm)?;
     }
+    Ok(())
+}
+
+/// `--samples`: a few joints' and leaf corners' world positions at every sample time of
+/// `clip` (glTF axes), for checking a client's playback of the `.glb` against the
+/// simulation.
+fn write_samples(
+    path: &std::path::Path,
+    model: &sylva_tree::mesh::TreeModel,
+    lod: usize,
+    joints: &[usize],
+    clip: &sylva_forest::clip::SwayClip,
+    max_error_mm: f32,
+) -> anyhow::Result<()> {
+    let sk = &model.tree.skeleton;
+    // The trunk top and the ends of the three heaviest exported stems: their joint
+    // nodes' world positions, M_j · o_j, in glTF's axes (x, z, −y).
+    let exported: std::collections::HashSet<usize> = joints.iter().copied().collect();
+    let mut picks = vec![sk.trunk_top()];
+    let mut stems: Vec<usize> =
+        joints.iter().copied().filter(|&j| j > 0 && !sk.joints()[j].continues).collect();
+    stems.sort_by(|&x, &y| sk.carried_mass(y).total_cmp(&sk.carried_mass(x)));
+    for s in stems.into_iter().take(3) {
+        // The stem's last joint, or its nearest exported ancestor.
+        let mut e = sk.stem_end(s);
+        while !exported.contains(&e) {
+            e = sk.joints()[e].parent as usize;
+        }
+        picks.push(e);
+    }
+    picks.retain(|j| exported.contains(j));
+    picks.dedup();
+    let slot = |j: usize| joints.iter().position(|&x| x == j);
+    let series: Vec<serde_json::Value> = picks
+        .iter()
+        .filter_map(|&j| {
+            let k = slot(j)?;
+            let o = sk.joints()[j].origin;
+            let pos: Vec<[f32; 3]> = clip
+                .palettes
+                .iter()
+                .map(|s| {
+                    let p = transform(&s[k], o);
+                    [p[0], p[2], -p[1]]
+                })
+                .collect();
+            Some(serde_json::json!({ "node": format!("joint{j}"), "positions": pos }))
+        })
+        .collect();
+    // Four leaf-card corners on exported joints: where the file's flutter targets and
+    // skin put them (the first-order flutter of sylva_tree::gltf::FLUTTER_TARGETS).
+    let clusters = &model.lods[lod].clusters;
+    let on_exported: Vec<usize> =
+        (0..clusters.len()).filter(|&c| exported.contains(&(clusters[c].joint as usize))).collect();
+    let leaves: Vec<serde_json::Value> = (0..4)
+        .filter_map(|i| {
+            let c = *on_exported.get(i * on_exported.len() / 4)?;
+            let cl = &clusters[c];
+            let k = slot(cl.joint as usize)?;
+            let (corners, _) = sylva_tree::gltf::leaf_quad(cl);
+            let [d0, d1] = sylva_tree::gltf::flutter_displacements(cl, &corners);
+            let pos: Vec<[f32; 3]> = clip
+                .palettes
+                .iter()
+                .zip(&clip.flutter)
+                .map(|(s, l)| {
+                    let (sn, cs) = l.phase.sin_cos();
+                    let (w0, w1) = (l.amplitude * sn, l.amplitude * cs);
+                    let q: [f32; 3] =
+                        std::array::from_fn(|e| corners[0][e] + w0 * d0[0][e] + w1 * d1[0][e]);
+                    let p = transform(&s[k], q);
+                    [p[0], p[2], -p[1]]
+                })
+                .collect();
+            Some(serde_json::json!({ "vertex": 4 * c, "positions": pos }))
+        })
+        .collect();
+    let doc = serde_json::json!({
+        "times": clip.times,
+        "max_error_m": max_error_mm / 1000.0,
+        "joints": series,
+        "leaves": leaves
+    });
+    sylva_wind::io::atomic::write_atomic(path, doc.to_string().as_bytes())
+        .with_context(|| format!("writing {}", path.display()))?;
+    println!(
+        "wrote {} ({} joints' and {} leaf corners' positions at {} times)",
+        path.display(),
+        picks.len(),
+        leaves.len(),
+        clip.times.len()
+    );
     Ok(())
 }
 

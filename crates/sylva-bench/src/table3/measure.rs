@@ -171,9 +171,58 @@ pub(super) fn command_line(a: &Table3Bench, (w, h): (u32, u32)) -> String {
     c
 }
 
+impl Cell {
+    /// One timed frame's figures: counts summed (their means taken by [`Cell::finish`]),
+    /// maxima raised; `cpu_ms` its simulation + frame building.
+    fn add_frame(&mut self, s: &sylva_forest::FrameStats, cpu_ms: f64) {
+        self.cpu_max_ms = self.cpu_max_ms.max(cpu_ms);
+        self.triangles += s.triangles as f64;
+        self.draws += s.draw_calls as f64;
+        self.joints += s.joints as f64;
+        self.upload_mb += s.uploaded_bytes as f64 / 1e6;
+        self.upload_max_mb = self.upload_max_mb.max(s.uploaded_bytes as f64 / 1e6);
+        self.state_mb = self.state_mb.max(s.state_bytes as f64 / 1e6);
+        self.capped = self.capped.max(s.state_capped);
+        self.impostors += s.impostors as f64;
+        self.shadow_only += s.shadow_only as f64;
+    }
+
+    /// After `frames` timed frames: the counts' means, the medians of the `samples`
+    /// (simulation, frame building, rendering ms), and the notes (the memory cap; with
+    /// `over_limit`, why the configuration was not rendered every frame).
+    fn finish(&mut self, frames: usize, samples: [Vec<f64>; 3], over_limit: bool) {
+        let k = frames as f64;
+        for v in [&mut self.triangles, &mut self.draws, &mut self.joints, &mut self.upload_mb] {
+            *v /= k;
+        }
+        self.impostors /= k;
+        self.shadow_only /= k;
+        let [mut sim, mut build, mut draw] = samples;
+        self.sim_ms = median(&mut sim);
+        self.frame_ms = median(&mut build);
+        self.render_ms = (!draw.is_empty()).then(|| median(&mut draw));
+        self.round_cpu = vec![self.sim_ms + self.frame_ms];
+        self.samples = [sim, build, draw];
+        if self.capped > 0 {
+            self.note = format!(
+                "memory cap: up to {} lane groups kept coarser (raise --max-memory)",
+                self.capped
+            );
+        }
+        if over_limit {
+            let why = std::mem::take(&mut self.note);
+            let sep = if why.is_empty() { "" } else { "; " };
+            let what = match &self.image {
+                Some(_) => "over --max-triangles: rendered once (last frame)",
+                None => "over --max-image-triangles: not rendered",
+            };
+            self.note = format!("{what}{sep}{why}");
+        }
+    }
+}
+
 /// One configuration of one scene along its path: warm-up, timed frames (waited for, and
-/// with `--overlapped` in flight), and the last frame kept for the image error. (About 125
-/// lines: the timing loop and what it records per frame belong together.)
+/// with `--overlapped` in flight), and the last frame kept for the image error.
 pub(super) fn run_config(
     spec: &SceneSpec,
     gpu: &mut Option<Headless>,
@@ -243,16 +292,7 @@ pub(super) fn run_config(
         if i >= a.warmup {
             sim.push(t_sim);
             build.push(t_frame);
-            cell.cpu_max_ms = cell.cpu_max_ms.max(t_sim + t_frame);
-            cell.triangles += tris;
-            cell.draws += frame.stats.draw_calls as f64;
-            cell.joints += frame.stats.joints as f64;
-            cell.upload_mb += frame.stats.uploaded_bytes as f64 / 1e6;
-            cell.upload_max_mb = cell.upload_max_mb.max(frame.stats.uploaded_bytes as f64 / 1e6);
-            cell.state_mb = cell.state_mb.max(frame.stats.state_bytes as f64 / 1e6);
-            cell.capped = cell.capped.max(frame.stats.state_capped);
-            cell.impostors += frame.stats.impostors as f64;
-            cell.shadow_only += frame.stats.shadow_only as f64;
+            cell.add_frame(&frame.stats, t_sim + t_frame);
         }
         if last {
             cell.image = image;
@@ -270,33 +310,8 @@ pub(super) fn run_config(
             a.in_flight,
         )?);
     }
-    let k = a.frames as f64;
-    for v in [&mut cell.triangles, &mut cell.draws, &mut cell.joints, &mut cell.upload_mb] {
-        *v /= k;
-    }
-    cell.impostors /= k;
-    cell.shadow_only /= k;
-    cell.sim_ms = median(&mut sim);
-    cell.frame_ms = median(&mut build);
-    cell.render_ms = (!draw.is_empty()).then(|| median(&mut draw));
-    cell.round_cpu = vec![cell.sim_ms + cell.frame_ms];
-    cell.samples = [sim, build, draw];
     cell.simulated = frame.stats.simulated;
-    if cell.capped > 0 {
-        cell.note = format!(
-            "memory cap: up to {} lane groups kept coarser (raise --max-memory)",
-            cell.capped
-        );
-    }
-    if render_all == Some(false) {
-        let why = std::mem::take(&mut cell.note);
-        let sep = if why.is_empty() { "" } else { "; " };
-        let what = match &cell.image {
-            Some(_) => "over --max-triangles: rendered once (last frame)",
-            None => "over --max-image-triangles: not rendered",
-        };
-        cell.note = format!("{what}{sep}{why}");
-    }
+    cell.finish(a.frames, [sim, build, draw], render_all == Some(false));
     Ok(cell)
 }
 

@@ -41,7 +41,7 @@ impl SwayBatch {
         self.updates = self.lane_computed.iter().map(|&s| s as usize).sum();
     }
 
-    /// The step's groups, `W` (= [`SwayBatch::width`]) lanes each. (About 150 lines: the
+    /// The step's groups, `W` (= [`SwayBatch::width`]) lanes each. (About 130 lines: the
     /// borrow of every group's storage, plan and rows at once for the parallel loop is what
     /// takes the room; the arithmetic is in `step_group` and `alone`.)
     fn step_lanes<const W: usize>(&mut self, blend: f32, rest: f32, wind: &[[f32; 3]]) {
@@ -86,30 +86,14 @@ impl SwayBatch {
                     bud[l] = budget[g * LANES + l];
                 }
                 let k = (keep[g] as usize).min(p);
-                // A lane stepped alone keeps its state and palettes in its row (see [`Row`]),
-                // taking from the group the joints it lacks and giving back those beyond what
-                // it now simulates; a lane that rejoins its group gives its state back and
-                // the row up (the step computes every palette it steps afresh, so none is
-                // copied back).
-                if solo != 0 && rows.len() < W {
-                    rows.resize_with(W, Row::default);
-                }
-                for (l, row) in rows.iter_mut().enumerate() {
-                    let r = if solo >> l & 1 == 1 { need[l] } else { 0 };
-                    row.hold(r, [&mut *theta, &mut *rate, &mut *weight], W, l, (stored, rest));
-                    if r == 0 {
-                        if row.capacity() > 0 {
-                            *row = Row::default();
-                        }
-                        continue;
-                    }
-                    // Grown exactly (the bytes counted are the bytes held); its values are
-                    // all written by the step.
-                    if row.pal.capacity() < 12 * r {
-                        row.pal = vec![0.0; 12 * r];
-                    }
-                    row.pal.resize(12 * r, 0.0);
-                }
+                hold_rows(
+                    rows,
+                    solo,
+                    &need,
+                    [&mut *theta, &mut *rate, &mut *weight],
+                    W,
+                    (stored, rest),
+                );
                 *alone = solo;
                 // The scratch is taken out of the thread's slot for the step, not borrowed in
                 // it: a crown stepped alone splits its work across threads, and while this
@@ -173,20 +157,8 @@ impl SwayBatch {
                     }
                 }
                 SCRATCH.set(loads);
-                // What each lane now has live: its switched-on prefix, and the joints beyond
-                // it still fading out (the last one not yet at rest).
-                for l in 0..used {
-                    stepped[l] = if solo >> l & 1 == 1 { need[l] } else { head } as u32;
-                    let (kl, was) = (on[l] as usize, live[l] as usize);
-                    let row = rows.get(l).filter(|r| r.joints > 0);
-                    let shown = |j: usize| match row {
-                        Some(r) if j < r.joints => r.weight[j],
-                        _ => weight[j * W + l],
-                    };
-                    let fading = (kl..was.min(need[l])).rev().find(|&j| shown(j) != 0.0);
-                    // Rounded up to a registered prefix, as every prefix a step takes is.
-                    live[l] = fading.map_or(kl, |j| round_up(lumped, n, j + 1)).max(kl) as u32;
-                }
+                let lane = LaneShown { rows, weight, width: W };
+                mark_live(&lane, (stepped, live), (&on, &need), (head, solo, used), (lumped, n));
                 // Joints fading out are dropped once every lane shows them at rest.
                 if k < p && live.iter().all(|&x| x as usize <= k) {
                     *active = k as u32;
@@ -194,6 +166,75 @@ impl SwayBatch {
                 block.store(stores, W, rest);
                 block.trim(W);
             });
+    }
+}
+
+/// The rows of a group's lanes for this step: a lane stepped alone (a bit of `solo`) keeps
+/// its state and palettes in its row (see [`Row`]), taking from the group's `state`
+/// (angles, rates, weights, `width` lanes inner) the joints it lacks and giving back those
+/// beyond the `need` it now simulates; a lane that rejoins its group gives its state back
+/// and the row up (the step computes every palette it steps afresh, so none is copied
+/// back).
+fn hold_rows(
+    rows: &mut Vec<Row>,
+    solo: u32,
+    need: &[usize; LANES],
+    state: [&mut Vec<f32>; 3],
+    width: usize,
+    (stored, rest): (usize, f32),
+) {
+    let [theta, rate, weight] = state;
+    if solo != 0 && rows.len() < width {
+        rows.resize_with(width, Row::default);
+    }
+    for (l, row) in rows.iter_mut().enumerate() {
+        let r = if solo >> l & 1 == 1 { need[l] } else { 0 };
+        row.hold(r, [&mut *theta, &mut *rate, &mut *weight], width, l, (stored, rest));
+        if r == 0 {
+            if row.capacity() > 0 {
+                *row = Row::default();
+            }
+            continue;
+        }
+        // Grown exactly (the bytes counted are the bytes held); its values are all written
+        // by the step.
+        if row.pal.capacity() < 12 * r {
+            row.pal = vec![0.0; 12 * r];
+        }
+        row.pal.resize(12 * r, 0.0);
+    }
+}
+
+/// Where a group's lanes show their blend weights: a lane's row for the joints it holds,
+/// else the group's `weight` (`width` lanes inner).
+struct LaneShown<'a> {
+    rows: &'a [Row],
+    weight: &'a [f32],
+    width: usize,
+}
+
+/// After a group's step, per lane of the `used`: the joints it computed (`stepped`: its
+/// `need` alone, else the group's `head`), and what it has live (`live`): its switched-on
+/// prefix (`on`) and the joints beyond it still fading out (the last one not yet at rest),
+/// rounded up to a registered prefix of `lumped` (`n` joints in all), as every prefix a
+/// step takes is.
+fn mark_live(
+    shown_in: &LaneShown<'_>,
+    (stepped, live): (&mut [u32], &mut [u32]),
+    (on, need): (&[u32; LANES], &[usize; LANES]),
+    (head, solo, used): (usize, u32, usize),
+    (lumped, n): (&[(usize, Vec<Lump>)], usize),
+) {
+    for l in 0..used {
+        stepped[l] = if solo >> l & 1 == 1 { need[l] } else { head } as u32;
+        let (kl, was) = (on[l] as usize, live[l] as usize);
+        let row = shown_in.rows.get(l).filter(|r| r.joints > 0);
+        let shown = |j: usize| match row {
+            Some(r) if j < r.joints => r.weight[j],
+            _ => shown_in.weight[j * shown_in.width + l],
+        };
+        let fading = (kl..was.min(need[l])).rev().find(|&j| shown(j) != 0.0);
+        live[l] = fading.map_or(kl, |j| round_up(lumped, n, j + 1)).max(kl) as u32;
     }
 }
 
