@@ -22,8 +22,9 @@ pub use driver::{
     shadow_level, wind_field,
 };
 pub use scene::{
-    CameraKey, Lighting, LodSpec, Placement, SCENES, SceneError, SceneSpec, SpeciesShare, Surround,
-    SwayOverrides, Terrain, WindSource, camera_on_path, camera_path_from_toml, camera_path_to_toml,
-    default_camera_path, layout,
+    BUILTIN_PATHS, CameraKey, FLY_IN, LOW_FLIGHT, Lighting, LodSpec, Placement, SCENES, SceneError,
+    SceneSpec, SpeciesShare, Surround, SwayOverrides, Terrain, WALK, WindSource, camera_on_path,
+    camera_path_from_toml, camera_path_to_toml, default_camera_path, layout, low_flight_path,
+    walk_path,
 };
 pub use sylva_sway::PaletteSlot;

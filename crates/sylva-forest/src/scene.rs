@@ -1,6 +1,7 @@
 //! Scene descriptions (TOML) and the deterministic forest layout: Poisson-disk spacing, a
 //! weighted species mix, random rotation and scale per tree, on gentle terrain.
 
+use std::collections::BTreeMap;
 use std::f32::consts::{PI, TAU};
 
 use serde::{Deserialize, Serialize};
@@ -15,7 +16,11 @@ mod layout;
 mod path;
 
 pub use layout::{Placement, Terrain, layout};
-pub use path::{camera_on_path, default_camera, default_camera_path};
+pub use path::{
+    BUILTIN_PATHS, EYE_HEIGHT, FLIGHT_OVER_CANOPY, FLIGHT_SPEED, FLY_IN, LOW_FLIGHT, WALK,
+    WALK_SECONDS, WALK_SPEED, camera_on_path, default_camera, default_camera_path, low_flight_path,
+    walk_path,
+};
 
 /// A scene file that could not be used.
 #[derive(Debug, Error)]
@@ -276,6 +281,16 @@ pub struct SceneSpec {
     /// the viewpoint and the benchmark flies in from it ([`default_camera_path`]).
     #[serde(default)]
     pub camera_path: Vec<CameraKey>,
+    /// Named camera paths (`[[paths.NAME]]` entries, as `camera_path`'s). `walk` and
+    /// `low-flight` replace the generated paths of those names ([`walk_path`],
+    /// [`low_flight_path`]); any other name adds a path of the scene's own.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub paths: BTreeMap<String, Vec<CameraKey>>,
+    /// The camera path `sylva render --camera-path` and the benchmarks follow: `fly-in`
+    /// (`camera_path`, or the default fly-in), `walk` (at eye height through the forest),
+    /// `low-flight` (across the canopy), or a name of `paths`. Default `fly-in`.
+    #[serde(default = "fly_in", skip_serializing_if = "is_fly_in")]
+    pub path: String,
 }
 
 /// What lies around a forest, out to the horizon.
@@ -483,6 +498,12 @@ fn amp() -> f32 {
 fn wavelength() -> f32 {
     150.0
 }
+fn fly_in() -> String {
+    FLY_IN.to_string()
+}
+fn is_fly_in(p: &String) -> bool {
+    p == FLY_IN
+}
 fn breeze() -> String {
     "breeze".into()
 }
@@ -654,6 +675,13 @@ impl SceneSpec {
             return Err(bad("lod.far_level", self.lod.far_level.to_string(), "1 … 6"));
         }
         validate_camera_path(file, &self.camera_path)?;
+        for path in self.paths.values() {
+            validate_camera_path(file, path)?;
+        }
+        if !(BUILTIN_PATHS.contains(&self.path.as_str()) || self.paths.contains_key(&self.path)) {
+            let expected = "fly-in, walk, low-flight or a name of `paths`";
+            return Err(bad("path", self.path.clone(), expected));
+        }
         if let Some(c) = &self.camera {
             if !(1.0..=150.0).contains(&c.fov_deg) {
                 return Err(bad("camera.fov_deg", c.fov_deg.to_string(), "1 … 150"));

@@ -53,6 +53,13 @@ pub struct Table3Bench {
     /// Scenes, comma-separated (built-in names or scene files).
     #[arg(long, default_value = "A,B,C,D")]
     scenes: String,
+    /// Camera paths each scene runs along, comma-separated: fly-in (the scene's own, or
+    /// the default fly-in), walk (eye height through the forest), low-flight (across the
+    /// canopy), a name of the scene's `paths`, or all (the three built in). A scene on a
+    /// path other than the fly-in is reported as "SCENE PATH", and a summary gives each
+    /// scene's worst path.
+    #[arg(long, default_value = "fly-in")]
+    path: String,
     /// Image size.
     #[arg(long, default_value = "1024x768")]
     size: String,
@@ -126,8 +133,19 @@ pub fn run(a: Table3Bench) -> anyhow::Result<()> {
     let mut results: Vec<(String, usize, Vec<Cell>)> = Vec::new();
     let mut floors: Vec<Floor> = Vec::new();
     let mut adapter = String::new();
+    let paths: Vec<&str> = if a.path.trim() == "all" {
+        sylva_forest::BUILTIN_PATHS.to_vec()
+    } else {
+        a.path.split(',').map(str::trim).collect()
+    };
+    let mut jobs = Vec::new();
     for name in &names {
-        let spec = SceneSpec::load(name)?;
+        let base = SceneSpec::load(name)?;
+        for &path in &paths {
+            jobs.push(on_path(&base, path)?);
+        }
+    }
+    for spec in &jobs {
         println!("scene {} ({} trees):", spec.name, spec.trees);
         let mut gpu: Option<Headless> = None;
         let mut rounds: Vec<Vec<Cell>> = vec![Vec::new(); CONFIGS.len()];
@@ -141,7 +159,7 @@ pub fn run(a: Table3Bench) -> anyhow::Result<()> {
                     rounds[k].push(Cell { note, ..Cell::default() });
                     continue;
                 }
-                let cell = run_config(&spec, &mut gpu, &a, (w, h), (g, an, wi), false)?;
+                let cell = run_config(spec, &mut gpu, &a, (w, h), (g, an, wi), false)?;
                 println!(
                     "  {label:<24} {:>7} fps{}  sim {:>6.1} ms  frame {:>6.1} ms  (slowest {:.1})  render {:>8} ms  {:>7.2} M tris  {:>6.0} draws  {:>9.0} joints  {:>7.2} MB up (max {:.2})  {:>8.1} MB state  {}",
                     cell.fps().map_or("—".into(), |f| format!("{f:.2}")),
@@ -168,7 +186,7 @@ pub fn run(a: Table3Bench) -> anyhow::Result<()> {
         let mut cells: Vec<Cell> = rounds.into_iter().map(Cell::pooled).collect();
         // Reference: full detail (geometry and animation LODs off), same instance groups.
         let reference =
-            run_config(&spec, &mut gpu, &a, (w, h), (false, false, true), !a.all_lods_only)?;
+            run_config(spec, &mut gpu, &a, (w, h), (false, false, true), !a.all_lods_only)?;
         if let Some(g) = &gpu {
             adapter = g.gpu.describe();
         }
@@ -186,7 +204,7 @@ pub fn run(a: Table3Bench) -> anyhow::Result<()> {
             floor.map_or("—".into(), |f| format!("{f:.3}"))
         );
         let still = match gpu.as_mut() {
-            Some(g) => still_error(&spec, g, &a, (w, h))?,
+            Some(g) => still_error(spec, g, &a, (w, h))?,
             None => None,
         };
         println!(
@@ -226,6 +244,23 @@ pub fn run(a: Table3Bench) -> anyhow::Result<()> {
     }
     let popping = if a.popping_frames >= 3 { Some(popping(&a)?) } else { None };
     write_outputs(&a, &machine, &adapter, (w, h), &results, &floors, popping.as_deref())
+}
+
+/// Scene `base` on camera path `path`: named "SCENE PATH" unless it is the fly-in.
+fn on_path(base: &SceneSpec, path: &str) -> anyhow::Result<SceneSpec> {
+    if !(sylva_forest::BUILTIN_PATHS.contains(&path) || base.paths.contains_key(path)) {
+        anyhow::bail!(
+            "--path {path}: scene {} has fly-in, walk, low-flight{}",
+            base.name,
+            base.paths.keys().map(|k| format!(", {k}")).collect::<String>()
+        );
+    }
+    let mut spec = base.clone();
+    spec.path = path.to_string();
+    if path != sylva_forest::FLY_IN {
+        spec.name = format!("{} {path}", base.name);
+    }
+    Ok(spec)
 }
 
 #[cfg(test)]

@@ -28,6 +28,7 @@ pub(super) fn write_outputs(
     let csv = per_configuration(&mut md, results);
     floors_text(&mut md, floors);
     speed_up_table(&mut md, a, results, &header);
+    worst_paths(&mut md, results, floors);
     if let Some(p) = popping {
         md.push_str(p);
     }
@@ -309,4 +310,58 @@ fn chart(a: &Table3Bench, results: &[SceneCells]) -> anyhow::Result<()> {
     ];
     sylva_frames::plot::write_png(&a.out.join("table3.png"), &panels)?;
     Ok(())
+}
+
+/// Where scenes ran along several camera paths (`--path`), each scene's worst path for each
+/// figure of the configuration with all LODs: the most triangles, CPU and rendering time,
+/// upload, and image error over its sampling floor.
+fn worst_paths(md: &mut String, results: &[SceneCells], floors: &[Floor]) {
+    let scene_of = |name: &str| name.split(' ').next().unwrap_or(name).to_string();
+    let mut scenes: Vec<String> = Vec::new();
+    for (name, ..) in results {
+        if !scenes.contains(&scene_of(name)) {
+            scenes.push(scene_of(name));
+        }
+    }
+    if results.len() == scenes.len() {
+        return;
+    }
+    let _ = writeln!(
+        md,
+        "\nWorst path of each scene, all LODs (the path in brackets; image error less the path's sampling floor):\n"
+    );
+    let _ = writeln!(
+        md,
+        "| scene | M triangles | sim + frame ms | slowest sim + frame ms | render ms | MB uploaded (max) | FLIP over the floor |"
+    );
+    let _ = writeln!(md, "|---|---|---|---|---|---|---|");
+    let path_of = |name: &str| name.split_once(' ').map_or("fly-in", |(_, p)| p).to_string();
+    for scene in scenes {
+        let runs: Vec<(&String, &Cell)> = results
+            .iter()
+            .filter(|(n, ..)| scene_of(n) == scene)
+            .map(|(n, _, cells)| (n, &cells[0]))
+            .collect();
+        let worst = |v: &dyn Fn(&Cell) -> Option<f64>, p: usize| {
+            runs.iter()
+                .filter_map(|(n, c)| v(c).map(|x| (x, path_of(n))))
+                .max_by(|x, y| x.0.total_cmp(&y.0))
+                .map_or("—".into(), |(x, n)| format!("{x:.p$} ({n})"))
+        };
+        let over_floor = |c: &Cell| {
+            let name = runs.iter().find(|(_, k)| std::ptr::eq(*k, c)).map(|(n, _)| n.as_str())?;
+            let floor = floors.iter().find(|f| f.scene == name)?.still?.sampling.0;
+            c.flip.map(|f| f - floor)
+        };
+        let _ = writeln!(
+            md,
+            "| {scene} | {} | {} | {} | {} | {} | {} |",
+            worst(&|c| Some(c.triangles / 1e6), 2),
+            worst(&|c| Some(c.sim_ms + c.frame_ms), 1),
+            worst(&|c| Some(c.cpu_max_ms), 1),
+            worst(&|c| c.render_ms, 0),
+            worst(&|c| Some(c.upload_max_mb), 2),
+            worst(&over_floor, 3),
+        );
+    }
 }

@@ -53,8 +53,12 @@ impl Forest {
         let mut species = Vec::with_capacity(models.len());
         let mut trees: Vec<(Placement, u32)> = placements.iter().map(|&p| (p, 0)).collect();
         let total = trees.len().max(1);
+        let canopy = placements
+            .iter()
+            .map(|p| models[p.species as usize].tree.stats.height * p.scale)
+            .fold(0.0, f32::max);
         // Groups are first formed for where the camera starts.
-        let eye = start_camera(spec, radius).eye;
+        let eye = start_camera(spec, &terrain, radius, canopy).eye;
         let side = spec.side();
         let mut lane_base = 0;
         // Simulations per species: its share of `sim_joint_budget` in whole trees, or every
@@ -133,6 +137,7 @@ impl Forest {
             near,
             leaf_params: spec.leaves,
             radius,
+            canopy,
             time: 0.0,
             gain: 1.0,
             turn: 0.0,
@@ -159,9 +164,13 @@ impl Forest {
     }
 }
 
-/// Where the camera starts: the scene's path at time 0, or its default viewpoint.
-fn start_camera(spec: &SceneSpec, radius: f32) -> Camera {
+/// Where the camera starts: on the fly-in, the scene's `camera_path` at time 0 or its
+/// default viewpoint; on any other path, that path at time 0.
+fn start_camera(spec: &SceneSpec, terrain: &Terrain, radius: f32, canopy: f32) -> Camera {
     let base = default_camera(spec, radius);
+    if spec.path != crate::scene::FLY_IN {
+        return camera_on_path(&super::path_keys(spec, terrain, radius, canopy), 0.0, &base);
+    }
     if spec.camera_path.is_empty() { base } else { camera_on_path(&spec.camera_path, 0.0, &base) }
 }
 

@@ -70,7 +70,7 @@ use sylva_wind::{NearField, OwnedPyramid};
 use thiserror::Error;
 
 use crate::lanes;
-use crate::scene::{Placement, SceneSpec, Terrain};
+use crate::scene::{CameraKey, Placement, SceneSpec, Terrain};
 pub use crate::wind::{
     MAX_NEAR_POINTS, MAX_WIND_POINTS, NEAR_BAND, NEAR_REACH, SceneWind, wind_field, wind_points,
 };
@@ -110,6 +110,9 @@ pub enum ForestError {
     /// The wind field could not be made.
     #[error("wind: {0}")]
     Wind(String),
+    /// A camera path that the scene does not have.
+    #[error("camera path {0}")]
+    Path(String),
     /// The simulation state would not fit the documented memory cap.
     #[error(
         "the simulation would need {} MB of animation state (every joint of every \
@@ -243,6 +246,8 @@ pub struct Forest {
     leaf_params: LeafParams,
     /// Radius of the forest (trunks), m.
     pub radius: f32,
+    /// Height of the tallest tree above the ground, m.
+    canopy: f32,
     time: f64,
     gain: f32,
     turn: f32,
@@ -262,4 +267,20 @@ pub struct Forest {
     grouped: ([f32; 3], f64),
     /// Seconds a tree that changed group cross-fades (0: it switches at once).
     regroup_fade: f32,
+}
+
+/// The keys of the camera path `spec.path` of a forest on `terrain` whose trees stand
+/// within `radius` of the centre, the tallest `canopy` m high (see [`Forest::path_keys`]).
+fn path_keys(spec: &SceneSpec, terrain: &Terrain, radius: f32, canopy: f32) -> Vec<CameraKey> {
+    use crate::scene::{FLY_IN, LOW_FLIGHT, WALK, default_camera_path, low_flight_path, walk_path};
+    match spec.path.as_str() {
+        FLY_IN if spec.camera_path.is_empty() => default_camera_path(spec, radius),
+        FLY_IN => spec.camera_path.clone(),
+        name => match spec.paths.get(name) {
+            Some(keys) => keys.clone(),
+            None if name == WALK => walk_path(terrain),
+            None if name == LOW_FLIGHT => low_flight_path(terrain, radius, canopy),
+            None => Vec::new(),
+        },
+    }
 }

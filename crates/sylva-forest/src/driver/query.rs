@@ -4,10 +4,12 @@
 use sylva_sway::IDENTITY;
 use sylva_wind::{NearField, OwnedPyramid};
 
+use super::ForestError;
 use super::lod::{DEFAULT_LOD_FRACTION, LodSettings};
+use super::path_keys;
 use super::{Forest, SceneWind, TreeInfo};
 use crate::camera::Camera;
-use crate::scene::{Placement, camera_on_path, default_camera, default_camera_path};
+use crate::scene::{BUILTIN_PATHS, CameraKey, Placement, camera_on_path, default_camera};
 use crate::wind::{steer, wind_near};
 
 impl Forest {
@@ -16,26 +18,42 @@ impl Forest {
         default_camera(&self.spec, self.radius)
     }
 
-    /// How long the scene's camera path lasts, s: its last key's time, or the default
-    /// fly-in's ([`crate::scene::default_camera_path`]) when the scene has none (12 s if
-    /// that has no keys either), the span [`Forest::camera_at`] follows.
+    /// How long the camera path the forest follows ([`SceneSpec::path`](crate::SceneSpec::path))
+    /// lasts, s: its last key's time (12 s for a path without keys), the span
+    /// [`Forest::camera_at`] follows.
     pub fn path_duration(&self) -> f32 {
-        if self.spec.camera_path.is_empty() {
-            default_camera_path(&self.spec, self.radius).last().map_or(12.0, |k| k.t)
-        } else {
-            self.spec.camera_path.last().map_or(0.0, |k| k.t)
-        }
+        self.path_keys().last().map_or(12.0, |k| k.t)
     }
 
-    /// The camera at time `t` on the scene's camera path, or on the default fly-in
-    /// ([`crate::scene::default_camera_path`]) when the scene has none.
+    /// The camera at time `t` on the path the forest follows.
     pub fn camera_at(&self, t: f32) -> Camera {
-        let base = self.default_camera();
-        if self.spec.camera_path.is_empty() {
-            camera_on_path(&default_camera_path(&self.spec, self.radius), t, &base)
-        } else {
-            camera_on_path(&self.spec.camera_path, t, &base)
+        camera_on_path(&self.path_keys(), t, &self.default_camera())
+    }
+
+    /// The keys of the camera path the forest follows ([`SceneSpec::path`](crate::SceneSpec::path)):
+    /// the fly-in (the scene's `camera_path`, or [`default_camera_path`](crate::scene::default_camera_path)), the walk and the
+    /// low flight (the scene's own of those names, or [`walk_path`](crate::scene::walk_path) and
+    /// [`low_flight_path`](crate::scene::low_flight_path) over this forest's terrain and tallest tree), or a named path
+    /// of the scene.
+    pub fn path_keys(&self) -> Vec<CameraKey> {
+        path_keys(&self.spec, &self.terrain, self.radius, self.canopy)
+    }
+
+    /// Follow camera path `name` from now on (see [`Forest::path_keys`]); an unknown name
+    /// is refused, naming the paths there are.
+    pub fn set_path(&mut self, name: &str) -> Result<(), ForestError> {
+        if !(BUILTIN_PATHS.contains(&name) || self.spec.paths.contains_key(name)) {
+            let mut names: Vec<&str> = BUILTIN_PATHS.to_vec();
+            names.extend(self.spec.paths.keys().map(String::as_str));
+            return Err(ForestError::Path(format!("`{name}`: one of {}", names.join(", "))));
         }
+        self.spec.path = name.to_string();
+        Ok(())
+    }
+
+    /// The height of the tallest tree above the ground, m.
+    pub fn canopy_height(&self) -> f32 {
+        self.canopy
     }
 
     /// Geometry-LOD threshold: the image-height fraction `h₀` above which a tree is drawn at

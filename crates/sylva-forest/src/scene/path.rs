@@ -3,6 +3,73 @@
 
 use super::*;
 
+/// The path every scene flies in along: its `camera_path`, or [`default_camera_path`].
+pub const FLY_IN: &str = "fly-in";
+/// A walk at eye height through the forest ([`walk_path`]).
+pub const WALK: &str = "walk";
+/// A low flight across the canopy ([`low_flight_path`]).
+pub const LOW_FLIGHT: &str = "low-flight";
+/// The paths every scene has, by name.
+pub const BUILTIN_PATHS: [&str; 3] = [FLY_IN, WALK, LOW_FLIGHT];
+
+/// A walker's eye over the terrain, m.
+pub const EYE_HEIGHT: f32 = 1.7;
+/// Walking pace, m/s (a leisurely adult walk).
+pub const WALK_SPEED: f32 = 1.4;
+/// How long the walk lasts, s.
+pub const WALK_SECONDS: f32 = 60.0;
+/// Speed of the low flight, m/s.
+pub const FLIGHT_SPEED: f32 = 15.0;
+/// Height of the low flight over the tallest tree, m (30 … 60 m over the canopy).
+pub const FLIGHT_OVER_CANOPY: f32 = 40.0;
+
+/// A walk at eye height ([`EYE_HEIGHT`] over the terrain) through the forest: from its
+/// centre at walking pace for [`WALK_SECONDS`], along a route that turns by up to about 60°
+/// to either side, looking where it goes (15 m ahead, at eye height). Keys every second.
+pub fn walk_path(terrain: &Terrain) -> Vec<CameraKey> {
+    let eye_at = |x: f32, y: f32| [x, y, terrain.height(x, y) + EYE_HEIGHT];
+    let heading = |t: f32| 0.35 + 1.05 * (TAU * t / 40.0).sin();
+    let mut keys = Vec::new();
+    let (mut x, mut y) = (0.0f32, 0.0f32);
+    let steps = WALK_SECONDS as usize;
+    for k in 0..=steps {
+        let t = k as f32;
+        if k > 0 {
+            // The heading over the last second, at its middle.
+            let (s, c) = heading(t - 0.5).sin_cos();
+            x += WALK_SPEED * c;
+            y += WALK_SPEED * s;
+        }
+        let (s, c) = heading(t).sin_cos();
+        let (tx, ty) = (x + 15.0 * c, y + 15.0 * s);
+        keys.push(CameraKey { t, eye: eye_at(x, y), target: eye_at(tx, ty) });
+    }
+    keys
+}
+
+/// A low flight across the forest: [`FLIGHT_OVER_CANOPY`] over its tallest tree (`canopy`,
+/// m above the ground) at [`FLIGHT_SPEED`], from beyond one edge (`radius` from the centre)
+/// straight over the middle to the far edge, looking ahead and down at the canopy 150 m in
+/// front. Keys every two seconds; the height follows the terrain.
+pub fn low_flight_path(terrain: &Terrain, radius: f32, canopy: f32) -> Vec<CameraKey> {
+    let length = 2.0 * radius.max(1.0);
+    let duration = length / FLIGHT_SPEED;
+    let keys = (duration / 2.0).ceil().max(1.0) as usize;
+    (0..=keys)
+        .map(|k| {
+            let t = duration * k as f32 / keys as f32;
+            let x = -radius + FLIGHT_SPEED * t;
+            let y = 0.1 * radius;
+            let ahead = x + 150.0;
+            CameraKey {
+                t,
+                eye: [x, y, terrain.height(x, y) + canopy + FLIGHT_OVER_CANOPY],
+                target: [ahead, y, terrain.height(ahead, y) + canopy],
+            }
+        })
+        .collect()
+}
+
 /// Where the camera is at time `t` on `path` (Catmull–Rom through the keys' eyes and
 /// targets, uniform in time; held at the ends), with the lens of `base`.
 pub fn camera_on_path(path: &[CameraKey], t: f32, base: &Camera) -> Camera {
