@@ -22,6 +22,8 @@ pub const WALK_SECONDS: f32 = 60.0;
 pub const FLIGHT_SPEED: f32 = 15.0;
 /// Height of the low flight over the tallest tree, m (30 … 60 m over the canopy).
 pub const FLIGHT_OVER_CANOPY: f32 = 40.0;
+/// How far ahead of the low flight the canopy it looks at lies, m.
+pub const FLIGHT_LOOK_AHEAD: f32 = 150.0;
 
 /// A walk at eye height ([`EYE_HEIGHT`] over the terrain) through the forest: from its
 /// centre at walking pace for [`WALK_SECONDS`], along a route that turns by up to about 60°
@@ -48,11 +50,12 @@ pub fn walk_path(terrain: &Terrain) -> Vec<CameraKey> {
 }
 
 /// A low flight across the forest: [`FLIGHT_OVER_CANOPY`] over its tallest tree (`canopy`,
-/// m above the ground) at [`FLIGHT_SPEED`], from beyond one edge (`radius` from the centre)
-/// straight over the middle to the far edge, looking ahead and down at the canopy 150 m in
-/// front. Keys every two seconds; the height follows the terrain.
+/// m above the ground) at [`FLIGHT_SPEED`], from one edge (`radius` from the centre)
+/// straight over the middle until the canopy it looks at, [`FLIGHT_LOOK_AHEAD`] in front
+/// and below, is the far edge (so its last view still shows the forest). Keys every two
+/// seconds; the height follows the terrain.
 pub fn low_flight_path(terrain: &Terrain, radius: f32, canopy: f32) -> Vec<CameraKey> {
-    let length = 2.0 * radius.max(1.0);
+    let length = (2.0 * radius - FLIGHT_LOOK_AHEAD).max(2.0 * FLIGHT_SPEED);
     let duration = length / FLIGHT_SPEED;
     let keys = (duration / 2.0).ceil().max(1.0) as usize;
     (0..=keys)
@@ -60,7 +63,7 @@ pub fn low_flight_path(terrain: &Terrain, radius: f32, canopy: f32) -> Vec<Camer
             let t = duration * k as f32 / keys as f32;
             let x = -radius + FLIGHT_SPEED * t;
             let y = 0.1 * radius;
-            let ahead = x + 150.0;
+            let ahead = x + FLIGHT_LOOK_AHEAD;
             CameraKey {
                 t,
                 eye: [x, y, terrain.height(x, y) + canopy + FLIGHT_OVER_CANOPY],
