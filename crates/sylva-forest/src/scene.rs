@@ -17,9 +17,9 @@ mod path;
 
 pub use layout::{Placement, Terrain, layout};
 pub use path::{
-    BUILTIN_PATHS, EYE_HEIGHT, FLIGHT_OVER_CANOPY, FLIGHT_SPEED, FLY_IN, LOW_FLIGHT, WALK,
-    WALK_SECONDS, WALK_SPEED, camera_on_path, default_camera, default_camera_path, low_flight_path,
-    walk_path,
+    BUILTIN_PATHS, EYE_HEIGHT, FLIGHT_LOOK_AHEAD, FLIGHT_OVER_CANOPY, FLIGHT_SPEED, FLY_IN,
+    LOW_FLIGHT, WALK, WALK_SECONDS, WALK_SPEED, camera_on_path, default_camera,
+    default_camera_path, low_flight_path, walk_path,
 };
 
 /// A scene file that could not be used.
@@ -481,6 +481,10 @@ impl Lighting {
 fn spacing() -> f32 {
     7.0
 }
+/// The smallest `spacing`, m: trunks closer than a metre are not a stand of trees but a
+/// pile of them (every crown overlapping the next), and a scene of thousands of them
+/// drawn in one spot takes minutes a frame.
+pub const MIN_SPACING: f32 = 1.0;
 /// The largest `spacing`, m: trees a kilometre apart are a scattering, not a forest.
 pub const MAX_SPACING: f32 = 1000.0;
 /// The largest `terrain_amplitude`, m.
@@ -583,8 +587,8 @@ impl SceneSpec {
         // A bound above, not only finiteness: the layout's Poisson-disk test squares the
         // spacing in f32, and past about 1e19 m that square is infinite, no second tree
         // fits and the layout grows its square without end.
-        if !(self.spacing > 0.0 && self.spacing <= MAX_SPACING) {
-            return Err(bad("spacing", self.spacing.to_string(), "> 0 … 1000 m"));
+        if !(self.spacing >= MIN_SPACING && self.spacing <= MAX_SPACING) {
+            return Err(bad("spacing", self.spacing.to_string(), "1 … 1000 m"));
         }
         if self.species.is_empty() {
             return Err(bad("species", "[]".into(), "at least one species"));

@@ -19,7 +19,7 @@ fn scene() -> impl Strategy<Value = SceneSpec> {
         1..=3,
     );
     (
-        (0..=i64::MAX as u64, 1usize..=300, (-0.3f32..=1.7).prop_map(|e| 10f32.powf(e))),
+        (0..=i64::MAX as u64, 1usize..=300, (0.0f32..=1.7).prop_map(|e| 10f32.powf(e))),
         (species, proptest::collection::vec(0.05f32..=10.0, 3)),
         (0.0f32..=0.9, 0.0f32..=30.0, (0.5f32..=3.5).prop_map(|e| 10f32.powf(e))),
         (0usize..4, -720.0f32..=720.0, (0.0f32..=6.3).prop_map(|e| 10f32.powf(e) as usize + 1)),

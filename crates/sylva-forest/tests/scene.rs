@@ -62,7 +62,8 @@ fn bad_scene_files_name_the_field() {
 #[test]
 fn the_ground_and_spacing_at_their_limits_lay_out_and_past_them_are_refused() {
     use sylva_forest::scene::{
-        MAX_SPACING, MAX_TERRAIN_AMPLITUDE, MAX_TERRAIN_WAVELENGTH, MIN_TERRAIN_WAVELENGTH,
+        MAX_SPACING, MAX_TERRAIN_AMPLITUDE, MAX_TERRAIN_WAVELENGTH, MIN_SPACING,
+        MIN_TERRAIN_WAVELENGTH,
     };
     let file = |spacing: f32, amplitude: f32, wavelength: f32| {
         format!(
@@ -73,7 +74,7 @@ fn the_ground_and_spacing_at_their_limits_lay_out_and_past_them_are_refused() {
     for (spacing, amplitude, wavelength) in [
         (MAX_SPACING, MAX_TERRAIN_AMPLITUDE, MIN_TERRAIN_WAVELENGTH),
         (MAX_SPACING, MAX_TERRAIN_AMPLITUDE, MAX_TERRAIN_WAVELENGTH),
-        (1e-3, 0.0, MIN_TERRAIN_WAVELENGTH),
+        (MIN_SPACING, 0.0, MIN_TERRAIN_WAVELENGTH),
     ] {
         let spec = SceneSpec::from_toml("x.toml", &file(spacing, amplitude, wavelength))
             .expect("inside the ranges");
@@ -90,6 +91,8 @@ fn the_ground_and_spacing_at_their_limits_lay_out_and_past_them_are_refused() {
     }
     for (spacing, amplitude, wavelength, field) in [
         (1e30, 2.0, 150.0, "`spacing`"),
+        (1e-3, 2.0, 150.0, "`spacing`"),
+        (MIN_SPACING * 0.99, 2.0, 150.0, "`spacing`"),
         (MAX_SPACING * 1.01, 2.0, 150.0, "`spacing`"),
         (7.0, 1e30, 150.0, "`terrain_amplitude`"),
         (7.0, 2.0, 1e-38, "`terrain_wavelength`"),

@@ -52,6 +52,10 @@ pub enum WindError {
     /// A structure cannot be exported in the requested format.
     #[error("cannot export: {0}")]
     Export(String),
+    /// A wind sample is not finite or beyond physical bounds (see
+    /// [`crate::field::check_samples`]); the message names its frame and grid point.
+    #[error("{0}")]
+    Samples(String),
 }
 
 impl WindError {

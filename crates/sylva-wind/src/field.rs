@@ -21,6 +21,52 @@ use crate::params::{AIR_DENSITY, Component, WindParams};
 use crate::spectrum;
 use crate::synth::{self, SynthParams};
 
+/// Largest mean wind speed at any height, m/s: the bound a steady wind (`--wind 12`) has,
+/// and what a synthesised profile or a file's mean may reach.
+pub const MAX_MEAN_SPEED: f64 = 100.0;
+
+/// Largest speed of any one sample, m/s: above the highest surface gust ever measured
+/// (113 m/s, Barrow Island, 1996). A sample beyond it is a corrupt file or one in other
+/// units, not wind.
+pub const MAX_SAMPLE_SPEED: f64 = 150.0;
+
+/// Check that every sample of `field` is finite and at most [`MAX_SAMPLE_SPEED`], and that
+/// the mean speed of each height over its points and frames is at most
+/// [`MAX_MEAN_SPEED`]; the error names the first bad sample's frame and grid point (or the
+/// height). Every reader and writer runs it, so a field that passes is one the forest and
+/// the sway probe can take.
+pub fn check_samples(field: &WindField) -> Result<(), WindError> {
+    let g = &field.grid;
+    let (nx, ny, nz) = (g.nx(), g.ny(), g.nz());
+    let plane = nx * ny * nz;
+    let mut sums = vec![0.0f64; nz];
+    for (t, frame) in field.data.chunks_exact(3 * plane).enumerate() {
+        for q in 0..plane {
+            let (u, v, w) = (frame[q] as f64, frame[plane + q] as f64, frame[2 * plane + q] as f64);
+            let speed = (u * u + v * v + w * w).sqrt();
+            if speed.is_nan() || speed > MAX_SAMPLE_SPEED {
+                let (iz, iy, ix) = (q / (nx * ny), (q / nx) % ny, q % nx);
+                return Err(WindError::Samples(format!(
+                    "wind sample at frame {t}, point (x {ix}, y {iy}, z {iz}) = ({u}, {v}, {w}) \
+                     m/s: expected finite speeds of at most {MAX_SAMPLE_SPEED} m/s"
+                )));
+            }
+            sums[q / (nx * ny)] += u;
+        }
+    }
+    let n = (g.frames * nx * ny).max(1) as f64;
+    for (iz, s) in sums.iter().enumerate() {
+        let mean = s / n;
+        if mean.abs() > MAX_MEAN_SPEED {
+            return Err(WindError::Samples(format!(
+                "mean wind at height {} m is {mean:.1} m/s: expected at most {MAX_MEAN_SPEED} m/s",
+                g.zs[iz]
+            )));
+        }
+    }
+    Ok(())
+}
+
 /// A wind field: grid, model parameters, synthesis settings and the velocity samples.
 #[derive(Debug, Clone, PartialEq)]
 pub struct WindField {

@@ -104,9 +104,20 @@ fn any_wind_parameters_inside_the_ranges_give_finite_fields() {
         p.validate().map_err(|e| TestCaseError::fail(format!("drawn outside the ranges: {e}")))?;
         grid.validate().map_err(|e| TestCaseError::fail(format!("grid: {e}")))?;
         let sp = SynthParams { seed, method: Method::fastest(&p, &grid) };
+        // Ranges each parameter keeps can still combine into a mean wind over 100 m/s on
+        // the grid: such a profile is refused, naming a parameter, before any synthesis.
+        let fastest = grid.zs.iter().map(|&z| p.mean_speed(z)).fold(0.0, f64::max);
+        if fastest > sylva_wind::field::MAX_MEAN_SPEED {
+            let e = WindField::generate(&p, &grid, sp, &|_| {}).expect_err("refused");
+            prop_assert!(e.to_string().contains("at most 100 m/s"), "{}", e);
+            return Ok(());
+        }
         let f = WindField::generate(&p, &grid, sp, &|_| {})
             .map_err(|e| TestCaseError::fail(format!("{e}")))?;
         prop_assert_eq!(f.data.len(), grid.points() * 3 * grid.frames);
+        sylva_wind::field::check_samples(&f).map_err(|e| {
+            TestCaseError::fail(format!("a synthesised field a reader refuses: {e}"))
+        })?;
         prop_assert!(f.data.iter().all(|v| v.is_finite()), "a non-finite sample");
         prop_assert!(f.coherence_error.is_finite() && f.coherence_error >= 0.0);
         let again = WindField::generate(&p, &grid, sp, &|_| {})

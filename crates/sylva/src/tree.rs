@@ -475,12 +475,34 @@ fn write_samples(
     Ok(())
 }
 
+/// Most samples a sway probe records (its wind and every sample's row are held in memory):
+/// a day at 115 samples a second.
+const MAX_PROBE_SAMPLES: f64 = 1e7;
+
+/// `--seconds` and `--fps` of a sway probe, whatever its wind: at most a day (as for a
+/// preset's synthesised wind), at most 1000 samples a second, and at most
+/// [`MAX_PROBE_SAMPLES`] samples, checked before anything is allocated.
+fn check_probe_length(seconds: f64, fps: f64) -> anyhow::Result<()> {
+    if !(seconds > 0.0 && seconds <= 86_400.0) {
+        bail!("--seconds {seconds}: more than 0 and at most 86 400 (a day)");
+    }
+    if !(fps > 0.0 && fps <= 1000.0) {
+        bail!("--fps {fps}: more than 0 and at most 1000");
+    }
+    if seconds * fps > MAX_PROBE_SAMPLES {
+        bail!(
+            "--seconds {seconds} at --fps {fps} is {:.0} samples: at most {MAX_PROBE_SAMPLES:.0} \
+             (fewer seconds, or fewer samples a second)",
+            seconds * fps
+        );
+    }
+    Ok(())
+}
+
 /// `sylva sway`: a tree's sway probed in a wind (a CSV of its motion, or its free decay).
 pub fn run_sway(cmd: SwayCommand) -> anyhow::Result<()> {
     let SwayCommand::Probe(a) = cmd;
-    if !(a.seconds > 0.0 && a.fps > 0.0) {
-        bail!("--seconds and --fps must be positive");
-    }
+    check_probe_length(a.seconds, a.fps)?;
     let species = Species::load(&a.species)?;
     let tree = species.generate(a.seed)?;
     let sk = &tree.skeleton;

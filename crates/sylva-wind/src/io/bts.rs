@@ -44,6 +44,7 @@ pub fn check_bts(grid: &Grid, x_index: usize) -> Result<(f64, f64), WindError> {
 
 /// Write the x = `x_index` plane of `field` as TurbSim `.bts`.
 pub fn write_bts(field: &WindField, x_index: usize, path: &Path) -> Result<(), WindError> {
+    crate::field::check_samples(field)?;
     let g = &field.grid;
     let (dy, dz) = check_bts(g, x_index)?;
     let (nz, ny) = (g.nz(), g.ny());
@@ -160,6 +161,7 @@ impl BtsField {
 
 /// Read a TurbSim `.bts` file.
 pub fn read_bts(path: &Path) -> Result<BtsField, WindError> {
+    super::regular(path, false)?;
     let bytes = std::fs::read(path).map_err(|e| WindError::io(path, e))?;
     parse_bts(&bytes)
 }

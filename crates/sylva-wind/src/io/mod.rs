@@ -39,12 +39,31 @@ use crate::synth::SynthParams;
 
 /// Read a wind field by its file's extension: `.npy` (with its sidecar), `.zarr`, else
 /// `.swf`. (A `.bts` holds one plane without the model: read it with [`read_bts`].)
+///
+/// Whatever the format, what is read is checked ([`crate::field::check_samples`]): finite
+/// samples within physical bounds. A path that is not a regular file (a `.zarr` store: not
+/// a folder) is refused before anything is read, so a FIFO or a device never blocks.
 pub fn read_field(path: &Path) -> Result<WindField, WindError> {
-    match path.extension().and_then(|e| e.to_str()) {
+    let zarr = path.extension().and_then(|e| e.to_str()) == Some("zarr");
+    regular(path, zarr)?;
+    let field = match path.extension().and_then(|e| e.to_str()) {
         Some("npy") => read_npy(path),
         Some("zarr") => read_zarr(path),
         _ => read_swf(path),
+    }?;
+    crate::field::check_samples(&field)?;
+    Ok(field)
+}
+
+/// Refuse `path` unless it is a regular file (a folder where `folder`).
+pub(crate) fn regular(path: &Path, folder: bool) -> Result<(), WindError> {
+    let meta = std::fs::metadata(path).map_err(|e| WindError::io(path, e))?;
+    let ok = if folder { meta.is_dir() } else { meta.is_file() };
+    if ok {
+        return Ok(());
     }
+    let what = if folder { "a folder (a Zarr store)" } else { "a regular file" };
+    Err(WindError::io(path, std::io::Error::other(format!("not {what}"))))
 }
 
 /// Magic bytes of an `.swf` file.
@@ -96,6 +115,7 @@ pub(crate) fn quantisation(field: &WindField, levels: f64) -> ([f64; 3], [f64; 3
 
 /// Write `field` as `.swf`.
 pub fn write_swf(field: &WindField, path: &Path) -> Result<(), WindError> {
+    crate::field::check_samples(field)?;
     let (offset, scale) = quantisation(field, 65534.0);
     let header = SwfHeader {
         grid: field.grid.clone(),

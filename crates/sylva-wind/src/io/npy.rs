@@ -72,6 +72,7 @@ fn sidecar_path(path: &Path) -> PathBuf {
 
 /// Write `field` to `path` (`.npy`) and its sidecar next to it (`.json`).
 pub fn write_npy(field: &WindField, path: &Path) -> Result<(), WindError> {
+    crate::field::check_samples(field)?;
     let g = &field.grid;
     let (shape, axes): (Vec<usize>, Vec<&str>) = if g.nz() == 1 {
         (vec![g.frames, 3, g.ny(), g.nx()], vec!["frame", "component", "y", "x"])

@@ -2,6 +2,8 @@
 //! method's time and memory, and the checks that refuse a configuration with the figure.
 
 use super::*;
+use crate::error::ParamError;
+use crate::params::Profile;
 
 /// What the dense Cholesky method will cost on a grid, estimated before it starts.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -57,6 +59,7 @@ pub fn memory_estimate(grid: &Grid, method: Method) -> f64 {
 pub fn check_config(params: &WindParams, grid: &Grid, synth: SynthParams) -> Result<(), WindError> {
     params.validate()?;
     grid.validate()?;
+    check_profile(params, grid)?;
     if synth.method == Method::Separable
         && params.coherence_speed == CoherenceSpeed::PairMean
         && grid.nz() > 1
@@ -95,4 +98,35 @@ pub fn streaming_memory_estimate(grid: &Grid) -> f64 {
     let nc = (grid.frames / 2 + 1) as f64;
     let cols = EMIT_COLUMNS.min(grid.nx()) as f64;
     4.0 * cols * column * grid.frames as f64 + 2.0 * 16.0 * column * nc + 64.0 * column * nc
+}
+
+/// The mean profile must give every height of the grid a finite mean speed of at most
+/// [`crate::field::MAX_MEAN_SPEED`]: parameters each in range can still combine into an
+/// infinite or absurd profile (a power law with `z_ref` = 1e-300), which would be
+/// synthesised into a field of infinities. The error names the parameter that makes it so.
+fn check_profile(params: &WindParams, grid: &Grid) -> Result<(), WindError> {
+    const EXPECTED: &str =
+        "a profile whose mean speed is finite and at most 100 m/s at every height of the grid";
+    for &z in &grid.zs {
+        let u = params.mean_speed(z);
+        if u.is_finite() && u.abs() <= crate::field::MAX_MEAN_SPEED {
+            continue;
+        }
+        let (field, value) = match params.profile {
+            Profile::Power { u_ref, z_ref, alpha } => {
+                let ratio = (z.max(1e-3) / z_ref).powf(alpha);
+                if ratio.is_finite() && ratio <= 1e3 {
+                    ("profile.u_ref", u_ref)
+                } else {
+                    ("profile.z_ref", z_ref)
+                }
+            }
+            Profile::Log { z0, d } => {
+                let ln = ((z - d).max(2.0 * z0) / z0).ln();
+                if ln.is_finite() { ("u_star", params.u_star) } else { ("profile.z0", z0) }
+            }
+        };
+        return Err(ParamError::new(field, value, EXPECTED).into());
+    }
+    Ok(())
 }
