@@ -47,6 +47,10 @@ impl std::fmt::Debug for Welch {
     }
 }
 
+/// Bins beyond which a line's power leaks through the Hann window by less than 1e-10 (its
+/// gain falls as δ⁻⁶).
+const HANN_REACH: f64 = 48.0;
+
 impl Welch {
     /// An estimator with segments of `segment` samples (made even, at least 4) at step `dt`.
     pub fn new(segment: usize, dt: f64) -> Welch {
@@ -122,8 +126,7 @@ impl Welch {
         let norm = self.dt / self.window.iter().map(|w| w * w).sum::<f64>();
         let powers: Vec<f64> =
             (0..m / 2).map(|j| if j == 0 { 0.0 } else { line_power(j) }).collect();
-        // The Hann gain falls as δ⁻⁶: beyond 48 bins a line adds < 1e-10 of its power.
-        const REACH: f64 = 48.0;
+        const REACH: f64 = HANN_REACH;
         let per_bin = m as f64 / n as f64;
         (0..=n / 2)
             .map(|k| {
@@ -587,7 +590,10 @@ impl ComponentEstimate<'_> {
 
     /// The synthesised lines a band of Welch bins sees, each with the power it brings to
     /// the band through the window (the Hann main lobe spans ±2 bins, so the slow, strong
-    /// lines just below a band weigh on it).
+    /// lines just below a band weigh on it). A line is summed over the band's bins within
+    /// [`HANN_REACH`] of it only, beyond which the window passes less than 1e-10 of its
+    /// power: so a band costs its lines, not its lines times its bins, and the statistics
+    /// of a long record grow as its length, not its square.
     fn band_lines(&self, b: &[usize]) -> Vec<(usize, f64)> {
         let (m, per_bin) = (self.e.m, self.e.per_bin);
         let lo = ((b[0] as f64 - 4.0) * per_bin).floor().max(1.0) as usize;
@@ -595,11 +601,10 @@ impl ComponentEstimate<'_> {
         (lo..hi)
             .map(|j| {
                 let c = j as f64 / per_bin;
-                (
-                    j,
-                    self.line(j)
-                        * b.iter().map(|&k| self.e.welch.hann_gain(k as f64 - c)).sum::<f64>(),
-                )
+                let near = b.partition_point(|&k| (k as f64) < c - HANN_REACH)
+                    ..b.partition_point(|&k| (k as f64) <= c + HANN_REACH);
+                let gain: f64 = b[near].iter().map(|&k| self.e.welch.hann_gain(k as f64 - c)).sum();
+                (j, self.line(j) * gain)
             })
             .collect()
     }

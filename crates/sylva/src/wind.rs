@@ -210,10 +210,20 @@ pub struct GridArgs {
     method: MethodArg,
 }
 
+/// Most grid points along x or y: a million (a 4 km side at 4 mm); checked before the
+/// coordinate arrays are built, so a mistyped size is refused at once, not after gigabytes
+/// are allocated.
+const MAX_POINTS_A_SIDE: usize = 1_000_000;
+
 impl GridArgs {
     fn grid(&self, params: &WindParams) -> anyhow::Result<(Grid, SynthParams)> {
         if self.nx == 0 || self.ny == 0 {
             bail!("--nx and --ny must be at least 1 (got {} and {})", self.nx, self.ny);
+        }
+        for (flag, n) in [("--nx", self.nx), ("--ny", self.ny)] {
+            if n > MAX_POINTS_A_SIDE {
+                bail!("{flag} {n}: at most {MAX_POINTS_A_SIDE} points a side");
+            }
         }
         if !(self.spacing > 0.0 && self.spacing.is_finite()) {
             bail!("--spacing must be a positive number of metres (got {})", self.spacing);
@@ -312,7 +322,9 @@ pub fn run(cmd: WindCommand) -> anyhow::Result<()> {
                 Some(f) => f,
                 None => format_of(&a.out)?,
             };
-            // Everything that can fail on the output is checked before the synthesis.
+            // Everything that can fail on the output is checked before the synthesis: its
+            // folder exists (or is made) and takes a file.
+            check_out_folder(&a.out)?;
             if format == FormatArg::Bts {
                 io::check_bts(&grid, a.bts_x_index)?;
             }
@@ -403,6 +415,19 @@ pub fn demo(a: DemoArgs) -> anyhow::Result<()> {
     println!("\nwrote {}", path.display());
     for p in plots {
         println!("wrote {}", p.display());
+    }
+    Ok(())
+}
+
+/// The folder `out` is written into exists (made if missing) and is a folder, checked
+/// before minutes of synthesis rather than after.
+fn check_out_folder(out: &std::path::Path) -> anyhow::Result<()> {
+    let dir =
+        out.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
+    std::fs::create_dir_all(dir)
+        .with_context(|| format!("--out {}: creating {}", out.display(), dir.display()))?;
+    if !dir.is_dir() {
+        bail!("--out {}: {} is not a folder", out.display(), dir.display());
     }
     Ok(())
 }

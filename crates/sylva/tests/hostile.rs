@@ -97,3 +97,62 @@ fn a_reader_refuses_a_fifo_instead_of_blocking() {
     assert!(!ok && text.contains("not a regular file"), "{text}");
     assert!(start.elapsed() < Duration::from_secs(30), "no hang");
 }
+
+/// Grid sizes a user mistypes were allocated before they were checked: 2³² a side
+/// aborted on a 34 GB allocation, 2⁶⁴ − 1 panicked, 5·10⁸ × 1 allocated 3.9 GB first. Each
+/// is refused at once, naming the flag; and an output folder that cannot exist is refused
+/// before the synthesis, not after it.
+#[test]
+fn grid_sizes_and_output_folders_are_checked_before_any_allocation() {
+    for (nx, ny) in
+        [("4294967296", "4294967296"), ("18446744073709551615", "4"), ("500000000", "1")]
+    {
+        let start = Instant::now();
+        let (ok, text) =
+            sylva(&["wind", "generate", "--nx", nx, "--ny", ny, "--out", "/dev/null/w.swf"]);
+        assert!(!ok, "--nx {nx} --ny {ny} refused: {text}");
+        assert!(text.contains("--nx") || text.contains("--ny"), "names the flag: {text}");
+        assert!(!text.contains("panicked"), "{text}");
+        assert!(start.elapsed() < Duration::from_secs(10), "refused at once");
+    }
+    // A file where the output's folder would be: refused before synthesising (quickly).
+    let dir = TempPath::new("sylva-hostile", "out");
+    std::fs::create_dir_all(&*dir).expect("dir");
+    let blocker = dir.join("file");
+    std::fs::write(&blocker, b"not a folder").expect("write");
+    let out = blocker.join("w.swf");
+    let start = Instant::now();
+    let (ok, text) = sylva(&[
+        "wind",
+        "generate",
+        "--nx",
+        "256",
+        "--ny",
+        "256",
+        "--frames",
+        "8192",
+        "--out",
+        out.to_str().expect("utf-8"),
+    ]);
+    assert!(!ok && text.contains("--out"), "{text}");
+    assert!(start.elapsed() < Duration::from_secs(10), "before the synthesis");
+}
+
+/// `wind stats` grew as the square of the frames (a 1 × 1 grid of 131 072 frames took 18 s,
+/// of 10⁶ over two minutes): each band summed every line against every bin. It now grows
+/// as the frames; 262 144 frames, which took over a minute, take a few seconds. The bound
+/// here guards against the square coming back, not a performance figure.
+#[test]
+fn stats_of_a_long_record_take_time_in_proportion_to_its_length() {
+    let dir = TempPath::new("sylva-hostile", "long");
+    std::fs::create_dir_all(&*dir).expect("dir");
+    let path = dir.join("long.swf");
+    let p = path.to_str().expect("utf-8");
+    let (ok, text) =
+        sylva(&["wind", "generate", "--nx", "1", "--ny", "1", "--frames", "262144", "--out", p]);
+    assert!(ok, "{text}");
+    let start = Instant::now();
+    let (ok, text) = sylva(&["wind", "stats", p]);
+    assert!(ok, "{text}");
+    assert!(start.elapsed() < Duration::from_secs(60), "{:?}", start.elapsed());
+}
