@@ -195,6 +195,25 @@ pub struct RenderReport {
     pub mp4: Option<PathBuf>,
 }
 
+/// Remove what an earlier clip left in `dir`: its frames (`frame_NNNN.png`), `forest.gif`
+/// and `forest.mp4`. Nothing else in the folder is touched.
+fn remove_earlier_clip(dir: &Path) -> anyhow::Result<()> {
+    let entries = std::fs::read_dir(dir).with_context(|| format!("listing {}", dir.display()))?;
+    for e in entries.flatten() {
+        let name = e.file_name();
+        let name = name.to_string_lossy();
+        let frame = name
+            .strip_prefix("frame_")
+            .and_then(|r| r.strip_suffix(".png"))
+            .is_some_and(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()));
+        if frame || name == "forest.gif" || name == "forest.mp4" {
+            std::fs::remove_file(e.path())
+                .with_context(|| format!("removing the earlier clip's {}", e.path().display()))?;
+        }
+    }
+    Ok(())
+}
+
 /// A clip as `sylva render` writes it: numbered PNG frames (`frame_0000.png` …), a looping
 /// GIF at most 480 px wide (`forest.gif`), and an MP4 through ffmpeg when it is installed
 /// (`forest.mp4`, at the clip's mean frame rate).
@@ -221,8 +240,11 @@ impl std::fmt::Debug for ClipWriter {
 
 impl ClipWriter {
     /// Start a clip of `w × h` frames in `dir` (created), with a GIF unless `gif` is false.
+    /// A clip written into a folder holding an earlier one replaces it: the earlier clip's
+    /// frames, GIF and MP4 are removed first, so the folder never mixes two runs.
     pub fn new(dir: &Path, w: u32, h: u32, gif: bool) -> anyhow::Result<ClipWriter> {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        remove_earlier_clip(dir)?;
         let k = (w / 480).max(1);
         let gif = if gif {
             let path = dir.join("forest.gif");

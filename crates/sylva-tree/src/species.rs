@@ -219,12 +219,14 @@ pub enum SpeciesError {
         file: String,
     },
     /// TOML syntax error.
-    #[error("{file}: line {line}: {message}")]
+    #[error("{file}: line {line}, column {column}: {message}")]
     Syntax {
         /// File name.
         file: String,
         /// 1-based line.
         line: usize,
+        /// 1-based column (characters) within the line.
+        column: usize,
         /// The parser's message.
         message: String,
     },
@@ -266,10 +268,20 @@ pub enum SpeciesError {
     },
 }
 
+/// The 1-based line where `key` is set (`key = …`) or opens a table (`[key]`, `[[key]]`,
+/// `[key.sub]`); 0 if neither is found.
 fn line_of(text: &str, key: &str) -> usize {
     text.lines()
         .position(|l| {
             let t = l.trim_start();
+            if let Some(header) = t.strip_prefix('[') {
+                let h = header.trim_start_matches('[').trim_start();
+                let h = h.strip_prefix('"').unwrap_or(h);
+                return h.strip_prefix(key).is_some_and(|r| {
+                    let r = r.strip_prefix('"').unwrap_or(r).trim_start();
+                    r.starts_with(']') || r.starts_with('.')
+                });
+            }
             let t = t.strip_prefix('"').unwrap_or(t);
             t.strip_prefix(key).is_some_and(|r| {
                 let r = r.strip_prefix('"').unwrap_or(r).trim_start();
@@ -277,6 +289,18 @@ fn line_of(text: &str, key: &str) -> usize {
             })
         })
         .map_or(0, |i| i + 1)
+}
+
+/// 1-based line and column (in characters) of byte `offset` of `text`.
+fn line_and_column(text: &str, offset: usize) -> (usize, usize) {
+    let mut at = offset.min(text.len());
+    while !text.is_char_boundary(at) {
+        at -= 1;
+    }
+    let before = &text[..at];
+    let line = before.matches('\n').count() + 1;
+    let start = before.rfind('\n').map_or(0, |i| i + 1);
+    (line, before[start..].chars().count() + 1)
 }
 
 /// Split a key into (level, base name): `1DownAngle` → (Some(1), "DownAngle").
@@ -331,9 +355,9 @@ impl Species {
             return Err(SpeciesError::Empty { file: file.into() });
         }
         let table: toml::Table = text.parse().map_err(|e: toml::de::Error| {
-            let line =
-                e.span().map_or(0, |s| text[..s.start.min(text.len())].lines().count().max(1));
-            SpeciesError::Syntax { file: file.into(), line, message: e.message().to_string() }
+            let (line, column) = e.span().map_or((0, 0), |s| line_and_column(text, s.start));
+            let message = e.message().trim().to_string();
+            SpeciesError::Syntax { file: file.into(), line, column, message }
         })?;
         let name = std::path::Path::new(file).file_stem().and_then(|s| s.to_str()).unwrap_or(file);
         let mut s = Species::defaults(name);

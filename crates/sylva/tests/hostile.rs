@@ -156,3 +156,40 @@ fn stats_of_a_long_record_take_time_in_proportion_to_its_length() {
     assert!(ok, "{text}");
     assert!(start.elapsed() < Duration::from_secs(60), "{:?}", start.elapsed());
 }
+
+/// `render --out DIR` again with fewer frames or another size mixed the new frames with
+/// the stale ones and the old GIF: the folder now holds the new clip alone.
+#[test]
+fn rendering_into_a_folder_again_replaces_the_earlier_clip() {
+    let dir = TempPath::new("sylva-hostile", "clip");
+    let out = dir.to_str().expect("utf-8");
+    let run = |seconds: &str, size: &str| {
+        let (ok, text) = sylva(&[
+            "render",
+            "--scene",
+            "small",
+            "--seconds",
+            seconds,
+            "--fps",
+            "10",
+            "--size",
+            size,
+            "--out",
+            out,
+        ]);
+        assert!(ok, "{text}");
+    };
+    run("0.5", "64x48");
+    std::fs::write(dir.join("notes.txt"), b"the user's own").expect("write");
+    run("0.2", "48x32");
+    let mut frames: Vec<String> = std::fs::read_dir(&*dir)
+        .expect("list")
+        .filter_map(|e| e.ok().map(|e| e.file_name().to_string_lossy().into_owned()))
+        .filter(|n| n.starts_with("frame_"))
+        .collect();
+    frames.sort();
+    // 0.2 s at 10 frames a second: the second run's frames only (0.5 s wrote more).
+    let second = frames.len();
+    assert!((2..=3).contains(&second), "frames left: {frames:?}");
+    assert!(dir.join("notes.txt").exists(), "nothing but the clip's own files is removed");
+}

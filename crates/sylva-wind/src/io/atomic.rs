@@ -6,7 +6,7 @@
 //! the previous file or the complete new one. A writer that fails or is dropped before
 //! committing removes its temporary file. A process killed outright (SIGKILL, power loss)
 //! leaves the previous file intact and at most a `.partial-` file beside it, which the next
-//! write to the same name does not reuse.
+//! write to the same name removes (on Linux, once no process of its number runs).
 //!
 //! This module sits in the lowest crate so that every layer (wind files, glTF, images,
 //! tables) shares one implementation.
@@ -34,6 +34,7 @@ impl AtomicFile {
         let name = dest
             .file_name()
             .ok_or_else(|| io::Error::new(io::ErrorKind::InvalidInput, "the path names no file"))?;
+        sweep_stale(dest, &name.to_string_lossy());
         let n = COUNTER.fetch_add(1, Ordering::Relaxed);
         let tmp_name = format!(".{}.partial-{}-{n}", name.to_string_lossy(), std::process::id());
         let tmp = dest.with_file_name(tmp_name);
@@ -92,6 +93,30 @@ impl Drop for AtomicFile {
     }
 }
 
+/// Remove the temporary files that earlier writers of `dest` (file name `name`) left when
+/// they were killed: `.NAME.partial-PID-N` whose process is gone. Only on Linux, where
+/// `/proc` says which processes run; elsewhere they stay, as harmless as before.
+fn sweep_stale(dest: &Path, name: &str) {
+    if !cfg!(target_os = "linux") {
+        return;
+    }
+    let dir = dest.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let prefix = format!(".{name}.partial-");
+    let Ok(entries) = std::fs::read_dir(dir) else { return };
+    for e in entries.flatten() {
+        let file = e.file_name();
+        let file = file.to_string_lossy();
+        let Some(rest) = file.strip_prefix(&prefix) else { continue };
+        let Some(pid) = rest.split('-').next().and_then(|p| p.parse::<u32>().ok()) else {
+            continue;
+        };
+        if pid != std::process::id() && !Path::new(&format!("/proc/{pid}")).exists() {
+            // Best effort: another writer may have removed it first.
+            let _ = std::fs::remove_file(e.path());
+        }
+    }
+}
+
 /// Write `bytes` to `path` atomically.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> io::Result<()> {
     let mut f = AtomicFile::create(path)?;
@@ -142,5 +167,23 @@ mod tests {
         f.commit().expect("commit");
         assert_eq!(std::fs::read(&path).expect("read"), b"new and longer");
         assert_eq!(partials(d), 0);
+    }
+
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn a_partial_file_of_a_killed_writer_goes_with_the_next_write_of_that_name() {
+        let dir = sylva_testkit::TempDir::new("sylva-atomic");
+        let d = dir.path();
+        // A writer killed outright left these: no process has number 4 294 967 295.
+        let stale = d.join(".w.swf.partial-4294967295-0");
+        std::fs::write(&stale, b"half a file").expect("stale");
+        // One of a writer still running (this process) and one of another name stay.
+        let live = d.join(format!(".w.swf.partial-{}-9", std::process::id()));
+        std::fs::write(&live, b"in flight").expect("live");
+        let other = d.join(".x.swf.partial-4294967295-0");
+        std::fs::write(&other, b"another file's").expect("other");
+        write_atomic(&d.join("w.swf"), b"whole").expect("write");
+        assert!(!stale.exists(), "the dead writer's partial file is removed");
+        assert!(live.exists() && other.exists(), "a live writer's and another name's stay");
     }
 }
