@@ -208,7 +208,8 @@ pub struct SceneSpec {
     pub seed: u64,
     /// Number of trees (1 … 1 000 000).
     pub trees: usize,
-    /// Poisson-disk minimum distance between trunks, m (> 0 … 1 000). Default 7.
+    /// Poisson-disk minimum distance between trunks, m (1 … 1 000: closer, the trees would
+    /// be a pile, not a stand). Default 7.
     #[serde(default = "spacing")]
     pub spacing: f32,
     /// Species mix.
