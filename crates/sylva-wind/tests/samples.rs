@@ -66,3 +66,35 @@ fn writers_refuse_a_field_they_could_not_read_back() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// An `.swf` whose header was edited and its checksum recomputed (scale 0, an offset of
+/// 1e300, a negative largest error) was taken on trust: each is refused, naming the field.
+#[test]
+fn an_swf_header_edited_with_its_checksum_recomputed_is_range_checked() {
+    let dir = std::env::temp_dir().join(format!("sylva-swf-edit-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("dir");
+    let path = dir.join("w.swf");
+    sylva_wind::io::write_swf(&field(), &path).expect("write");
+    let bytes = std::fs::read(&path).expect("read");
+    let hlen = u32::from_le_bytes(bytes[12..16].try_into().expect("4 bytes")) as usize;
+    let header: serde_json::Value = serde_json::from_slice(&bytes[16..16 + hlen]).expect("json");
+    let data = &bytes[16 + hlen..bytes.len() - 4];
+    for (key, value, field_name) in [
+        ("scale", 0.0, "scale[0]"),
+        ("offset", 1e300, "offset[0]"),
+        ("max_error", -1.0, "max_error[0]"),
+    ] {
+        let mut h = header.clone();
+        h[key][0] = serde_json::json!(value);
+        let json = serde_json::to_vec(&h).expect("json");
+        let mut out = bytes[..12].to_vec();
+        out.extend_from_slice(&(json.len() as u32).to_le_bytes());
+        out.extend_from_slice(&json);
+        out.extend_from_slice(data);
+        let crc = crc32fast::hash(&out);
+        out.extend_from_slice(&crc.to_le_bytes());
+        let e = sylva_wind::io::parse_swf(&out).expect_err("edited header refused").to_string();
+        assert!(e.contains(field_name), "{key}: {e}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -95,6 +95,36 @@ pub struct SwfHeader {
     pub coherence_error: f64,
 }
 
+/// The header's quantisation, range-checked (a header edited with its checksum recomputed
+/// would otherwise be taken on trust): per component a step of more than 0 and at most
+/// 0.01 m/s a count (a writer's step spans a component's range over 65 534 counts, so
+/// 0.01 m/s would already be a range of 655 m/s), an offset within ±100 m/s (the mean
+/// wind's bound), and the largest error half the step.
+fn check_quantisation(h: &SwfHeader) -> Result<(), WindError> {
+    for c in 0..3 {
+        let (scale, offset, err) = (h.scale[c], h.offset[c], h.max_error[c]);
+        if !(scale > 0.0 && scale <= 0.01) {
+            return Err(WindError::format(
+                16,
+                format!("header: scale[{c}] = {scale}: expected > 0 … 0.01 m/s a count"),
+            ));
+        }
+        if !(offset.abs() <= crate::field::MAX_MEAN_SPEED) {
+            return Err(WindError::format(
+                16,
+                format!("header: offset[{c}] = {offset}: expected within ±100 m/s"),
+            ));
+        }
+        if !((err - 0.5 * scale).abs() <= 1e-9 * scale.max(1e-12) + 1e-15) {
+            return Err(WindError::format(
+                16,
+                format!("header: max_error[{c}] = {err}: expected half the scale, {}", 0.5 * scale),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Per-component (offset, scale) spanning min…max over ±32767 counts.
 pub(crate) fn quantisation(field: &WindField, levels: f64) -> ([f64; 3], [f64; 3]) {
     let n = field.grid.points();
@@ -232,6 +262,7 @@ pub fn parse_swf(bytes: &[u8]) -> Result<WindField, WindError> {
             ),
         ));
     }
+    check_quantisation(&header)?;
     let n = header.grid.points();
     let data = bytes[hend..hend + 2 * count]
         .chunks_exact(2)
