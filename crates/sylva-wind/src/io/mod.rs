@@ -109,13 +109,14 @@ fn check_quantisation(h: &SwfHeader) -> Result<(), WindError> {
                 format!("header: scale[{c}] = {scale}: expected > 0 … 0.01 m/s a count"),
             ));
         }
-        if !(offset.abs() <= crate::field::MAX_MEAN_SPEED) {
+        if offset.is_nan() || offset.abs() > crate::field::MAX_MEAN_SPEED {
             return Err(WindError::format(
                 16,
                 format!("header: offset[{c}] = {offset}: expected within ±100 m/s"),
             ));
         }
-        if !((err - 0.5 * scale).abs() <= 1e-9 * scale.max(1e-12) + 1e-15) {
+        let off = (err - 0.5 * scale).abs();
+        if off.is_nan() || off > 1e-9 * scale.max(1e-12) + 1e-15 {
             return Err(WindError::format(
                 16,
                 format!("header: max_error[{c}] = {err}: expected half the scale, {}", 0.5 * scale),
