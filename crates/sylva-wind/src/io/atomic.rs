@@ -117,6 +117,35 @@ fn sweep_stale(dest: &Path, name: &str) {
     }
 }
 
+/// An exclusive lock on `.NAME.lock` beside a file, held until dropped: writers of files
+/// that go together (an `.npy` and its sidecar) take it around both writes, so two writers
+/// of one pair never leave one's array with the other's sidecar. On Linux through
+/// `flock(2)` (released by the kernel when the process ends, however it ends); elsewhere
+/// no lock is taken. The lock file stays, empty: removing it while another writer waits
+/// on it would let a third lock a new file beside the waiter's.
+#[derive(Debug)]
+pub struct PathLock {
+    _file: File,
+}
+
+/// Take the lock of `path` (see [`PathLock`]), waiting while another writer holds it.
+pub fn lock_beside(path: &Path) -> io::Result<PathLock> {
+    let name = path
+        .file_name()
+        .ok_or_else(|| io::Error::new(io::ErrorKind::InvalidInput, "the path names no file"))?;
+    let lock = path.with_file_name(format!(".{}.lock", name.to_string_lossy()));
+    let file = File::options().create(true).truncate(false).write(true).open(&lock)?;
+    #[cfg(target_os = "linux")]
+    {
+        use std::os::fd::AsRawFd;
+        // SAFETY: flock on a descriptor this File owns and keeps open for the lock's life.
+        if unsafe { libc::flock(file.as_raw_fd(), libc::LOCK_EX) } != 0 {
+            return Err(io::Error::last_os_error());
+        }
+    }
+    Ok(PathLock { _file: file })
+}
+
 /// Write `bytes` to `path` atomically.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> io::Result<()> {
     let mut f = AtomicFile::create(path)?;

@@ -71,8 +71,12 @@ fn sidecar_path(path: &Path) -> PathBuf {
 }
 
 /// Write `field` to `path` (`.npy`) and its sidecar next to it (`.json`).
+///
+/// The array and its sidecar are written under one lock ([`super::atomic::lock_beside`]):
+/// two writers of the same path leave one of their pairs, never a mix.
 pub fn write_npy(field: &WindField, path: &Path) -> Result<(), WindError> {
     crate::field::check_samples(field)?;
+    let _pair = super::atomic::lock_beside(path).map_err(|e| WindError::io(path, e))?;
     let g = &field.grid;
     let (shape, axes): (Vec<usize>, Vec<&str>) = if g.nz() == 1 {
         (vec![g.frames, 3, g.ny(), g.nx()], vec!["frame", "component", "y", "x"])
