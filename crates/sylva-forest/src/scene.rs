@@ -683,7 +683,7 @@ impl SceneSpec {
         for path in self.paths.values() {
             validate_camera_path(file, path)?;
         }
-        if !(BUILTIN_PATHS.contains(&self.path.as_str()) || self.paths.contains_key(&self.path)) {
+        if !self.has_path(&self.path) {
             let expected = "fly-in, walk, low-flight or a name of `paths`";
             return Err(bad("path", self.path.clone(), expected));
         }
@@ -696,6 +696,11 @@ impl SceneSpec {
             }
         }
         Ok(())
+    }
+
+    /// Whether the scene has camera path `name`: one of [`BUILTIN_PATHS`] or of its `paths`.
+    pub fn has_path(&self, name: &str) -> bool {
+        BUILTIN_PATHS.contains(&name) || self.paths.contains_key(name)
     }
 
     /// Replace the scene's wind (a command's `--wind`); a preset's U* set by the scene goes

@@ -248,7 +248,7 @@ pub fn run(a: Table3Bench) -> anyhow::Result<()> {
 
 /// Scene `base` on camera path `path`: named "SCENE PATH" unless it is the fly-in.
 fn on_path(base: &SceneSpec, path: &str) -> anyhow::Result<SceneSpec> {
-    if !(sylva_forest::BUILTIN_PATHS.contains(&path) || base.paths.contains_key(path)) {
+    if !base.has_path(path) {
         anyhow::bail!(
             "--path {path}: scene {} has fly-in, walk, low-flight{}",
             base.name,

@@ -13,7 +13,9 @@ use super::{Forest, ForestError, Group, SpeciesRuntime};
 use crate::camera::Camera;
 use crate::groups::{morton, partition};
 use crate::lanes;
-use crate::scene::{Placement, SceneSpec, Terrain, camera_on_path, default_camera, layout};
+use crate::scene::{
+    CameraKey, Placement, SceneSpec, Terrain, camera_on_path, default_camera, layout,
+};
 use crate::wind::{SceneWind, wind_field};
 
 /// The trees' feet and heights as separate arrays (what culling reads, in the layout that
@@ -58,7 +60,8 @@ impl Forest {
             .map(|p| models[p.species as usize].tree.stats.height * p.scale)
             .fold(0.0, f32::max);
         // Groups are first formed for where the camera starts.
-        let eye = start_camera(spec, &terrain, radius, canopy).eye;
+        let path = super::path_keys(spec, &terrain, radius, canopy);
+        let eye = start_camera(spec, &path, radius).eye;
         let side = spec.side();
         let mut lane_base = 0;
         // Simulations per species: its share of `sim_joint_budget` in whole trees, or every
@@ -138,6 +141,7 @@ impl Forest {
             leaf_params: spec.leaves,
             radius,
             canopy,
+            path,
             time: 0.0,
             gain: 1.0,
             turn: 0.0,
@@ -166,10 +170,10 @@ impl Forest {
 
 /// Where the camera starts: on the fly-in, the scene's `camera_path` at time 0 or its
 /// default viewpoint; on any other path, that path at time 0.
-fn start_camera(spec: &SceneSpec, terrain: &Terrain, radius: f32, canopy: f32) -> Camera {
+fn start_camera(spec: &SceneSpec, path: &[CameraKey], radius: f32) -> Camera {
     let base = default_camera(spec, radius);
     if spec.path != crate::scene::FLY_IN {
-        return camera_on_path(&super::path_keys(spec, terrain, radius, canopy), 0.0, &base);
+        return camera_on_path(path, 0.0, &base);
     }
     if spec.camera_path.is_empty() { base } else { camera_on_path(&spec.camera_path, 0.0, &base) }
 }

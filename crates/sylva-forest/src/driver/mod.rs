@@ -248,6 +248,8 @@ pub struct Forest {
     pub radius: f32,
     /// Height of the tallest tree above the ground, m.
     canopy: f32,
+    /// The keys of the camera path the forest follows (`spec.path`), made once.
+    path: Vec<CameraKey>,
     time: f64,
     gain: f32,
     turn: f32,

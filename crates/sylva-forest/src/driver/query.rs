@@ -27,7 +27,7 @@ impl Forest {
 
     /// The camera at time `t` on the path the forest follows.
     pub fn camera_at(&self, t: f32) -> Camera {
-        camera_on_path(&self.path_keys(), t, &self.default_camera())
+        camera_on_path(&self.path, t, &self.default_camera())
     }
 
     /// The keys of the camera path the forest follows ([`SceneSpec::path`](crate::SceneSpec::path)):
@@ -35,19 +35,20 @@ impl Forest {
     /// low flight (the scene's own of those names, or [`walk_path`](crate::scene::walk_path) and
     /// [`low_flight_path`](crate::scene::low_flight_path) over this forest's terrain and tallest tree), or a named path
     /// of the scene.
-    pub fn path_keys(&self) -> Vec<CameraKey> {
-        path_keys(&self.spec, &self.terrain, self.radius, self.canopy)
+    pub fn path_keys(&self) -> &[CameraKey] {
+        &self.path
     }
 
     /// Follow camera path `name` from now on (see [`Forest::path_keys`]); an unknown name
     /// is refused, naming the paths there are.
     pub fn set_path(&mut self, name: &str) -> Result<(), ForestError> {
-        if !(BUILTIN_PATHS.contains(&name) || self.spec.paths.contains_key(name)) {
+        if !self.spec.has_path(name) {
             let mut names: Vec<&str> = BUILTIN_PATHS.to_vec();
             names.extend(self.spec.paths.keys().map(String::as_str));
             return Err(ForestError::Path(format!("`{name}`: one of {}", names.join(", "))));
         }
         self.spec.path = name.to_string();
+        self.path = path_keys(&self.spec, &self.terrain, self.radius, self.canopy);
         Ok(())
     }
 
