@@ -4,6 +4,7 @@
 //!   tree growth, textures), so a seed means the same stream everywhere;
 //! - [`lanes`]: lane-interleaved 3×4 matrices (a SIMD step's palettes) to one row per
 //!   lane, transposed eight lanes at a time where the CPU has AVX;
+//! - [`memory`]: the memory the machine has free, for estimates made before allocating;
 //! - [`mat4`]: column-major 4×4 product and inverse (camera and renderer);
 //! - [`quat`]: unit quaternions from and to rotation matrices, slerp (glTF animation);
 //! - [`v3`]: helpers on `[f32; 3]`, the vector type of every public struct (plain, `Pod`,
@@ -14,6 +15,7 @@
 
 pub mod lanes;
 pub mod mat4;
+pub mod memory;
 pub mod quat;
 pub mod rng;
 pub mod simd;

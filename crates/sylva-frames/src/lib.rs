@@ -31,10 +31,4 @@ pub fn at_least_one(s: &str) -> Result<usize, String> {
     }
 }
 
-/// Memory the kernel reports as available (MemAvailable), bytes; `None` where unknown.
-pub fn available_memory() -> Option<f64> {
-    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb * 1024.0)
-}
+pub use sylva_core::memory::available_memory;

@@ -26,6 +26,7 @@
 use std::f32::consts::PI;
 
 use sylva_core::SplitMix64 as Rng;
+use sylva_core::memory::USABLE_SHARE;
 use sylva_core::v3::{V3, add, cross, dot, norm, rotate, scale};
 
 use crate::skeleton::{Joint, NO_PARENT, Skeleton, SkeletonError};
@@ -134,6 +135,20 @@ struct StemSeed {
     share: f32,
 }
 
+/// Peak bytes per joint of a tree's growth and meshes, leaves aside: the presets measure
+/// 1.1–1.9 kB (peak resident memory of `Species::model` over its joints, release build).
+pub const BYTES_PER_JOINT: f64 = 2048.0;
+/// Peak bytes per joint for each leaf its stem carries, up to [`LEAVES_COUNTED`]: a
+/// quaking aspen with 20 000 leaves per stem measures 13.1 kB per joint against 1.85 kB
+/// with its 25.
+pub const BYTES_PER_LEAF: f64 = 20.0;
+/// Leaves per stem counted by [`BYTES_PER_LEAF`]: past about 2 000 the leaf cards stop
+/// growing in number (the aspen peaks at 55 MB with 2 000 leaves per stem and with 20 000),
+/// and 700 × 20 B bounds what it measures at every count.
+pub const LEAVES_COUNTED: f64 = 700.0;
+/// Bytes for the bark and leaf textures, whatever the tree.
+pub const FIXED_BYTES: f64 = 16e6;
+
 impl Species {
     /// An upper bound on the joints a tree of this species grows without splits: every level
     /// carries at most nBranches children per parent stem, each of nCurveRes segments.
@@ -149,9 +164,33 @@ impl Species {
         joints.min(u64::MAX as f64) as u64
     }
 
+    /// An upper bound on the memory, bytes, that growing this species' tree and building
+    /// its meshes, LOD chain and textures takes at its peak: per joint of
+    /// [`Species::joint_bound`], [`BYTES_PER_JOINT`] plus [`BYTES_PER_LEAF`] for each of up to
+    /// [`LEAVES_COUNTED`] leaves a stem carries, and [`FIXED_BYTES`] for the textures.
+    pub fn memory_estimate(&self) -> f64 {
+        let leaves = (self.leaves.abs() as f64).min(LEAVES_COUNTED);
+        self.joint_bound() as f64 * (BYTES_PER_JOINT + BYTES_PER_LEAF * leaves) + FIXED_BYTES
+    }
+
+    /// Refuse a species whose [`Species::memory_estimate`] is over `usable` bytes (what
+    /// [`Species::generate`] checks against the usable share of the free memory).
+    pub fn check_memory(&self, usable: f64) -> Result<(), SkeletonError> {
+        let need = self.memory_estimate();
+        if need > usable {
+            return Err(SkeletonError::TooMuchMemory {
+                need_gb: need / 1e9,
+                usable_gb: usable / 1e9,
+                joints: self.joint_bound(),
+            });
+        }
+        Ok(())
+    }
+
     /// Generate the tree of this species for `seed`. Refused, before anything grows, when
-    /// [`Species::joint_bound`] exceeds `MaxJoints`, and stopped when growth passes it (splits
-    /// can multiply stems beyond the bound).
+    /// [`Species::joint_bound`] exceeds `MaxJoints` or [`Species::memory_estimate`] the usable
+    /// share of the free memory, and stopped when growth passes `MaxJoints` (splits can
+    /// multiply stems beyond the bound).
     pub fn generate(&self, seed: u64) -> Result<Tree, SkeletonError> {
         let bound = self.joint_bound();
         if bound > self.max_joints as u64 {
@@ -160,6 +199,9 @@ impl Species {
                 max: self.max_joints,
                 how: "nBranches and nCurveRes allow up to this many",
             });
+        }
+        if let Some(free) = sylva_core::memory::available_memory() {
+            self.check_memory(USABLE_SHARE * free)?;
         }
         let mut rng = Rng::new(seed ^ 0x5175_a000_0000_0000);
         let sp = self;

@@ -88,6 +88,20 @@ pub enum SkeletonError {
         /// How the figure was found.
         how: &'static str,
     },
+    /// Growing and meshing the tree would need more memory than the machine has free.
+    #[error(
+        "this species would need about {need_gb:.2} GB to grow and mesh ({joints} joints at \
+         most), more than the {usable_gb:.2} GB usable of this machine's free memory: lower \
+         nBranches, nCurveRes, nSegSplits or Leaves in the species file"
+    )]
+    TooMuchMemory {
+        /// [`Species::memory_estimate`](crate::Species::memory_estimate), GB.
+        need_gb: f64,
+        /// The share of the free memory one piece of work may use, GB.
+        usable_gb: f64,
+        /// [`Species::joint_bound`](crate::Species::joint_bound).
+        joints: u64,
+    },
     /// A joint has a non-finite or out-of-range value.
     #[error("joint {joint}: {field} = {value} is invalid ({expected})")]
     Value {
