@@ -1,7 +1,7 @@
 //! A tree's growth is sized before it starts: a species whose tree would not fit in memory
 //! is refused with the figure, not grown until the allocator aborts.
 
-use sylva_tree::{Species, SkeletonError};
+use sylva_tree::{SkeletonError, Species};
 
 /// The aspen with two crowded branch levels and the documented largest `MaxJoints`:
 /// 2 000 branches on 2 000 branches, 12 million joints.

@@ -23,7 +23,7 @@ mod npy;
 pub mod zarr;
 
 pub use bts::{BtsField, check_bts, parse_bts, read_bts, write_bts};
-pub use npy::{parse_npy, read_npy, write_npy};
+pub use npy::{NpySidecar, parse_npy, read_npy, write_npy};
 pub use zarr::{read_zarr, write_zarr_streaming};
 
 use std::io::Write;
@@ -46,13 +46,12 @@ use crate::synth::SynthParams;
 pub fn read_field(path: &Path) -> Result<WindField, WindError> {
     let zarr = path.extension().and_then(|e| e.to_str()) == Some("zarr");
     regular(path, zarr)?;
-    let field = match path.extension().and_then(|e| e.to_str()) {
+    // Each reader checks the samples it returns.
+    match path.extension().and_then(|e| e.to_str()) {
         Some("npy") => read_npy(path),
         Some("zarr") => read_zarr(path),
         _ => read_swf(path),
-    }?;
-    crate::field::check_samples(&field)?;
-    Ok(field)
+    }
 }
 
 /// Refuse `path` unless it is a regular file (a folder where `folder`).
@@ -273,13 +272,15 @@ pub fn parse_swf(bytes: &[u8]) -> Result<WindField, WindError> {
             (header.offset[c] + header.scale[c] * i16::from_le_bytes([b[0], b[1]]) as f64) as f32
         })
         .collect();
-    Ok(WindField {
+    let field = WindField {
         grid: header.grid,
         params: header.params,
         synth: header.synth,
         data,
         coherence_error: header.coherence_error,
-    })
+    };
+    crate::field::check_samples(&field)?;
+    Ok(field)
 }
 
 #[cfg(test)]

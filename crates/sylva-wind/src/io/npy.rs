@@ -60,6 +60,89 @@ pub struct NpySidecar {
     /// CRC-32 (IEEE) of the `.npy` file's data bytes (after its header), so a reader can
     /// detect corruption; `.npy` itself carries no checksum.
     pub data_crc32: u32,
+    /// CRC-32 (IEEE) of this sidecar itself: of its compact JSON (`serde_json`'s, fields in
+    /// this order) with this field 0, so an edited grid, time step or parameter is refused
+    /// rather than trusted ([`NpySidecar::checksum`]).
+    pub sidecar_crc32: u32,
+}
+
+impl NpySidecar {
+    /// The CRC-32 [`NpySidecar::sidecar_crc32`] holds for this sidecar's other fields.
+    pub fn checksum(&self) -> Result<u32, WindError> {
+        let zeroed = NpySidecar { sidecar_crc32: 0, ..self.clone() };
+        let text = serde_json::to_string(&zeroed).map_err(|e| WindError::Export(e.to_string()))?;
+        Ok(crc32fast::hash(text.as_bytes()))
+    }
+
+    /// Check the fields that repeat the grid and parameters for readers without Sylva
+    /// (shape, heights, mean speeds, spacing, `dt`) against them: the checksum covers the
+    /// text, this its sense.
+    fn check_consistent(&self, name: &str) -> Result<(), WindError> {
+        let g = &self.grid;
+        let bad = |field: &str, what: String| {
+            Err(WindError::format(0, format!("{name}: `{field}` {what}")))
+        };
+        if self.shape != npy_shape(g) {
+            return bad("shape", format!("{:?} is not the grid's {:?}", self.shape, npy_shape(g)));
+        }
+        if self.heights != g.zs {
+            return bad("heights", format!("{:?} are not the grid's {:?}", self.heights, g.zs));
+        }
+        if self.dt != g.dt {
+            return bad("dt", format!("{} is not the grid's {}", self.dt, g.dt));
+        }
+        let spacing = [Grid::regular_spacing(&g.xs), Grid::regular_spacing(&g.ys)];
+        if self.spacing != spacing {
+            return bad("spacing", format!("{:?} is not the grid's {spacing:?}", self.spacing));
+        }
+        if self.u_star != self.params.u_star {
+            return bad(
+                "u_star",
+                format!("{} is not the parameters' {}", self.u_star, self.params.u_star),
+            );
+        }
+        let means: Vec<f64> = g.zs.iter().map(|&z| self.params.mean_speed(z)).collect();
+        if self.mean_speeds.len() != means.len()
+            || self
+                .mean_speeds
+                .iter()
+                .zip(&means)
+                .any(|(a, b)| (a - b).abs() > 1e-9 * b.abs().max(1.0))
+        {
+            return bad(
+                "mean_speeds",
+                format!("{:?} are not the model's {means:?}", self.mean_speeds),
+            );
+        }
+        Ok(())
+    }
+}
+
+/// The array's shape for `g`: (frames, 3, ny, nx) for one height, with nz after the
+/// component for several.
+fn npy_shape(g: &Grid) -> Vec<usize> {
+    if g.nz() == 1 {
+        vec![g.frames, 3, g.ny(), g.nx()]
+    } else {
+        vec![g.frames, 3, g.nz(), g.ny(), g.nx()]
+    }
+}
+
+/// The `shape` tuple of an `.npy` header dictionary, as numbers; `None` if it has none that
+/// parses.
+fn header_shape(dict: &str) -> Option<Vec<usize>> {
+    let rest = &dict[dict.find("'shape':")? + "'shape':".len()..];
+    let open = rest.find('(')?;
+    let close = rest.find(')')?;
+    if close < open {
+        return None;
+    }
+    rest[open + 1..close]
+        .split(',')
+        .map(str::trim)
+        .filter(|t| !t.is_empty())
+        .map(|t| t.parse().ok())
+        .collect()
 }
 
 fn reference_model() -> String {
@@ -78,10 +161,11 @@ pub fn write_npy(field: &WindField, path: &Path) -> Result<(), WindError> {
     crate::field::check_samples(field)?;
     let _pair = super::atomic::lock_beside(path).map_err(|e| WindError::io(path, e))?;
     let g = &field.grid;
-    let (shape, axes): (Vec<usize>, Vec<&str>) = if g.nz() == 1 {
-        (vec![g.frames, 3, g.ny(), g.nx()], vec!["frame", "component", "y", "x"])
+    let shape = npy_shape(g);
+    let axes = if g.nz() == 1 {
+        vec!["frame", "component", "y", "x"]
     } else {
-        (vec![g.frames, 3, g.nz(), g.ny(), g.nx()], vec!["frame", "component", "z", "y", "x"])
+        vec!["frame", "component", "z", "y", "x"]
     };
     let dims: Vec<String> = shape.iter().map(|d| d.to_string()).collect();
     let mut dict =
@@ -110,7 +194,7 @@ pub fn write_npy(field: &WindField, path: &Path) -> Result<(), WindError> {
     }
     w.commit().map_err(io)?;
     let data_crc32 = crc.finalize();
-    let side = NpySidecar {
+    let mut side = NpySidecar {
         shape,
         axes: axes.into_iter().map(String::from).collect(),
         u_star: field.params.u_star,
@@ -128,7 +212,9 @@ pub fn write_npy(field: &WindField, path: &Path) -> Result<(), WindError> {
         synth: field.synth,
         captured: field.captured(),
         data_crc32,
+        sidecar_crc32: 0,
     };
+    side.sidecar_crc32 = side.checksum()?;
     let sp = sidecar_path(path);
     let json = serde_json::to_string_pretty(&side).map_err(|e| WindError::Export(e.to_string()))?;
     // Written after the array: an interruption between the two leaves the previous sidecar,
@@ -154,8 +240,20 @@ pub fn parse_npy(
         offset: 0,
         reason: format!("{sidecar_name}: line {}: {e}", e.line()),
     })?;
+    let crc = side.checksum()?;
+    if crc != side.sidecar_crc32 {
+        return Err(WindError::format(
+            0,
+            format!(
+                "{sidecar_name}: sidecar checksum {crc:08x} differs from its `sidecar_crc32` \
+                 {:08x}: the sidecar was edited or is corrupt",
+                side.sidecar_crc32
+            ),
+        ));
+    }
     side.grid.validate().map_err(|e| WindError::format(0, format!("{sidecar_name}: {e}")))?;
     side.params.validate().map_err(|e| WindError::format(0, format!("{sidecar_name}: {e}")))?;
+    side.check_consistent(sidecar_name)?;
     if bytes.len() < 10 || &bytes[..6] != b"\x93NUMPY" {
         return Err(WindError::format(0, "not a .npy file (bad magic)"));
     }
@@ -173,6 +271,16 @@ pub fn parse_npy(
     let dict = String::from_utf8_lossy(&bytes[10..start]);
     if !dict.contains("'<f4'") || dict.contains("'fortran_order': True") {
         return Err(WindError::format(10, "array is not little-endian f32 in C order"));
+    }
+    match header_shape(&dict) {
+        Some(shape) if shape == side.shape => {}
+        Some(shape) => {
+            return Err(WindError::format(
+                10,
+                format!("the npy header's shape {shape:?} is not the sidecar's {:?}", side.shape),
+            ));
+        }
+        None => return Err(WindError::format(10, "the npy header has no shape that parses")),
     }
     let count = side.grid.points() * 3 * side.grid.frames;
     let need = start + 4 * count;
@@ -200,13 +308,15 @@ pub fn parse_npy(
         .chunks_exact(4)
         .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
         .collect();
-    Ok(WindField {
+    let field = WindField {
         grid: side.grid,
         params: side.params,
         synth: side.synth,
         data,
         coherence_error: side.coherence_error,
-    })
+    };
+    crate::field::check_samples(&field)?;
+    Ok(field)
 }
 
 #[cfg(test)]

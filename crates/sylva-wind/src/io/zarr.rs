@@ -13,11 +13,14 @@
 //! padded to 32 columns with the fill value 0, as Zarr requires.
 //!
 //! The group's `attributes.sylva` holds what `.swf` headers and `.npy` sidecars hold: grid,
-//! parameters, seed and method, mean speeds, the coherence model and the advection origin.
+//! parameters, seed and method, mean speeds, the coherence model and the advection origin;
+//! and the store's manifest, the CRC-32 of every chunk, with a checksum of the attributes
+//! themselves. The group's `zarr.json` is written last, once every chunk's checksum is known.
 //!
 //! The store is written into a temporary folder beside the destination and renamed into
 //! place when complete; an interrupted run leaves any previous store intact.
 
+use std::collections::BTreeMap;
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 
@@ -45,6 +48,27 @@ pub struct ZarrAttributes {
     pub coherence_model: String,
     /// Advection phase origin x_c, m; null when advection is off.
     pub advection_origin_x: Option<f64>,
+    /// The store's manifest: the CRC-32 (IEEE) of every chunk file, keyed by its path in
+    /// the store (`wind/c/0/1/0/0/3`, `x/c/0`, …). The reader checks each chunk it reads
+    /// against it.
+    pub checksums: BTreeMap<String, u32>,
+    /// CRC-32 of these attributes themselves: of their compact JSON with this field 0
+    /// ([`ZarrAttributes::checksum`]), so an edited grid or manifest is refused.
+    pub attributes_crc32: u32,
+}
+
+impl ZarrAttributes {
+    /// The CRC-32 [`ZarrAttributes::attributes_crc32`] holds for the other fields.
+    pub fn checksum(&self) -> Result<u32, WindError> {
+        let zeroed = ZarrAttributes { attributes_crc32: 0, ..self.clone() };
+        let text = serde_json::to_string(&zeroed).map_err(|e| WindError::Export(e.to_string()))?;
+        Ok(crc32fast::hash(text.as_bytes()))
+    }
+}
+
+/// A chunk's key in the manifest: its path in the store with `/` separators.
+fn manifest_key(path: &Path) -> String {
+    path.iter().map(|p| p.to_string_lossy()).collect::<Vec<_>>().join("/")
 }
 
 /// Removes a partial store unless it was moved into place.
@@ -85,12 +109,11 @@ pub fn write_zarr_streaming(
         let d = tmp.join("wind/c/0").join(c.to_string()).join("0/0");
         std::fs::create_dir_all(&d).map_err(|e| WindError::io(&d, e))?;
     }
-    let (group, array) = metadata(params, grid, synth_params)?;
-    write_file(&tmp.join("zarr.json"), group.as_bytes())?;
-    write_file(&tmp.join("wind/zarr.json"), array.as_bytes())?;
+    write_file(&tmp.join("wind/zarr.json"), array_metadata(grid)?.as_bytes())?;
+    let mut checksums = BTreeMap::new();
     let times: Vec<f64> = (0..m).map(|t| t as f64 * grid.dt).collect();
     for (name, values) in [("time", &times), ("z", &grid.zs), ("y", &grid.ys), ("x", &grid.xs)] {
-        write_coordinate(&tmp, name, values)?;
+        checksums.insert(format!("{name}/c/0"), write_coordinate(&tmp, name, values)?);
     }
     // Each block of columns becomes one chunk, written frame by frame in C order
     // (frame, z·y, 32 columns), through a small buffer of frames.
@@ -98,8 +121,10 @@ pub fn write_zarr_streaming(
     let mut buf: Vec<u8> = Vec::with_capacity(TILE * np * EMIT_COLUMNS * 4);
     let mut tile: Vec<f32> = Vec::with_capacity(TILE * np * EMIT_COLUMNS);
     let mut emit = |comp: Component, x0: usize, cols: usize, rec: &[f32]| {
-        let path = tmp.join(chunk_key(comp.index(), x0 / EMIT_COLUMNS));
+        let key = chunk_key(comp.index(), x0 / EMIT_COLUMNS);
+        let path = tmp.join(&key);
         let mut f = AtomicFile::create(&path).map_err(|e| WindError::io(&path, e))?;
+        let mut crc = crc32fast::Hasher::new();
         for t0 in (0..m).step_by(TILE) {
             let tn = (t0 + TILE).min(m) - t0;
             // Read each record's run of `tn` frames (contiguous), scatter into the tile.
@@ -117,11 +142,16 @@ pub fn write_zarr_streaming(
             for v in &tile {
                 buf.extend_from_slice(&v.to_le_bytes());
             }
+            crc.update(&buf);
             f.write_all(&buf).map_err(|e| WindError::io(&path, e))?;
         }
+        checksums.insert(manifest_key(&key), crc.finalize());
         f.commit().map_err(|e| WindError::io(&path, e))
     };
     synth::synthesize_streaming(params, grid, synth_params, &mut emit, progress)?;
+    // The group, with the manifest, last: a store is complete when it has its root.
+    let group = group_metadata(params, grid, synth_params, checksums)?;
+    write_file(&tmp.join("zarr.json"), group.as_bytes())?;
     // Into place: the previous store (if any) goes only once the new one is complete.
     let old = dir.with_file_name(format!(".{}.old-{}", name.to_string_lossy(), std::process::id()));
     if dir.exists() {
@@ -139,8 +169,8 @@ fn write_file(path: &Path, bytes: &[u8]) -> Result<(), WindError> {
     super::atomic::write_atomic(path, bytes).map_err(|e| WindError::io(path, e))
 }
 
-/// A 1-D float64 coordinate array `name` in one chunk.
-fn write_coordinate(root: &Path, name: &str, values: &[f64]) -> Result<(), WindError> {
+/// A 1-D float64 coordinate array `name` in one chunk; returns the chunk's CRC-32.
+fn write_coordinate(root: &Path, name: &str, values: &[f64]) -> Result<u32, WindError> {
     let dir = root.join(name);
     std::fs::create_dir_all(dir.join("c")).map_err(|e| WindError::io(&dir, e))?;
     let units = if name == "time" { "s" } else { "m" };
@@ -159,28 +189,38 @@ fn write_coordinate(root: &Path, name: &str, values: &[f64]) -> Result<(), WindE
     let text = serde_json::to_string_pretty(&meta).map_err(|e| WindError::Export(e.to_string()))?;
     write_file(&dir.join("zarr.json"), text.as_bytes())?;
     let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
-    write_file(&dir.join("c/0"), &bytes)
+    write_file(&dir.join("c/0"), &bytes)?;
+    Ok(crc32fast::hash(&bytes))
 }
 
-/// The group's and the `wind` array's metadata.
-fn metadata(
+/// The group's metadata: `attributes.sylva` with the store's manifest.
+fn group_metadata(
     params: &WindParams,
     grid: &Grid,
     synth: SynthParams,
-) -> Result<(String, String), WindError> {
-    let attrs = ZarrAttributes {
+    checksums: BTreeMap<String, u32>,
+) -> Result<String, WindError> {
+    let mut attrs = ZarrAttributes {
         grid: grid.clone(),
         params: params.clone(),
         synth,
         mean_speeds: grid.zs.iter().map(|&z| params.mean_speed(z)).collect(),
         coherence_model: params.coherence_speed.name().into(),
         advection_origin_x: params.advection.then(|| grid.x_mid()),
+        checksums,
+        attributes_crc32: 0,
     };
+    attrs.attributes_crc32 = attrs.checksum()?;
     let group = serde_json::json!({
         "zarr_format": 3,
         "node_type": "group",
         "attributes": {"sylva": attrs}
     });
+    serde_json::to_string_pretty(&group).map_err(|e| WindError::Export(e.to_string()))
+}
+
+/// The `wind` array's metadata.
+fn array_metadata(grid: &Grid) -> Result<String, WindError> {
     let meta = serde_json::json!({
         "zarr_format": 3,
         "node_type": "array",
@@ -196,10 +236,7 @@ fn metadata(
         "dimension_names": ["time", "component", "z", "y", "x"],
         "attributes": {"units": "m/s", "components": ["u", "v", "w"]}
     });
-    let text = |v: &serde_json::Value| {
-        serde_json::to_string_pretty(v).map_err(|e| WindError::Export(e.to_string()))
-    };
-    Ok((text(&group)?, text(&meta)?))
+    serde_json::to_string_pretty(&meta).map_err(|e| WindError::Export(e.to_string()))
 }
 
 /// Read a store written by [`write_zarr_streaming`] into memory.
@@ -218,8 +255,49 @@ pub fn read_zarr(dir: &Path) -> Result<WindField, WindError> {
         offset: 0,
         reason: format!("{}: {reason}", mp.display()),
     };
+    let gp = dir.join("zarr.json");
     let attrs: ZarrAttributes = serde_json::from_value(group["attributes"]["sylva"].clone())
         .map_err(|e| bad(format!("the group's attributes.sylva: {e}")))?;
+    let crc = attrs.checksum()?;
+    if crc != attrs.attributes_crc32 {
+        return Err(WindError::Format {
+            offset: 0,
+            reason: format!(
+                "{}: attributes.sylva's checksum {crc:08x} differs from its attributes_crc32 \
+                 {:08x}: the store's attributes were edited or are corrupt",
+                gp.display(),
+                attrs.attributes_crc32
+            ),
+        });
+    }
+    // Every chunk file against the manifest: the coordinates here, the wind as it is read.
+    let check = |key: &str, bytes: &[u8]| -> Result<(), WindError> {
+        let path = dir.join(key);
+        let Some(&want) = attrs.checksums.get(key) else {
+            return Err(WindError::Format {
+                offset: 0,
+                reason: format!("{}: the store's manifest has no checksum for it", path.display()),
+            });
+        };
+        let got = crc32fast::hash(bytes);
+        if got != want {
+            return Err(WindError::Format {
+                offset: 0,
+                reason: format!(
+                    "{}: chunk checksum {got:08x} differs from the manifest's {want:08x}: the \
+                     chunk is corrupt",
+                    path.display()
+                ),
+            });
+        }
+        Ok(())
+    };
+    for name in ["time", "z", "y", "x"] {
+        let key = format!("{name}/c/0");
+        let path = dir.join(&key);
+        let bytes = std::fs::read(&path).map_err(|e| WindError::io(&path, e))?;
+        check(&key, &bytes)?;
+    }
     attrs.grid.validate().map_err(|e| bad(e.to_string()))?;
     attrs.params.validate().map_err(|e| bad(e.to_string()))?;
     let g = &attrs.grid;
@@ -246,7 +324,8 @@ pub fn read_zarr(dir: &Path) -> Result<WindField, WindError> {
     let mut bytes = Vec::with_capacity(per_chunk);
     for c in 0..3 {
         for xb in 0..nx.div_ceil(EMIT_COLUMNS) {
-            let path = dir.join(chunk_key(c, xb));
+            let key = chunk_key(c, xb);
+            let path = dir.join(&key);
             bytes.clear();
             std::fs::File::open(&path)
                 .and_then(|mut f| f.read_to_end(&mut bytes))
@@ -261,6 +340,7 @@ pub fn read_zarr(dir: &Path) -> Result<WindField, WindError> {
                     ),
                 });
             }
+            check(&manifest_key(&key), &bytes)?;
             for (k, v) in bytes.chunks_exact(4).enumerate() {
                 let b = k % EMIT_COLUMNS;
                 let x = xb * EMIT_COLUMNS + b;
@@ -272,13 +352,15 @@ pub fn read_zarr(dir: &Path) -> Result<WindField, WindError> {
             }
         }
     }
-    Ok(WindField {
+    let field = WindField {
         grid: attrs.grid,
         params: attrs.params,
         synth: attrs.synth,
         data,
         coherence_error: 0.0,
-    })
+    };
+    crate::field::check_samples(&field)?;
+    Ok(field)
 }
 
 #[cfg(test)]
@@ -338,6 +420,11 @@ mod tests {
             g["xs"] = (0..nx).map(|i| i as f64).collect::<Vec<_>>().into();
             g["ys"] = (0..ny).map(|i| i as f64).collect::<Vec<_>>().into();
             g["frames"] = frames.into();
+            // The attributes' checksum recomputed, as a hostile edit would.
+            let a = &mut v["attributes"]["sylva"];
+            let mut attrs: ZarrAttributes = serde_json::from_value(a.clone()).expect("attributes");
+            attrs.attributes_crc32 = attrs.checksum().expect("checksum");
+            *a = serde_json::to_value(attrs).expect("json");
         });
         edit("wind/zarr.json", &|v| {
             v["shape"] = serde_json::json!([frames, 3, 1, ny, nx]);
