@@ -285,7 +285,8 @@ pub struct StatsArgs {
     /// Height index to report (default: every height).
     #[arg(long)]
     height: Option<usize>,
-    /// Welch segment length in frames (default frames/8, at least 32).
+    /// Welch segment length in frames: even, 4 … the field's frames (default frames/8, at
+    /// least 32).
     #[arg(long)]
     segment: Option<usize>,
     /// Print the statistics as JSON instead of tables.
@@ -300,7 +301,7 @@ pub struct PlotArgs {
     /// Folder for spectra.png and coherence.png (default: the file's folder).
     #[arg(long)]
     out: Option<PathBuf>,
-    /// Welch segment length in frames.
+    /// Welch segment length in frames: even, 4 … the field's frames.
     #[arg(long)]
     segment: Option<usize>,
 }
@@ -372,6 +373,7 @@ pub fn run(cmd: WindCommand) -> anyhow::Result<()> {
                 Some(h) => vec![h],
                 None => (0..nz).collect(),
             };
+            check_segment(a.segment, fields[0].grid.frames)?;
             let stats: Vec<FieldStats> =
                 heights.iter().map(|&h| ensemble_stats_at(&fields, a.segment, h)).collect();
             if a.json {
@@ -385,6 +387,7 @@ pub fn run(cmd: WindCommand) -> anyhow::Result<()> {
         }
         WindCommand::Plot(a) => {
             let field = read(&a.file)?;
+            check_segment(a.segment, field.grid.frames)?;
             let dir =
                 a.out.unwrap_or_else(|| a.file.parent().map(Path::to_path_buf).unwrap_or_default());
             std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
@@ -430,6 +433,17 @@ fn check_out_folder(out: &std::path::Path) -> anyhow::Result<()> {
         bail!("--out {}: {} is not a folder", out.display(), dir.display());
     }
     Ok(())
+}
+
+/// Refuse a Welch segment the estimate would have to change: under 4 frames, odd, or longer
+/// than the field's `frames`.
+fn check_segment(segment: Option<usize>, frames: usize) -> anyhow::Result<()> {
+    match segment {
+        Some(n) if n < 4 || n % 2 == 1 || n > frames => {
+            bail!("--segment {n}: an even number of frames, 4 … {frames} (the field's frames)")
+        }
+        _ => Ok(()),
+    }
 }
 
 /// Checks before a synthesis starts: the method fits the model and grid, the memory it needs

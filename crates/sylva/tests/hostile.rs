@@ -193,3 +193,22 @@ fn rendering_into_a_folder_again_replaces_the_earlier_clip() {
     assert!((2..=3).contains(&second), "frames left: {frames:?}");
     assert!(dir.join("notes.txt").exists(), "nothing but the clip's own files is removed");
 }
+
+/// `wind stats --segment 1` ran with a 4-frame segment it chose itself, saying so only in
+/// its table's heading: a segment the estimate cannot use as given is refused by name.
+#[test]
+fn a_welch_segment_the_estimate_cannot_use_is_refused() {
+    let dir = TempPath::new("sylva-hostile", "segment");
+    std::fs::create_dir_all(&*dir).expect("dir");
+    let path = dir.join("w.swf");
+    let p = path.to_str().expect("utf-8");
+    let (ok, text) =
+        sylva(&["wind", "generate", "--nx", "4", "--ny", "4", "--frames", "64", "--out", p]);
+    assert!(ok, "{text}");
+    for bad in ["1", "7", "128"] {
+        let (ok, text) = sylva(&["wind", "stats", "--segment", bad, p]);
+        assert!(!ok && text.contains(&format!("--segment {bad}")), "{bad}: {text}");
+    }
+    let (ok, text) = sylva(&["wind", "stats", "--segment", "16", p]);
+    assert!(ok && text.contains("Welch segment 16 frames"), "{text}");
+}
