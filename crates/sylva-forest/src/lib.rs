@@ -18,8 +18,8 @@ pub use camera::{Camera, Mat4, ShadowBox, ViewCone};
 pub use driver::{
     Bucket, Forest, ForestError, FrameData, FrameStats, Instance, LodSettings, MAX_NEAR_POINTS,
     NEAR_REACH, REGROUP_FADE, REGROUP_TRAVEL, SHADOW_COARSER, SceneWind, SpeciesRuntime, TreeInfo,
-    blend_levels, hysteresis, lod_cap, lod_coordinate, next_lod_state, past_cap_fraction,
-    shadow_level, wind_field,
+    blend_levels, error_coordinate, hysteresis, level_thresholds, lod_cap, lod_coordinate,
+    next_lod_state, past_cap_fraction, shadow_level, wind_field,
 };
 pub use scene::{
     BUILTIN_PATHS, CameraKey, FLY_IN, LOW_FLIGHT, Lighting, LodSpec, Placement, SCENES, SceneError,

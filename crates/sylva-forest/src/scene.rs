@@ -345,6 +345,10 @@ pub struct LodSpec {
     /// First level drawn as an impostor (1 … 6). Default 1 (`DEFAULT_FAR_LEVEL`): full
     /// detail, then the impostor.
     pub far_level: u32,
+    /// Screen-space error budget, pixels (0 … 64). Above 0, each tree is drawn at the
+    /// coarsest level whose geometric error against full detail spans at most this many
+    /// pixels, and `fraction` is unused. Default 0: levels by `fraction`.
+    pub error_px: f32,
 }
 
 impl Default for LodSpec {
@@ -355,6 +359,7 @@ impl Default for LodSpec {
             wind: true,
             fraction: crate::driver::DEFAULT_LOD_FRACTION,
             far_level: crate::driver::DEFAULT_FAR_LEVEL,
+            error_px: 0.0,
         }
     }
 }
@@ -675,6 +680,9 @@ impl SceneSpec {
         if !(self.lod.fraction > 0.0 && self.lod.fraction.is_finite() && self.lod.fraction <= 100.0)
         {
             return Err(bad("lod.fraction", self.lod.fraction.to_string(), "0 … 100"));
+        }
+        if !(0.0..=64.0).contains(&self.lod.error_px) {
+            return Err(bad("lod.error_px", self.lod.error_px.to_string(), "0 … 64 pixels"));
         }
         if !(1..=6).contains(&self.lod.far_level) {
             return Err(bad("lod.far_level", self.lod.far_level.to_string(), "1 … 6"));

@@ -67,6 +67,11 @@ pub struct LodArgs {
     /// then the impostor).
     #[arg(long)]
     pub far_level: Option<u32>,
+    /// Screen-space error budget, pixels (0 … 64): each tree at the coarsest level whose
+    /// geometric error against full detail spans at most this many pixels (0: levels by
+    /// the image-height fraction). Default: the scene's (`[lod] error_px`).
+    #[arg(long, value_parser = crate::finite::<f32>)]
+    pub lod_error: Option<f32>,
     /// Memory the forest's animation state may take, GB (replaces the scene's
     /// `max_state_mb`). Without it the cap is the scene's, and at most three quarters of
     /// the memory this machine has free.
@@ -82,6 +87,12 @@ impl LodArgs {
                 bail!("--far-level {f}: must be 1 … 6");
             }
             spec.lod.far_level = f;
+        }
+        if let Some(px) = self.lod_error {
+            if !(0.0..=64.0).contains(&px) {
+                bail!("--lod-error {px}: must be 0 … 64 pixels");
+            }
+            spec.lod.error_px = px;
         }
         apply_max_memory(spec, self.max_memory)?;
         spec.lod.geometry &= !self.no_geometry_lod;
@@ -359,7 +370,7 @@ pub fn render(a: &RenderArgs, warmup: usize) -> anyhow::Result<RenderReport> {
     let frames = (a.seconds * a.fps).round().max(1.0) as usize;
     let dt = (1.0 / a.fps) as f32;
     let mut clip = ClipWriter::new(&a.out, w, h, !a.no_gif)?;
-    let mut frame = FrameData::default();
+    let mut frame = FrameData::with_rows(h);
     let (mut sim, mut draw, mut tris) = (Vec::new(), Vec::new(), Vec::new());
     let mut step = Vec::new();
     let mut passes: Vec<[f64; sylva_render::PASS_PARTS.len()]> = Vec::new();

@@ -12,6 +12,7 @@
 
 pub mod generate;
 pub mod gltf;
+pub mod lod_error;
 pub mod mesh;
 pub mod order;
 pub mod skeleton;

@@ -124,6 +124,10 @@ pub(super) fn configure(
         anyhow::ensure!(h0 > 0.0 && h0 <= 100.0, "--lod-fraction {h0}: must be in (0, 100]");
         spec.lod.fraction = h0;
     }
+    if let Some(px) = a.lod_error {
+        anyhow::ensure!((0.0..=64.0).contains(&px), "--lod-error {px}: must be 0 … 64 pixels");
+        spec.lod.error_px = px;
+    }
     sylva_frames::render::apply_max_memory(&mut spec, a.max_memory)?;
     Ok(spec)
 }
@@ -146,6 +150,9 @@ pub(super) fn command_line(a: &Table3Bench, (w, h): (u32, u32)) -> String {
     }
     if let Some(h0) = a.lod_fraction {
         let _ = write!(c, " --lod-fraction {h0}");
+    }
+    if let Some(px) = a.lod_error {
+        let _ = write!(c, " --lod-error {px}");
     }
     if let Some(m) = a.max_memory {
         let _ = write!(c, " --max-memory {m}");
@@ -253,7 +260,7 @@ pub(super) fn run_config(
     // The frame's arrays grow to the path's largest before timing: built once for each of
     // its cameras, last to first (so the level history ends where the path starts), no
     // timed frame pays for growing them.
-    let mut frame = FrameData::default();
+    let mut frame = FrameData::with_rows(h);
     for camera in cameras.iter().rev() {
         forest.frame(camera, w as f32 / h as f32, &mut frame);
     }
@@ -328,7 +335,7 @@ pub(super) fn overlapped(
     (w, h): (u32, u32),
     limit: u32,
 ) -> anyhow::Result<f64> {
-    let mut frame = FrameData::default();
+    let mut frame = FrameData::with_rows(h);
     let mut in_flight = std::collections::VecDeque::new();
     let start = Instant::now();
     for camera in cameras {

@@ -64,7 +64,7 @@ pub(super) fn still_error(
         // The last timed frame's camera: the path's end (its start when one frame is run).
         let last = if a.warmup + a.frames > 1 { forest.path_duration() } else { 0.0 };
         let camera = forest.camera_at(last);
-        let mut frame = FrameData::default();
+        let mut frame = FrameData::with_rows(h);
         forest.frame(&camera, w as f32 / h as f32, &mut frame);
         if frame.stats.triangles as f64 > a.max_image_triangles {
             return Ok(None);

@@ -82,6 +82,10 @@ pub struct Table3Bench {
     /// Geometry-LOD threshold h₀ (default: the scene's).
     #[arg(value_parser = sylva_frames::finite::<f32>, long)]
     lod_fraction: Option<f32>,
+    /// Screen-space error budget, pixels (0 … 64; 0: levels by fraction; default: the
+    /// scene's).
+    #[arg(value_parser = sylva_frames::finite::<f32>, long)]
+    lod_error: Option<f32>,
     /// Memory the animation state may take, GB (default: the scene's cap, at most three
     /// quarters of the free memory). Over it, lane groups are kept at coarser prefixes (a
     /// note says how many); without the animation LOD the forest is refused.

@@ -151,6 +151,7 @@ impl Forest {
                 animation: spec.lod.animation,
                 fraction: spec.lod.fraction,
                 far_level: spec.lod.far_level,
+                error_budget: spec.lod.error_px,
                 ..LodSettings::default()
             },
             lane_groups: lane_base,
@@ -259,8 +260,10 @@ fn new_species(
     let mut prefixes = order.prefix.clone();
     prefixes.push(order.trunk);
     batch.set_prefixes(&prefixes);
+    let level_error = level_errors(&model);
     Ok(SpeciesRuntime {
         name: spec.species[si].name.clone(),
+        level_error,
         model,
         batch,
         lean,
@@ -281,4 +284,24 @@ fn new_species(
         coarse_wind: 0,
         near_wind: 0,
     })
+}
+
+/// A species' mesh levels' errors as shares of its tree's height
+/// ([`TreeModel::level_errors`](sylva_tree::TreeModel::level_errors)).
+fn level_errors(model: &TreeModel) -> Vec<f32> {
+    let height = model.tree.stats.height.max(1e-3);
+    model.level_errors().iter().map(|v| v / height).collect()
+}
+
+/// The crown radius of a species' unscaled tree, m: the distance from the trunk within
+/// which 90 % of its full-detail leaf clusters hang, plus half a card.
+pub(super) fn crown_radius(model: &TreeModel) -> f32 {
+    let clusters = model.lods.first().map(|l| &l.clusters[..]).unwrap_or(&[]);
+    let mut d: Vec<f32> = clusters
+        .iter()
+        .map(|c| (c.center[0] * c.center[0] + c.center[1] * c.center[1]).sqrt())
+        .collect();
+    d.sort_by(f32::total_cmp);
+    let card = clusters.first().map(|c| 0.5 * c.size).unwrap_or(0.0);
+    d.get(d.len() * 9 / 10).copied().unwrap_or(0.0) + card
 }

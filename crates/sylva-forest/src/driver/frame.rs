@@ -117,7 +117,12 @@ impl Forest {
         let far_box = ShadowBox::new(camera, aspect, camera.shadow_reach().1, lighting.sun_unit());
         let box_margin = 4.0 * far_box.radius / ShadowBox::TEXELS as f32;
         let all_keys = if sweep.is_some() { 2 * n_keys } else { n_keys };
-        let ahead = (ANIMATION_FRACTION / lod.fraction).ln() / 3f32.ln();
+        // By error, the animation simulates what is drawn (half a level ahead).
+        let ahead = if lod.error_budget > 0.0 {
+            0.0
+        } else {
+            (ANIMATION_FRACTION / lod.fraction).ln() / 3f32.ln()
+        };
         View { cone, sweep, far_box, box_margin, n_species, n_keys, all_keys, lod, ahead, previous }
     }
 
@@ -136,14 +141,29 @@ impl Forest {
         if out.runs.len() < runs {
             out.runs.resize_with(runs, TreeRun::default);
         }
-        // Per species, the fraction below which a tree goes to its LOD cap.
+        // Per species, the levels' thresholds when levels go by error, and the fraction
+        // below which a tree goes to its LOD cap.
         let lod = view.lod;
         let mut past_cap = std::mem::take(&mut out.past_cap);
         past_cap.clear();
-        past_cap.extend(self.species.iter().map(|sp| {
+        let mut thresholds = std::mem::take(&mut out.thresholds);
+        thresholds.resize_with(self.species.len(), Vec::new);
+        let rows = if out.image_rows == 0 { DEFAULT_IMAGE_ROWS } else { out.image_rows };
+        for (sp, f) in self.species.iter().zip(thresholds.iter_mut()) {
             let far = lod.far_level.min(sp.model.lods.len() as u32);
-            past_cap_fraction(lod.fraction, lod_cap(far), lod.hysteresis)
-        }));
+            past_cap.push(if lod.error_budget > 0.0 {
+                // The mesh levels short of the impostor by their errors, the impostor by the
+                // fraction; a mesh level whose error would keep it past that is passed over.
+                let mesh = &sp.level_error[..(far as usize).min(sp.level_error.len())];
+                level_thresholds(mesh, rows, lod.error_budget, f);
+                f.iter_mut().for_each(|t| *t = t.max(lod.fraction));
+                f.push(lod.fraction);
+                past_cap_error_fraction(f, lod_cap(far), lod.hysteresis)
+            } else {
+                f.clear();
+                past_cap_fraction(lod.fraction, lod_cap(far), lod.hysteresis)
+            });
+        }
         let (need_max, want_max, seen_max) = (&out.need_max, &out.want_max, &out.seen_max);
         out.runs[..runs]
             .par_iter_mut()
@@ -182,10 +202,11 @@ impl Forest {
                     let h = ch[k];
                     let c = [cx[k], cy[k], cz[k] + 0.5 * h];
                     let tree = Tree { i: first + k, p, group: *g, c, h };
-                    self.classify_tree(view, &past_cap, &tree, k, state, &mut to);
+                    self.classify_tree(view, (&past_cap, &thresholds), &tree, k, state, &mut to);
                 }
             });
         out.past_cap = past_cap;
+        out.thresholds = thresholds;
         runs
     }
 
@@ -194,7 +215,7 @@ impl Forest {
     fn classify_tree(
         &self,
         view: &View,
-        past_cap: &[f32],
+        (past_cap, thresholds): (&[f32], &[Vec<f32>]),
         tree: &Tree<'_>,
         k: usize,
         state: &mut f32,
@@ -235,7 +256,13 @@ impl Forest {
             let before = *state;
             let x = next_lod_state(
                 before,
-                || lod_coordinate(frac(), lod.fraction),
+                || {
+                    if lod.error_budget > 0.0 {
+                        error_coordinate(frac(), &thresholds[p.species as usize])
+                    } else {
+                        lod_coordinate(frac(), lod.fraction)
+                    }
+                },
                 cone.fraction_below(c, h, past_cap[p.species as usize]),
                 lod.hysteresis,
                 lod_cap(far),

@@ -120,6 +120,10 @@ pub struct FrameStats {
 pub struct FrameData {
     /// Simulation time, s.
     pub time: f64,
+    /// Rows of the image this view is drawn into, pixels (0:
+    /// [`DEFAULT_IMAGE_ROWS`](super::lod::DEFAULT_IMAGE_ROWS)): what an error budget in
+    /// pixels is measured against. Set it where the image's size is known.
+    pub image_rows: u32,
     /// Instances, grouped by bucket.
     pub instances: Vec<Instance>,
     /// Buckets in (LOD, species) order, and within each bucket of meshes the trees nearest
@@ -159,6 +163,8 @@ pub struct FrameData {
     /// Per species, the image fraction below which a tree goes to its LOD cap
     /// ([`past_cap_fraction`]).
     pub(super) past_cap: Vec<f32>,
+    /// Scratch: per species, the levels' fraction thresholds when levels go by error.
+    pub(super) thresholds: Vec<Vec<f32>>,
     /// Per lane group drawn: where its palettes go.
     pub(super) copies: Vec<PaletteCopy>,
     /// `need` and `want` as the runs raise them, and `need` of the trees in view alone.
@@ -229,6 +235,13 @@ impl Maxima {
         if m.load(Ordering::Relaxed) < v {
             m.fetch_max(v, Ordering::Relaxed);
         }
+    }
+}
+
+impl FrameData {
+    /// An empty frame for a view whose image is `rows` pixels tall.
+    pub fn with_rows(rows: u32) -> FrameData {
+        FrameData { image_rows: rows, ..FrameData::default() }
     }
 }
 

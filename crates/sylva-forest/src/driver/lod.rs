@@ -21,6 +21,12 @@ pub struct LodSettings {
     /// Animation LOD on: each lane group simulates only the joints its drawn levels use.
     /// Off: every joint of every simulated tree, every step.
     pub animation: bool,
+    /// Screen-space error budget of the mesh levels, pixels (0 … 64; 0: every level by
+    /// [`LodSettings::fraction`]). Above 0, a tree nearer than its impostor is drawn at the
+    /// coarsest mesh level whose geometric error against full detail spans at most this
+    /// many pixels of the image ([`level_thresholds`]), and `fraction` places the impostor
+    /// alone: a tree covering less of the image's height is one.
+    pub error_budget: f32,
 }
 
 /// Pyramid level the wind of far groups is read from: averages of 4 × 4 grid points.
@@ -65,6 +71,7 @@ impl Default for LodSettings {
             band: 0.3,
             hysteresis: 0.1,
             animation: true,
+            error_budget: 0.0,
         }
     }
 }
@@ -144,3 +151,55 @@ pub const DEFAULT_LOD_FRACTION: f32 = 0.2;
 /// detail for several times the triangles; from level 2 on, merged cards look further from
 /// full detail than the impostor does (docs/decisions/0003-lod-thresholds.md).
 pub const DEFAULT_FAR_LEVEL: u32 = 1;
+
+/// Image rows a [`FrameData`](super::FrameData) assumes until its caller sets
+/// [`FrameData::image_rows`](super::FrameData::image_rows): the benchmark's 768.
+pub const DEFAULT_IMAGE_ROWS: u32 = 768;
+
+/// Per level 1 … `errors.len() − 1` of a species, the image-height fraction `F_k` at or
+/// below which that level's error is within `budget` pixels of an image `rows` tall: level
+/// `k` may be drawn when the tree covers at most `F_k` of the image. `errors[k]` is level
+/// k's error as a share of the tree's height (its geometric error over its height), so
+/// that a tree of any scale covering `frac` of the image shows it as
+/// `frac · rows · errors[k]` pixels. Non-increasing: a coarser level needs a smaller tree.
+pub fn level_thresholds(errors: &[f32], rows: u32, budget: f32, out: &mut Vec<f32>) {
+    out.clear();
+    let mut last = f32::INFINITY;
+    for &e in errors.iter().skip(1) {
+        let f = budget / (rows as f32 * e.max(1e-9));
+        last = last.min(f);
+        out.push(last);
+    }
+}
+
+/// The continuous LOD coordinate of a tree covering `frac` of the image, with the per-level
+/// thresholds `f` of [`level_thresholds`] (f[k − 1] for level k): level 0 above `f[0]`, the
+/// coarsest level k with `frac ≤ f[k − 1]` below, and between two thresholds the fraction's
+/// logarithm mapped linearly onto the level's unit interval, so the coordinate is
+/// continuous and non-decreasing as the tree shrinks in the image. Above `f[0]` and past
+/// the last threshold it moves one level per factor 3 of size, as [`lod_coordinate`] does.
+/// Levels whose thresholds coincide are passed over.
+pub fn error_coordinate(frac: f32, f: &[f32]) -> f32 {
+    let frac = frac.max(1e-12);
+    let ln3 = 3f32.ln();
+    let Some(&first) = f.first() else { return 0.0 };
+    if frac > first {
+        return (1.0 - (frac / first).ln() / ln3).max(0.0);
+    }
+    for k in 1..f.len() {
+        let (hi, lo) = (f[k - 1], f[k]);
+        if frac > lo {
+            // Level k: between its own threshold and the next level's.
+            return if hi > lo { k as f32 + (hi / frac).ln() / (hi / lo).ln() } else { k as f32 };
+        }
+    }
+    f.len() as f32 + (f[f.len() - 1] / frac).ln() / ln3
+}
+
+/// The fraction below which [`error_coordinate`] is at least `cap + half_width`, smaller by
+/// 10⁻³ of itself: the counterpart of [`past_cap_fraction`] for levels by error, the cap
+/// lying past the last threshold (`cap ≥ f.len()`).
+pub fn past_cap_error_fraction(f: &[f32], cap: f32, half_width: f32) -> f32 {
+    let last = f.last().copied().unwrap_or(0.0);
+    last * 3f32.powf(f.len() as f32 - cap - half_width) * (1.0 - 1e-3)
+}

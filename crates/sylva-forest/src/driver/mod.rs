@@ -89,8 +89,9 @@ mod tests;
 use build::Crowns;
 pub use frame_data::{Bucket, FrameData, FrameStats, Instance};
 pub use lod::{
-    ANIMATION_FRACTION, DEFAULT_FAR_LEVEL, DEFAULT_LOD_FRACTION, FAR_WIND_LEVEL, LodSettings,
-    SHADOW_COARSER, SIM_MARGIN, blend_levels, hysteresis, lod_cap, lod_coordinate, next_lod_state,
+    ANIMATION_FRACTION, DEFAULT_FAR_LEVEL, DEFAULT_IMAGE_ROWS, DEFAULT_LOD_FRACTION,
+    FAR_WIND_LEVEL, LodSettings, SHADOW_COARSER, SIM_MARGIN, blend_levels, error_coordinate,
+    hysteresis, level_thresholds, lod_cap, lod_coordinate, next_lod_state, past_cap_error_fraction,
     past_cap_fraction, shadow_level,
 };
 use regroup::Switch;
@@ -159,6 +160,9 @@ pub struct SpeciesRuntime {
     pub name: String,
     /// Geometry, LOD chain and textures.
     pub model: TreeModel,
+    /// Per mesh level, its geometric error against full detail as a share of the tree's
+    /// height (the geometry LOD's error budget reads it).
+    pub level_error: Vec<f32>,
     batch: SwayBatch,
     /// The crown's static lean in wind, for its impostors.
     lean: CrownLean,

@@ -76,6 +76,7 @@ impl Forest {
             band: finite(lod.band, d.band).clamp(0.0, 1.0),
             hysteresis: finite(lod.hysteresis, d.hysteresis).clamp(0.0, 0.5),
             animation: lod.animation,
+            error_budget: finite(lod.error_budget, d.error_budget).clamp(0.0, 64.0),
         };
     }
 
@@ -146,19 +147,7 @@ impl Forest {
 
     /// Per species: the crown radius of the unscaled tree (see [`Forest::crowns`]), m.
     pub(super) fn crown_radii(&self) -> Vec<f32> {
-        self.species
-            .iter()
-            .map(|s| {
-                let clusters = s.model.lods.first().map(|l| &l.clusters[..]).unwrap_or(&[]);
-                let mut d: Vec<f32> = clusters
-                    .iter()
-                    .map(|c| (c.center[0] * c.center[0] + c.center[1] * c.center[1]).sqrt())
-                    .collect();
-                d.sort_by(f32::total_cmp);
-                let card = clusters.first().map(|c| 0.5 * c.size).unwrap_or(0.0);
-                d.get(d.len() * 9 / 10).copied().unwrap_or(0.0) + card
-            })
-            .collect()
+        self.species.iter().map(|s| super::build::crown_radius(&s.model)).collect()
     }
 
     /// Placement of tree `t` (species, trunk base, yaw, scale), if there is such a tree.

@@ -8,6 +8,7 @@ use sylva_forest::{
 };
 use sylva_sway::{LANES, STATE_BYTES, SwayBatch};
 
+mod error;
 mod groups;
 mod joints;
 
