@@ -67,9 +67,10 @@ pub struct LodArgs {
     /// then the impostor).
     #[arg(long)]
     pub far_level: Option<u32>,
-    /// Screen-space error budget, pixels (0 … 64): each tree at the coarsest level whose
-    /// geometric error against full detail spans at most this many pixels (0: levels by
-    /// the image-height fraction). Default: the scene's (`[lod] error_px`).
+    /// Screen-space error budget of the mesh levels, pixels (0 … 64): a tree nearer than its
+    /// impostor is drawn at the coarsest mesh level whose geometric error against full
+    /// detail spans at most this many pixels, the impostor still placed by the image-height
+    /// fraction (0: every level by the fraction). Default: the scene's (`[lod] error_px`).
     #[arg(long, value_parser = crate::finite::<f32>)]
     pub lod_error: Option<f32>,
     /// Memory the forest's animation state may take, GB (replaces the scene's

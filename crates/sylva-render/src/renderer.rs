@@ -3,9 +3,7 @@
 //! spares hidden fragments their shading), per-species GPU resources, and the one-way
 //! upload of [`FrameData`].
 
-use sylva_forest::{
-    Camera, Forest, FrameData, Instance, Lighting, Surround, Terrain, shadow_level,
-};
+use sylva_forest::{Camera, Forest, FrameData, Instance, Lighting, Surround, Terrain};
 use sylva_tree::mesh::TreeModel;
 
 use crate::gpu::{Gpu, RenderError};
@@ -487,7 +485,7 @@ impl Renderer {
 
     /// Draw every tree drawn as a mesh (not the impostors) with `pipelines` (branches,
     /// leaves), bound through the frame's palette windows. `shadow`: into the shadow map,
-    /// through the shadow pass's windows and at its [`shadow_level`], coarser than the
+    /// through the shadow pass's windows and at its bucket's `shadow_lod`, no finer than the
     /// tree is drawn at (its joints are a prefix of the drawn level's, so its palettes are
     /// there): a shadow-map texel spans a decimetre or more, and the coarser levels keep
     /// the crown's outline and leaf area, so the finer ones add cost, not shade.
@@ -507,11 +505,7 @@ impl Renderer {
                 if b.shadow_only && shadow.is_none() {
                     continue;
                 }
-                let level = if shadow.is_some() {
-                    shadow_level(b.lod, sp.lods.len() as u32) as usize
-                } else {
-                    b.lod as usize
-                };
+                let level = if shadow.is_some() { b.shadow_lod as usize } else { b.lod as usize };
                 if b.lod as usize >= sp.lods.len() {
                     continue;
                 }
@@ -557,7 +551,7 @@ impl Renderer {
                 let reads = self.species.get(b.species as usize).map_or(1, |s| {
                     let chain = s.lods.len() as u32;
                     if b.shadow_only && b.lod < chain {
-                        s.reads(shadow_level(b.lod, chain))
+                        s.reads(b.shadow_lod)
                     } else {
                         s.reads(b.lod)
                     }

@@ -177,6 +177,7 @@ impl App {
         v.advance(real_dt);
         let Some(s) = self.surface.as_mut() else { return };
         let (w, h) = (s.config.width, s.config.height);
+        v.frame.image_rows = h;
         v.build_frame(w as f32 / h as f32);
         // The panel first; what it asks for applies now, and shows from the next frame on.
         let mut actions = Vec::new();

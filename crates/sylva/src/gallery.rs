@@ -38,7 +38,7 @@ fn picture(
     camera: &dyn Fn(&Forest, &FrameData) -> Option<Camera>,
 ) -> anyhow::Result<Vec<u8>> {
     let mut forest = Forest::new(spec)?;
-    let mut frame = FrameData::default();
+    let mut frame = FrameData::with_rows(size.1);
     let aspect = size.0 as f32 / size.1 as f32;
     let first = forest.default_camera();
     forest.frame(&first, aspect, &mut frame);

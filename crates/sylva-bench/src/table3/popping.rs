@@ -47,7 +47,7 @@ pub(super) fn popping(a: &Table3Bench) -> anyhow::Result<String> {
         }
         let gpu = gpu.as_mut().context("renderer")?;
         let camera = forest.default_camera();
-        let mut frame = FrameData::default();
+        let mut frame = FrameData::with_rows(h);
         let mut diffs = FrameDiffs::default();
         for i in 0..n {
             let h0 = 0.3 * 10f32.powf(i as f32 / (n - 1) as f32);
@@ -101,7 +101,7 @@ fn fly_out_popping(a: &Table3Bench, md: &mut String, gpu: &mut Headless) -> anyh
         forest.set_lod(sylva_forest::LodSettings { geometry, band, hysteresis, ..lod });
         let start = forest.default_camera();
         let back: [f32; 3] = std::array::from_fn(|k| start.eye[k] - start.target[k]);
-        let mut frame = FrameData::default();
+        let mut frame = FrameData::with_rows(h);
         let mut diffs = TwoWays::default();
         for i in 0..n {
             let k = FLY_OUT.powf(i as f32 / (n - 1) as f32);
@@ -316,7 +316,7 @@ fn regroup_popping(a: &Table3Bench, md: &mut String, gpu: &mut Headless) -> anyh
         (camera.eye[0], camera.eye[1]) =
             (camera.target[0] + k * back[0], camera.target[1] + k * back[1]);
         camera.eye[2] = camera.target[2] + 0.6 * r;
-        let mut frame = FrameData::default();
+        let mut frame = FrameData::with_rows(h);
         let mut diffs = TwoWays::default();
         // Sideways: across the line of sight, horizontally.
         let f = [camera.target[0] - camera.eye[0], camera.target[1] - camera.eye[1]];

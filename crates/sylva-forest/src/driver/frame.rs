@@ -43,6 +43,18 @@ struct View {
     ahead: f32,
     /// The simulation time of the frame before in this view.
     previous: f64,
+    /// Per species: the first level drawn as its impostor; the fraction below which a
+    /// tree goes to its LOD cap; with levels by error, its levels' fraction thresholds
+    /// (scratch of the `FrameData`, given back after the frame).
+    far: Vec<u32>,
+    past_cap: Vec<f32>,
+    thresholds: Vec<Vec<f32>>,
+    /// With levels by error, per species the finest level its trees cast their shadows
+    /// with: the coarsest mesh level whose error is within a texel of the near shadow
+    /// cascade (empty with levels by fraction: [`shadow_level`]).
+    shadow_from: Vec<u32>,
+    /// The near cascade's texel, m.
+    texel: f32,
 }
 
 impl View {
@@ -81,7 +93,8 @@ impl Forest {
         out.need_max.reset(sims);
         out.want_max.reset(sims);
         out.seen_max.reset(sims);
-        let view = self.view(camera, aspect, previous);
+        let mut view = self.view(camera, aspect, previous);
+        self.plan_levels(&mut view, out);
         let mut stats = FrameStats { trees: self.trees.len(), ..FrameStats::default() };
         let runs = self.classify(&view, out);
         out.gather(runs, view.all_keys, &mut stats);
@@ -96,6 +109,8 @@ impl Forest {
             *a = m.load(Ordering::Relaxed);
         }
         self.write_instances(&view, out);
+        (out.far, out.past_cap, out.thresholds, out.shadow_from) =
+            (view.far, view.past_cap, view.thresholds, view.shadow_from);
         stats.uploaded_bytes =
             4 * out.palettes.len() + std::mem::size_of::<Instance>() * out.instances.len();
         stats.sim_ms = self.last_sim_ms;
@@ -123,13 +138,88 @@ impl Forest {
         } else {
             (ANIMATION_FRACTION / lod.fraction).ln() / 3f32.ln()
         };
-        View { cone, sweep, far_box, box_margin, n_species, n_keys, all_keys, lod, ahead, previous }
+        View {
+            cone,
+            sweep,
+            far_box,
+            box_margin,
+            n_species,
+            n_keys,
+            all_keys,
+            lod,
+            ahead,
+            previous,
+            far: Vec::new(),
+            past_cap: Vec::new(),
+            thresholds: Vec::new(),
+            shadow_from: Vec::new(),
+            texel: 2.0 * camera.shadow_sphere(aspect, camera.shadow_reach().0).1
+                / ShadowBox::TEXELS as f32,
+        }
+    }
+
+    /// The level a tree of `species` drawn at mesh level `level` casts its shadow with: a
+    /// level no finer than it is drawn (its joints are then a prefix of the drawn ones),
+    /// by error the coarsest whose error a shadow texel hides, by fraction
+    /// [`shadow_level`].
+    fn cast_level(&self, view: &View, species: u32, level: u32) -> u32 {
+        let chain = self.species[species as usize].model.lods.len() as u32;
+        match view.shadow_from.get(species as usize) {
+            Some(&from) => level.max(from).min(chain.saturating_sub(1)),
+            None => shadow_level(level, chain),
+        }
+    }
+
+    /// Per species, where its impostor starts and where its LOD state stops; with levels by
+    /// error, the thresholds of its mesh levels, the impostor's the fraction's. A mesh
+    /// level whose error keeps it until the tree is small enough for its impostor is not
+    /// used: the impostor starts before it, so the level coordinate stays continuous.
+    fn plan_levels(&self, view: &mut View, out: &mut FrameData) {
+        let lod = view.lod;
+        let rows = if out.image_rows == 0 { DEFAULT_IMAGE_ROWS } else { out.image_rows };
+        let (mut far, mut past_cap, mut thresholds, mut shadow_from) = (
+            std::mem::take(&mut out.far),
+            std::mem::take(&mut out.past_cap),
+            std::mem::take(&mut out.thresholds),
+            std::mem::take(&mut out.shadow_from),
+        );
+        far.clear();
+        past_cap.clear();
+        shadow_from.clear();
+        thresholds.resize_with(self.species.len(), Vec::new);
+        for (sp, f) in self.species.iter().zip(thresholds.iter_mut()) {
+            let chain_far = lod.far_level.min(sp.model.lods.len() as u32);
+            if lod.error_budget > 0.0 {
+                let mesh = &sp.level_error[..(chain_far as usize).min(sp.level_error.len())];
+                level_thresholds(mesh, rows, lod.error_budget, f);
+                // Levels past the fraction go; equal thresholds are parted by 10⁻³ of
+                // themselves, so each level keeps an interval of its own.
+                let used = f.iter().take_while(|&&t| t > lod.fraction).count();
+                f.truncate(used);
+                for k in 1..f.len() {
+                    f[k] = f[k].min(f[k - 1] * (1.0 - 1e-3)).max(lod.fraction);
+                }
+                f.push(lod.fraction);
+                let here = f.len() as u32;
+                far.push(here);
+                // Errors are shares of the unscaled tree's height.
+                let height = sp.model.tree.stats.height;
+                let within = mesh.iter().take_while(|&&e| e * height <= view.texel).count();
+                shadow_from.push(within.saturating_sub(1) as u32);
+                past_cap.push(past_cap_error_fraction(f, lod_cap(here), lod.hysteresis));
+            } else {
+                f.clear();
+                far.push(chain_far);
+                past_cap.push(past_cap_fraction(lod.fraction, lod_cap(chain_far), lod.hysteresis));
+            }
+        }
+        (view.far, view.past_cap, view.thresholds, view.shadow_from) =
+            (far, past_cap, thresholds, shadow_from);
     }
 
     /// Whether a tree of `species` at `level` is drawn as its impostor.
-    fn impostor(&self, lod: &LodSettings, species: u32, level: u32) -> bool {
-        let chain = self.species[species as usize].model.lods.len() as u32;
-        lod.geometry && level >= lod.far_level.min(chain)
+    fn impostor(&self, view: &View, species: u32, level: u32) -> bool {
+        view.lod.geometry && level >= view.far[species as usize]
     }
 
     /// Pass 1: the trees in runs of [`TREE_RUN`], the runs in parallel. Each fills its own
@@ -141,29 +231,7 @@ impl Forest {
         if out.runs.len() < runs {
             out.runs.resize_with(runs, TreeRun::default);
         }
-        // Per species, the levels' thresholds when levels go by error, and the fraction
-        // below which a tree goes to its LOD cap.
-        let lod = view.lod;
-        let mut past_cap = std::mem::take(&mut out.past_cap);
-        past_cap.clear();
-        let mut thresholds = std::mem::take(&mut out.thresholds);
-        thresholds.resize_with(self.species.len(), Vec::new);
-        let rows = if out.image_rows == 0 { DEFAULT_IMAGE_ROWS } else { out.image_rows };
-        for (sp, f) in self.species.iter().zip(thresholds.iter_mut()) {
-            let far = lod.far_level.min(sp.model.lods.len() as u32);
-            past_cap.push(if lod.error_budget > 0.0 {
-                // The mesh levels short of the impostor by their errors, the impostor by the
-                // fraction; a mesh level whose error would keep it past that is passed over.
-                let mesh = &sp.level_error[..(far as usize).min(sp.level_error.len())];
-                level_thresholds(mesh, rows, lod.error_budget, f);
-                f.iter_mut().for_each(|t| *t = t.max(lod.fraction));
-                f.push(lod.fraction);
-                past_cap_error_fraction(f, lod_cap(far), lod.hysteresis)
-            } else {
-                f.clear();
-                past_cap_fraction(lod.fraction, lod_cap(far), lod.hysteresis)
-            });
-        }
+        let (past_cap, thresholds) = (&view.past_cap, &view.thresholds);
         let (need_max, want_max, seen_max) = (&out.need_max, &out.want_max, &out.seen_max);
         out.runs[..runs]
             .par_iter_mut()
@@ -202,11 +270,9 @@ impl Forest {
                     let h = ch[k];
                     let c = [cx[k], cy[k], cz[k] + 0.5 * h];
                     let tree = Tree { i: first + k, p, group: *g, c, h };
-                    self.classify_tree(view, (&past_cap, &thresholds), &tree, k, state, &mut to);
+                    self.classify_tree(view, (past_cap, thresholds), &tree, k, state, &mut to);
                 }
             });
-        out.past_cap = past_cap;
-        out.thresholds = thresholds;
         runs
     }
 
@@ -237,8 +303,7 @@ impl Forest {
             }
         }
         let key_base = if shadow_only { view.n_keys as u32 } else { 0 };
-        let chain = sp.model.lods.len() as u32;
-        let far = lod.far_level.min(chain);
+        let far = view.far[p.species as usize];
         // Joints level `l` draws (a prefix in LOD order).
         let joints = |l: u32| {
             if lod.geometry && l >= far { sp.order.trunk } else { sp.order.prefix[l as usize] }
@@ -248,7 +313,7 @@ impl Forest {
             if lod.geometry && l >= far {
                 sp.order.trunk
             } else {
-                sp.order.prefix[shadow_level(l, chain) as usize]
+                sp.order.prefix[self.cast_level(view, p.species, l) as usize]
             }
         };
         let frac = || cone.screen_fraction(c, h);
@@ -333,7 +398,7 @@ impl Forest {
         stats.drawn += 1;
         stats.regrouping += switch.is_some() as usize;
         stats.fading += (a != b) as usize;
-        stats.impostors += (lod.geometry && b >= lod.far_level.min(chain)) as usize;
+        stats.impostors += (lod.geometry && b >= far) as usize;
     }
 
     /// Pass 3: the draws into buckets. A run of equal keys is one species at one level, one
@@ -349,7 +414,7 @@ impl Forest {
             let (species, level) = view.split(key);
             let shadow_only = key as usize >= view.n_keys;
             let sp = &self.species[species as usize];
-            let far = self.impostor(&view.lod, species, level);
+            let far = self.impostor(view, species, level);
             let bucket_lod = if far { sp.model.lods.len() as u32 } else { level };
             let count = (end - run) as u32;
             match out.buckets.last_mut() {
@@ -371,6 +436,11 @@ impl Forest {
                     out.buckets.push(Bucket {
                         species,
                         lod: bucket_lod,
+                        shadow_lod: if far {
+                            bucket_lod
+                        } else {
+                            self.cast_level(view, species, level)
+                        },
                         first: run as u32,
                         count,
                         shadow_only,
@@ -459,8 +529,8 @@ impl Forest {
                         _ => {
                             let (species, level) = view.split(key);
                             let sp = &self.species[species as usize];
-                            let last = view.lod.far_level.min(sp.model.lods.len() as u32);
-                            let far = self.impostor(&view.lod, species, level);
+                            let last = view.far[species as usize];
+                            let far = self.impostor(view, species, level);
                             *bucket.insert(KeyOf { key, species, level, sp, last, far })
                         }
                     };

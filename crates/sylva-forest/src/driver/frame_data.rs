@@ -60,6 +60,9 @@ pub struct Bucket {
     pub species: u32,
     /// LOD level.
     pub lod: u32,
+    /// The mesh level its trees cast their shadows with: no finer than `lod` (its joints
+    /// are a prefix of the drawn ones); `lod` itself for impostors.
+    pub shadow_lod: u32,
     /// First instance in [`FrameData::instances`].
     pub first: u32,
     /// Instances.
@@ -163,8 +166,12 @@ pub struct FrameData {
     /// Per species, the image fraction below which a tree goes to its LOD cap
     /// ([`past_cap_fraction`]).
     pub(super) past_cap: Vec<f32>,
-    /// Scratch: per species, the levels' fraction thresholds when levels go by error.
+    /// Scratch: per species, the levels' fraction thresholds when levels go by error, and
+    /// the first level drawn as its impostor.
     pub(super) thresholds: Vec<Vec<f32>>,
+    pub(super) far: Vec<u32>,
+    /// Scratch: per species, the finest level its trees cast shadows with, by error.
+    pub(super) shadow_from: Vec<u32>,
     /// Per lane group drawn: where its palettes go.
     pub(super) copies: Vec<PaletteCopy>,
     /// `need` and `want` as the runs raise them, and `need` of the trees in view alone.
