@@ -2,13 +2,18 @@
 //! unscaled tree: what a level's screen-space error is made of (the geometry LOD picks the
 //! coarsest level whose error, in pixels at the tree's distance, is within a budget).
 //!
-//! A level departs from full detail in two ways, and its error is the larger:
+//! A level departs from full detail in three ways, and its error is the largest:
 //! - the stems it drops: each thinner than the level's `min_radius`, so the widest gap it
 //!   leaves is a stem's diameter, `2 · min_radius`;
+//! - the stems it keeps with fewer ring sides ([`sides`]): a ring of `n` sides about a
+//!   stem of radius `r` lies up to `r (1 − cos(π / n))` inside the true circle, so each
+//!   kept stem moves by the difference of that from full detail's;
 //! - the leaf clusters it merges: each full-detail card is stood for by the nearest card of
 //!   the level, whose centre lies at most the level's leaf error away.
 
-use crate::mesh::{LeafCluster, TreeModel};
+use crate::mesh::{LeafCluster, TreeModel, sides, stem_levels};
+use std::f32::consts::PI;
+
 use sylva_core::v3::{length, sub};
 
 impl TreeModel {
@@ -16,6 +21,9 @@ impl TreeModel {
     /// non-decreasing (a level is never reported closer to full detail than a finer one).
     pub fn level_errors(&self) -> Vec<f32> {
         let full = self.lods.first().map(|l| &l.clusters[..]).unwrap_or(&[]);
+        let joints = self.tree.skeleton.joints();
+        let levels = stem_levels(&self.tree.skeleton);
+        let sagitta = |r: f32, n: u32| r * (1.0 - (PI / n as f32).cos());
         let mut worst = 0.0f32;
         self.lods
             .iter()
@@ -25,7 +33,15 @@ impl TreeModel {
                 } else {
                     leaf_displacement(full, &l.clusters)
                 };
-                worst = worst.max(2.0 * l.min_radius).max(leaves);
+                let rings = joints
+                    .iter()
+                    .zip(&levels)
+                    .filter(|(j, _)| j.radius >= l.min_radius)
+                    .map(|(j, &s)| {
+                        sagitta(j.radius, sides(s, l.level)) - sagitta(j.radius, sides(s, 0))
+                    })
+                    .fold(0.0f32, f32::max);
+                worst = worst.max(2.0 * l.min_radius).max(leaves).max(rings);
                 worst
             })
             .collect()

@@ -168,20 +168,30 @@ struct Topology {
     stem_start: Vec<u32>,
 }
 
-fn topology(sk: &Skeleton) -> Topology {
+/// Each joint's stem level (0 the trunk, at most 3): its parent's where it continues the
+/// parent's stem, one more where it starts a stem of its own.
+pub(crate) fn stem_levels(sk: &Skeleton) -> Vec<u32> {
     let js = sk.joints();
-    let n = js.len();
-    let mut level = vec![0u32; n];
-    let mut next = vec![NO_PARENT; n];
-    let mut stem_start = vec![0u32; n];
+    let mut level = vec![0u32; js.len()];
     for (i, j) in js.iter().enumerate() {
         if j.parent != NO_PARENT {
             let p = j.parent as usize;
             level[i] = if j.continues { level[p] } else { (level[p] + 1).min(3) };
-            if j.continues {
-                // The last continuing child is the stem itself; earlier ones are split clones.
-                next[p] = i as u32;
-            }
+        }
+    }
+    level
+}
+
+fn topology(sk: &Skeleton) -> Topology {
+    let js = sk.joints();
+    let n = js.len();
+    let level = stem_levels(sk);
+    let mut next = vec![NO_PARENT; n];
+    let mut stem_start = vec![0u32; n];
+    for (i, j) in js.iter().enumerate() {
+        // The last continuing child is the stem itself; earlier ones are split clones.
+        if j.parent != NO_PARENT && j.continues {
+            next[j.parent as usize] = i as u32;
         }
     }
     let mut shares = vec![false; n];

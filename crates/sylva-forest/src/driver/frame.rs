@@ -49,12 +49,6 @@ struct View {
     far: Vec<u32>,
     past_cap: Vec<f32>,
     thresholds: Vec<Vec<f32>>,
-    /// With levels by error, per species the finest level its trees cast their shadows
-    /// with: the coarsest mesh level whose error is within a texel of the near shadow
-    /// cascade (empty with levels by fraction: [`shadow_level`]).
-    shadow_from: Vec<u32>,
-    /// The near cascade's texel, m.
-    texel: f32,
 }
 
 impl View {
@@ -109,8 +103,7 @@ impl Forest {
             *a = m.load(Ordering::Relaxed);
         }
         self.write_instances(&view, out);
-        (out.far, out.past_cap, out.thresholds, out.shadow_from) =
-            (view.far, view.past_cap, view.thresholds, view.shadow_from);
+        (out.far, out.past_cap, out.thresholds) = (view.far, view.past_cap, view.thresholds);
         stats.uploaded_bytes =
             4 * out.palettes.len() + std::mem::size_of::<Instance>() * out.instances.len();
         stats.sim_ms = self.last_sim_ms;
@@ -152,21 +145,19 @@ impl Forest {
             far: Vec::new(),
             past_cap: Vec::new(),
             thresholds: Vec::new(),
-            shadow_from: Vec::new(),
-            texel: 2.0 * camera.shadow_sphere(aspect, camera.shadow_reach().0).1
-                / ShadowBox::TEXELS as f32,
         }
     }
 
-    /// The level a tree of `species` drawn at mesh level `level` casts its shadow with: a
-    /// level no finer than it is drawn (its joints are then a prefix of the drawn ones),
-    /// by error the coarsest whose error a shadow texel hides, by fraction
-    /// [`shadow_level`].
+    /// The level a tree of `species` drawn at mesh level `level` casts its shadow with,
+    /// no finer than it is drawn (its joints are then a prefix of the drawn ones): by
+    /// fraction [`shadow_level`]; by error the level full detail casts with, for the
+    /// shadow map's texels, whatever finer level the camera's error budget picked.
     fn cast_level(&self, view: &View, species: u32, level: u32) -> u32 {
         let chain = self.species[species as usize].model.lods.len() as u32;
-        match view.shadow_from.get(species as usize) {
-            Some(&from) => level.max(from).min(chain.saturating_sub(1)),
-            None => shadow_level(level, chain),
+        if view.lod.error_budget > 0.0 {
+            level.max(shadow_level(0, chain))
+        } else {
+            shadow_level(level, chain)
         }
     }
 
@@ -177,15 +168,13 @@ impl Forest {
     fn plan_levels(&self, view: &mut View, out: &mut FrameData) {
         let lod = view.lod;
         let rows = if out.image_rows == 0 { DEFAULT_IMAGE_ROWS } else { out.image_rows };
-        let (mut far, mut past_cap, mut thresholds, mut shadow_from) = (
+        let (mut far, mut past_cap, mut thresholds) = (
             std::mem::take(&mut out.far),
             std::mem::take(&mut out.past_cap),
             std::mem::take(&mut out.thresholds),
-            std::mem::take(&mut out.shadow_from),
         );
         far.clear();
         past_cap.clear();
-        shadow_from.clear();
         thresholds.resize_with(self.species.len(), Vec::new);
         for (sp, f) in self.species.iter().zip(thresholds.iter_mut()) {
             let chain_far = lod.far_level.min(sp.model.lods.len() as u32);
@@ -202,10 +191,6 @@ impl Forest {
                 f.push(lod.fraction);
                 let here = f.len() as u32;
                 far.push(here);
-                // Errors are shares of the unscaled tree's height.
-                let height = sp.model.tree.stats.height;
-                let within = mesh.iter().take_while(|&&e| e * height <= view.texel).count();
-                shadow_from.push(within.saturating_sub(1) as u32);
                 past_cap.push(past_cap_error_fraction(f, lod_cap(here), lod.hysteresis));
             } else {
                 f.clear();
@@ -213,8 +198,7 @@ impl Forest {
                 past_cap.push(past_cap_fraction(lod.fraction, lod_cap(chain_far), lod.hysteresis));
             }
         }
-        (view.far, view.past_cap, view.thresholds, view.shadow_from) =
-            (far, past_cap, thresholds, shadow_from);
+        (view.far, view.past_cap, view.thresholds) = (far, past_cap, thresholds);
     }
 
     /// Whether a tree of `species` at `level` is drawn as its impostor.
