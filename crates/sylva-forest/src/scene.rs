@@ -240,6 +240,12 @@ pub struct SceneSpec {
     /// (on). Only with a preset.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub wind_advection: Option<bool>,
+    /// The speed gusts travel at, m/s, (0, 100] (`WindParams::convection_speed`). Default,
+    /// with a log-law profile: [`CANOPY_CONVECTION`](crate::wind::CANOPY_CONVECTION) times
+    /// Ū at the canopy top the profile stands for (1.5 times its displacement height d),
+    /// the speed a canopy's large eddies travel at. Only with a preset.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub wind_convection_speed: Option<f64>,
     /// Mean wind profile replacing the preset's (a table: `kind = "log"` with `z0`, `d`, or
     /// `kind = "power"` with `u_ref`, `z_ref`, `alpha`; see `sylva_wind::Profile`). Only
     /// with a preset.
@@ -630,6 +636,18 @@ impl SceneSpec {
             }
             if !matches!(source, WindSource::Preset(_)) {
                 return Err(bad("u_star", u.to_string(), "set only with a wind preset"));
+            }
+        }
+        if let Some(u) = self.wind_convection_speed {
+            if !(u > 0.0 && u <= 100.0) {
+                return Err(bad("wind_convection_speed", u.to_string(), "(0, 100] m/s"));
+            }
+            if !matches!(source, WindSource::Preset(_)) {
+                return Err(bad(
+                    "wind_convection_speed",
+                    u.to_string(),
+                    "set only with a wind preset",
+                ));
             }
         }
         if let Some(p) = self.wind_profile {

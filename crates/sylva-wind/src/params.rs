@@ -160,10 +160,18 @@ pub struct WindParams {
     /// Direction the wind blows *towards*, in degrees counter-clockwise from world +x.
     /// Default 0.
     pub direction_deg: f64,
-    /// Taylor advection: gusts travel downwind at each height's mean speed Ū(z) (multiplies
-    /// each coefficient by e^{−iω(x − x_c)/Ū(z)}). Default `true`; `false` reproduces the
-    /// paper's real coherence (with [`CoherenceSpeed::PairMean`], exactly).
+    /// Taylor advection: gusts travel downwind at one convection speed U_c at every height
+    /// (multiplies each coefficient by e^{−iω(x − x_c)/U_c}), so the field is the same,
+    /// statistic for statistic, at every x. Default `true`; `false` reproduces the paper's
+    /// real coherence (with [`CoherenceSpeed::PairMean`], exactly).
     pub advection: bool,
+    /// The convection speed U_c of the advection, m/s (0 … 100]; `None`: the reference
+    /// speed, the mean of Ū over the grid's heights ([`crate::synth::convection_speed`]). A
+    /// forest's scene sets 1.8 Ū(h) at its canopy top h, the speed its large eddies travel
+    /// at (Finnigan 2000, "Turbulence in plant canopies", Annu. Rev. Fluid Mech. 32: 1.5–2
+    /// Ū(h); Shaw, Brunet, Finnigan & Raupach 1995: 1.8 Ū(h)).
+    #[serde(default)]
+    pub convection_speed: Option<f64>,
 }
 
 /// Table 1 of the paper: A and B of eq. 4 for u, v, w.
@@ -241,6 +249,7 @@ impl Default for WindParams {
             coherence_speed: CoherenceSpeed::Reference,
             direction_deg: 0.0,
             advection: true,
+            convection_speed: None,
         }
     }
 }
@@ -281,6 +290,9 @@ impl WindParams {
             }
         }
         check(self.direction_deg.is_finite(), "direction_deg", self.direction_deg, "finite")?;
+        if let Some(u) = self.convection_speed {
+            check(u > 0.0 && u <= 100.0, "convection_speed", u, "in (0, 100] m/s")?;
+        }
         Ok(())
     }
 

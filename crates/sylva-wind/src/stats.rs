@@ -7,7 +7,8 @@
 //! (Σ Re S_ab / √(Σ S_aa Σ S_bb)). A single-record magnitude coherence is biased upwards
 //! (≈ 0.18 where the truth is 0), which is why it is not used.
 //!
-//! With Taylor advection the model co-coherence along x is Coh(f, Δx) · cos(ωΔx/Ū(z)).
+//! With Taylor advection the model co-coherence along x is Coh(f, Δx) · cos(ωΔx/U_c), U_c
+//! the one convection speed of every height; between heights it is eq. 5's.
 //!
 //! Every estimate comes with the scatter one expects from the model for this grid and this
 //! number of realisations ([`line_power_scatter`]): with random phases a synthesised line's
@@ -431,10 +432,11 @@ struct Ensemble<'a> {
     z: f64,
     u_local: f64,
     u_same: f64,
+    /// The convection speed U_c the field advects at.
+    u_conv: f64,
     df: f64,
     per_bin: f64,
     nfields: f64,
-    x_mid: f64,
     per_field: usize,
 }
 
@@ -467,10 +469,10 @@ impl<'a> Ensemble<'a> {
             CoherenceSpeed::Reference => synth::reference_speed(p, g),
             CoherenceSpeed::PairMean => u_local,
         };
+        let u_conv = synth::convection_speed(p, g);
         let df = 1.0 / (m as f64 * g.dt);
         let per_bin = m as f64 / seg as f64;
         let nfields = fields.len() as f64;
-        let x_mid = g.x_mid();
         let per_field = g.nx() * g.ny();
         Ensemble {
             fields,
@@ -484,10 +486,10 @@ impl<'a> Ensemble<'a> {
             z,
             u_local,
             u_same,
+            u_conv,
             df,
             per_bin,
             nfields,
-            x_mid,
             per_field,
         }
     }
@@ -617,7 +619,7 @@ impl ComponentEstimate<'_> {
     fn xy_coherence(&self) -> Vec<CoherenceRow> {
         let e = self.e;
         let (g, p, m, comp, cc) = (e.g, e.p, e.m, self.comp, self.cc);
-        let (df, nfields, u_same, u_local) = (e.df, e.nfields, e.u_same, e.u_local);
+        let (df, nfields, u_same, u_conv) = (e.df, e.nfields, e.u_same, e.u_conv);
         let (fields, per_field, welch, specs) = (e.fields, e.per_field, &e.welch, &self.specs);
         let line = |j: usize| self.line(j);
         let mut coherence = Vec::new();
@@ -644,7 +646,7 @@ impl ComponentEstimate<'_> {
                 let d = if axis == "x" { [metres, 0.0, 0.0] } else { [0.0, metres, 0.0] };
                 let model = |f: f64| {
                     let c = spectrum::coherence(p, comp, f, d, u_same);
-                    if p.advection { c * (2.0 * PI * f * d[0] / u_local).cos() } else { c }
+                    if p.advection { c * (2.0 * PI * f * d[0] / u_conv).cos() } else { c }
                 };
                 let cross = welch.expected(m, &|j| line(j) * model(j as f64 * df));
                 let expected: Vec<f64> =
@@ -673,7 +675,7 @@ impl ComponentEstimate<'_> {
     fn z_coherence(&self) -> Option<CoherenceRow> {
         let e = self.e;
         let (g, p, m, comp, z, iz) = (e.g, e.p, e.m, self.comp, e.z, e.iz);
-        let (df, u_same, u_local, x_mid, welch) = (e.df, e.u_same, e.u_local, e.x_mid, &e.welch);
+        let (df, u_same, u_local, welch) = (e.df, e.u_same, e.u_local, &e.welch);
         if iz + 1 >= g.nz() {
             return None;
         }
@@ -692,17 +694,8 @@ impl ComponentEstimate<'_> {
             CoherenceSpeed::Reference => u_same,
             CoherenceSpeed::PairMean => 0.5 * (u_local + u_up),
         };
-        let shear = 1.0 / u_local - 1.0 / u_up;
-        let model = |f: f64| {
-            let c = spectrum::coherence(p, comp, f, [0.0, 0.0, z2 - z], um);
-            if p.advection {
-                let w = 2.0 * PI * f;
-                c * g.xs.iter().map(|x| (w * (x - x_mid) * shear).cos()).sum::<f64>()
-                    / g.nx() as f64
-            } else {
-                c
-            }
-        };
+        // Every height advects at the one convection speed: no phase between heights.
+        let model = |f: f64| spectrum::coherence(p, comp, f, [0.0, 0.0, z2 - z], um);
         // The two heights have different spectra: the expected pooled co-coherence is the
         // cross term over the geometric mean of the two auto terms.
         let line_up = |j: usize| spectrum::one_sided(p, comp, j as f64 * df, z2) * df;

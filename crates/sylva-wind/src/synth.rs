@@ -28,14 +28,15 @@
 //! [`Method::fastest`] picks the separable method where it is exact and the embedding
 //! otherwise.
 //!
-//! Taylor advection multiplies every coefficient at height z by e^{−iω (x − x_c)/Ū(z)}: gusts
-//! travel downwind at the local mean speed (Taylor's hypothesis is local), so the lag over Δx
-//! at height z is Δx/Ū(z). x_c is the middle of the grid's x range. The factor is diagonal
-//! and unitary: it keeps every factorisation exact and leaves the coherence magnitudes of
-//! eq. 5 untouched. Between two heights it adds the phase ω (x − x_c)(1/Ū_h − 1/Ū_k): eddies
-//! are sheared by the mean profile, so the vertical co-coherence at one point is eq. 5 times
-//! the cosine of that phase, largest in the middle of the grid (turn advection off for the
-//! paper's real coherence everywhere).
+//! Taylor advection multiplies every coefficient by e^{−iω (x − x_c)/U_c}: gusts travel
+//! downwind at one convection speed U_c at every height ([`convection_speed`]), so the lag
+//! over Δx is Δx/U_c. x_c is the middle of the grid's x range. The factor is diagonal and
+//! unitary: it keeps every factorisation exact and leaves the coherence magnitudes of eq. 5
+//! untouched, and being the same at every height it adds no phase between heights: the
+//! vertical co-coherence is eq. 5's at every x. (Each height at its own Ū(z) would add
+//! ω (x − x_c)(1/Ū_h − 1/Ū_k) between heights, and the co-coherence 57 m from the middle of a
+//! grid turned negative where eq. 5 gives +0.36; a canopy's large eddies convect at one
+//! speed across heights anyway, Finnigan 2000.)
 //!
 //! Memory and order of work: the separable method walks the grid one x-column at a time,
 //! carrying the x-recursion state from column to column; each column is transformed and
@@ -265,8 +266,8 @@ struct Lines {
     scale: Vec<f64>,
     /// Reference speed U_c (m/s) for the coherence of the separable method.
     u_ref: f64,
-    /// Mean speed Ū(z) at each height (m/s): the advection speed.
-    speeds: Vec<f64>,
+    /// The convection speed U_c (m/s) every height advects at.
+    u_conv: f64,
     /// Origin x_c of the advection phase: the middle of the grid's x range (m).
     x_mid: f64,
     /// √Δω.
@@ -287,17 +288,17 @@ impl Lines {
             }
         }
         let u_ref = reference_speed(params, grid);
-        let speeds = grid.zs.iter().map(|&z| params.mean_speed(z)).collect();
+        let u_conv = convection_speed(params, grid);
         let x_mid = grid.x_mid();
-        Lines { nc, omega, keys, scale, u_ref, speeds, x_mid, sqrt_dw: dw.sqrt() }
+        Lines { nc, omega, keys, scale, u_ref, u_conv, x_mid, sqrt_dw: dw.sqrt() }
     }
 
     /// Emission factors of the column at along-wind position `x`, per (height, line): the
-    /// Taylor-advection phase e^{−iω_j (x − x_c)/Ū(z)} (1 when `advect` is off) times √Δω·√S0
+    /// Taylor-advection phase e^{−iω_j (x − x_c)/U_c} (1 when `advect` is off) times √Δω·√S0
     /// (`with_spectrum`) or √Δω alone (a factor that already holds √S0).
     fn column_factors(&self, advect: bool, x: f64, with_spectrum: bool, out: &mut [C64]) {
+        let u = self.u_conv;
         for (iz, f) in out.chunks_mut(self.nc).enumerate() {
-            let u = self.speeds[iz];
             for (j, f) in f.iter_mut().enumerate() {
                 let amp = if with_spectrum { self.scale[iz * self.nc + j] } else { self.sqrt_dw };
                 *f = if advect {
@@ -325,6 +326,12 @@ impl Lines {
 /// The reference mean speed: Ū averaged over the grid's heights.
 pub fn reference_speed(params: &WindParams, grid: &Grid) -> f64 {
     grid.zs.iter().map(|&z| params.mean_speed(z)).sum::<f64>() / grid.nz() as f64
+}
+
+/// The speed U_c gusts advect at on `grid`, m/s: the parameters' own
+/// [`WindParams::convection_speed`], else the [`reference_speed`].
+pub fn convection_speed(params: &WindParams, grid: &Grid) -> f64 {
+    params.convection_speed.unwrap_or_else(|| reference_speed(params, grid))
 }
 
 /// A raw view of an output buffer that tasks write to at disjoint indices.

@@ -71,6 +71,7 @@ fn params() -> impl Strategy<Value = WindParams> {
                     coherence_speed: speed,
                     direction_deg: dir,
                     advection,
+                    convection_speed: None,
                 }
             },
         )

@@ -18,7 +18,7 @@ use sylva_frames::plot::write_stats_plots;
 #[derive(Debug, Subcommand)]
 pub enum WindCommand {
     /// Synthesise a periodic wind field and write it to a file.
-    Generate(GenerateArgs),
+    Generate(Box<GenerateArgs>),
     /// σ per component against the model, captured variance, and the spectral and
     /// coherence error tables of a field file.
     Stats(StatsArgs),
@@ -133,9 +133,13 @@ pub struct ModelArgs {
     #[arg(long, value_enum)]
     coherence_speed: Option<CoherenceSpeedArg>,
     /// Turn Taylor advection of gusts off (with the pair-mean speed, reproduces the paper's
-    /// coherence exactly). With it on, gusts travel at each height's own mean speed.
+    /// coherence exactly). With it on, gusts travel at one convection speed at every height.
     #[arg(long)]
     no_advection: bool,
+    /// The convection speed gusts travel at, m/s, (0, 100] (default: the mean of Ū over the
+    /// grid's heights). A canopy's large eddies travel at about 1.8 Ū(h), h its top.
+    #[arg(long, value_parser = sylva_frames::finite::<f64>)]
+    convection_speed: Option<f64>,
 }
 
 impl ModelArgs {
@@ -169,6 +173,7 @@ impl ModelArgs {
         };
         p.direction_deg = self.direction;
         p.advection = !self.no_advection;
+        p.convection_speed = self.convection_speed;
         p.validate().context("invalid wind model")?;
         Ok(p)
     }

@@ -38,10 +38,13 @@ pub struct NpySidecar {
     /// The one speed in eq. 5's denominator with the reference model, m/s; null with the
     /// pair mean.
     pub coherence_speed: Option<f64>,
-    /// Taylor advection: gusts at height z travel at `mean_speeds[z]`, with phase origin at
-    /// x = `advection_origin_x` (m); null when advection is off.
+    /// Taylor advection: gusts at every height travel at `advection_speed` (m/s), with
+    /// phase origin at x = `advection_origin_x` (m); both null when advection is off.
     #[serde(default)]
     pub advection_origin_x: Option<f64>,
+    /// The convection speed U_c every height advects at, m/s; null when advection is off.
+    #[serde(default)]
+    pub advection_speed: Option<f64>,
     /// Bound on the synthesised coherence's departure from the model (0 when exact).
     #[serde(default)]
     pub coherence_error: f64,
@@ -204,6 +207,7 @@ pub fn write_npy(field: &WindField, path: &Path) -> Result<(), WindError> {
         coherence_speed: (field.params.coherence_speed == CoherenceSpeed::Reference)
             .then(|| synth::reference_speed(&field.params, g)),
         advection_origin_x: field.params.advection.then(|| g.x_mid()),
+        advection_speed: field.params.advection.then(|| synth::convection_speed(&field.params, g)),
         coherence_error: field.coherence_error,
         spacing: [Grid::regular_spacing(&g.xs), Grid::regular_spacing(&g.ys)],
         dt: g.dt,

@@ -48,6 +48,9 @@ pub struct ZarrAttributes {
     pub coherence_model: String,
     /// Advection phase origin x_c, m; null when advection is off.
     pub advection_origin_x: Option<f64>,
+    /// The convection speed U_c every height advects at, m/s; null when advection is off.
+    #[serde(default)]
+    pub advection_speed: Option<f64>,
     /// The store's manifest: the CRC-32 (IEEE) of every chunk file, keyed by its path in
     /// the store (`wind/c/0/1/0/0/3`, `x/c/0`, …). The reader checks each chunk it reads
     /// against it.
@@ -207,6 +210,7 @@ fn group_metadata(
         mean_speeds: grid.zs.iter().map(|&z| params.mean_speed(z)).collect(),
         coherence_model: params.coherence_speed.name().into(),
         advection_origin_x: params.advection.then(|| grid.x_mid()),
+        advection_speed: params.advection.then(|| synth::convection_speed(params, grid)),
         checksums,
         attributes_crc32: 0,
     };
