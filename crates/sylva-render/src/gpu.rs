@@ -59,6 +59,24 @@ pub struct Gpu {
 }
 
 impl Gpu {
+    /// A `Gpu` on an application's own handles (wgpu's are cheap clones of shared ones):
+    /// the renderer then creates its buffers, textures and pipelines on the application's
+    /// device, writes through its queue, and draws into its encoders
+    /// ([`Renderer::encode_over`](crate::Renderer::encode_over)).
+    pub fn from_host(
+        instance: &wgpu::Instance,
+        adapter: &wgpu::Adapter,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Gpu {
+        Gpu {
+            instance: instance.clone(),
+            adapter: adapter.clone(),
+            device: device.clone(),
+            queue: queue.clone(),
+        }
+    }
+
     /// Open the best adapter (a surface, when given, must be presentable by it).
     pub fn new(
         instance: wgpu::Instance,

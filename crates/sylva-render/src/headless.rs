@@ -95,6 +95,55 @@ impl Headless {
         self.read_back()
     }
 
+    /// Draw `frame` from `camera` over what a host draws first, as an application that owns
+    /// the frame does, and return the image: `host` records its own passes into the
+    /// encoder it is given, onto a colour target (the renderer's format and sample count)
+    /// and a depth target ([`DEPTH`](crate::DEPTH), same samples) that it must
+    /// clear; the forest is then recorded over them with [`Renderer::encode_over`], so the
+    /// host's objects and the trees hide each other, and the result is resolved into the
+    /// capture target.
+    pub fn render_over(
+        &mut self,
+        frame: &FrameData,
+        camera: &Camera,
+        host: impl FnOnce(&Gpu, &mut wgpu::CommandEncoder, &wgpu::TextureView, &wgpu::TextureView),
+    ) -> Result<Vec<u8>, RenderError> {
+        let samples = self.renderer.samples();
+        let make = |format, label| {
+            self.gpu
+                .device
+                .create_texture(&wgpu::TextureDescriptor {
+                    label: Some(label),
+                    size: wgpu::Extent3d {
+                        width: self.width,
+                        height: self.height,
+                        depth_or_array_layers: 1,
+                    },
+                    mip_level_count: 1,
+                    sample_count: samples,
+                    dimension: wgpu::TextureDimension::D2,
+                    format,
+                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+                    view_formats: &[],
+                })
+                .create_view(&wgpu::TextureViewDescriptor::default())
+        };
+        let depth = make(crate::shared::DEPTH, "host depth");
+        let msaa = (samples > 1).then(|| make(FORMAT, "host colour"));
+        let (color, resolve) = match &msaa {
+            Some(m) => (m, Some(&self.view)),
+            None => (&self.view, None),
+        };
+        let mut enc = self
+            .gpu
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("host") });
+        host(&self.gpu, &mut enc, color, &depth);
+        self.renderer.encode_over(&self.gpu, &mut enc, frame, camera, (color, resolve), &depth);
+        self.gpu.queue.submit([enc.finish()]);
+        self.read_back()
+    }
+
     /// Draw `frame` from `camera` and wait until the GPU has finished it, without reading
     /// it back: what an interactive frame costs before presentation (benchmarks time this;
     /// [`read_back`](Self::read_back) then fetches the image when one is wanted).

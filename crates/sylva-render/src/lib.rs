@@ -23,6 +23,6 @@ pub use headless::Headless;
 pub use passes::panel::{PanelFrame, PanelPass};
 pub use passtimes::PARTS as PASS_PARTS;
 pub use renderer::{Overlay, Renderer, SceneAssets};
-pub use shared::{SHADER_PARTS, SHADERS, shader_source};
+pub use shared::{DEPTH, SHADER_PARTS, SHADERS, shader_source};
 pub use timer::GpuTimer;
 pub use wgpu;

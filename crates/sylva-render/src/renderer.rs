@@ -345,7 +345,8 @@ impl Renderer {
     /// Upload `frame` and draw it seen from `camera` into `target` (same format and size).
     /// Returns at once, the GPU still drawing: the index names the submission, to wait for
     /// it (the buffers it reads may be written again for the next frame meanwhile; the
-    /// queue orders the writes after it).
+    /// queue orders the writes after it). [`Renderer::encode`] and [`Renderer::encode_over`]
+    /// record the same into an encoder of the caller's, submitting nothing.
     pub fn render(
         &mut self,
         gpu: &Gpu,
@@ -353,7 +354,73 @@ impl Renderer {
         camera: &Camera,
         target: &wgpu::TextureView,
     ) -> wgpu::SubmissionIndex {
-        let dev = &gpu.device;
+        let mut enc = gpu
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
+        self.encode(gpu, &mut enc, frame, camera, target);
+        if let Some(t) = &mut self.timing {
+            t.resolve(&mut enc);
+        }
+        let index = gpu.queue.submit([enc.finish()]);
+        if let Some(t) = &mut self.timing {
+            t.submitted();
+        }
+        index
+    }
+
+    /// Record the frame into the caller's encoder `enc`, onto the renderer's own
+    /// multisampled colour and depth targets (cleared), resolved into `target` (the
+    /// renderer's format and size). Buffers are written through `gpu.queue`, ordered before
+    /// the caller's next submission; nothing is submitted here.
+    pub fn encode(
+        &mut self,
+        gpu: &Gpu,
+        enc: &mut wgpu::CommandEncoder,
+        frame: &FrameData,
+        camera: &Camera,
+        target: &wgpu::TextureView,
+    ) {
+        let (msaa, depth) = (self.msaa.take(), self.depth.clone());
+        let (view, resolve) = match &msaa {
+            Some(m) => (m, Some(target)),
+            None => (target, None),
+        };
+        let attach = Attach { color: view, resolve, depth: &depth, load: false };
+        self.record(gpu, enc, frame, camera, attach);
+        self.msaa = msaa;
+    }
+
+    /// Record the frame into the caller's encoder `enc` over what the caller has drawn:
+    /// `color` (the renderer's [`format`](Self::format), [`samples`](Self::samples) samples,
+    /// its size) and `depth` (format [`DEPTH`], Depth32Float, the same samples) are loaded,
+    /// not cleared, so the caller's objects and the forest hide each other by depth. The
+    /// depth convention is the standard one: 0 at the near plane, 1 at the far plane,
+    /// nearer passes `Less`; clear to 1.0. `resolve`, where given, receives the resolved
+    /// image (with one sample, pass `None`). The sky fills only what is still at depth 1.
+    /// Nothing is submitted; pass timing is not recorded on this path.
+    pub fn encode_over(
+        &mut self,
+        gpu: &Gpu,
+        enc: &mut wgpu::CommandEncoder,
+        frame: &FrameData,
+        camera: &Camera,
+        (color, resolve): (&wgpu::TextureView, Option<&wgpu::TextureView>),
+        depth: &wgpu::TextureView,
+    ) {
+        let timing = self.timing.take();
+        self.record(gpu, enc, frame, camera, Attach { color, resolve, depth, load: true });
+        self.timing = timing;
+    }
+
+    /// Write the frame's uniforms and buffers, then record the shadow map and the image.
+    fn record(
+        &mut self,
+        gpu: &Gpu,
+        enc: &mut wgpu::CommandEncoder,
+        frame: &FrameData,
+        camera: &Camera,
+        attach: Attach<'_>,
+    ) {
         let aspect = self.width as f32 / self.height as f32;
         let mut g = Globals::for_camera(camera, aspect, frame.time as f32, &self.lighting);
         g.overlay = match self.overlay {
@@ -373,8 +440,6 @@ impl Renderer {
         }
         gpu.queue.write_buffer(&self.globals, 0, bytemuck::bytes_of(&g));
         self.upload(gpu, frame);
-        let mut enc =
-            dev.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
         if shadows {
             // The sun's shadow map: every tree casts into each cascade (those in view, and
             // those out of it whose shadow may fall in it: `Bucket::shadow_only`), into the
@@ -382,7 +447,7 @@ impl Renderer {
             // as an impostor: its texels span metres, and it shades only beyond the near
             // one's reach, where the trees are small.
             let stamps = pass_writes(self.timing.as_ref(), Stamp::ShadowStart, Stamp::ShadowEnd);
-            let mut pass = self.shadow.begin(&mut enc, stamps);
+            let mut pass = self.shadow.begin(enc, stamps);
             ShadowPass::viewport(&mut pass, 0);
             pass.set_vertex_buffer(1, self.instances.slice(..));
             let casters = [&self.shadow.branch, &self.shadow.leaf];
@@ -392,9 +457,18 @@ impl Renderer {
             self.draw_impostors(&mut pass, frame, &self.shadow_windows_far, Casting::Every);
         }
         {
-            let (view, resolve) = match &self.msaa {
-                Some(m) => (m, Some(target)),
-                None => (target, None),
+            let Attach { color: view, resolve, depth, load } = attach;
+            let depth_stencil = if load {
+                wgpu::RenderPassDepthStencilAttachment {
+                    view: depth,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Load,
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
+                }
+            } else {
+                crate::shared::depth_cleared(depth)
             };
             let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("forest"),
@@ -403,11 +477,15 @@ impl Renderer {
                     depth_slice: None,
                     resolve_target: resolve,
                     ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                        load: if load {
+                            wgpu::LoadOp::Load
+                        } else {
+                            wgpu::LoadOp::Clear(wgpu::Color::BLACK)
+                        },
                         store: wgpu::StoreOp::Store,
                     },
                 })],
-                depth_stencil_attachment: Some(crate::shared::depth_cleared(&self.depth)),
+                depth_stencil_attachment: Some(depth_stencil),
                 // The pass's end stamp comes after its MSAA resolve.
                 timestamp_writes: self.timing.as_ref().map(|t| t.end_of_pass(Stamp::ImageEnd)),
                 occlusion_query_set: None,
@@ -431,15 +509,16 @@ impl Renderer {
             stamp(self.timing.as_ref(), &mut pass, Stamp::Ground);
             self.sky.draw(&mut pass);
         }
-        if let Some(t) = &mut self.timing {
-            t.resolve(&mut enc);
-        }
-        let index = gpu.queue.submit([enc.finish()]);
-        if let Some(t) = &mut self.timing {
-            t.submitted();
-        }
-        index
     }
+}
+
+/// The image pass's attachments: colour (with its resolve target) and depth, cleared by the
+/// renderer or loaded from what the caller drew (`load`).
+struct Attach<'a> {
+    color: &'a wgpu::TextureView,
+    resolve: Option<&'a wgpu::TextureView>,
+    depth: &'a wgpu::TextureView,
+    load: bool,
 }
 
 /// Which trees [`Renderer::draw_impostors`] draws.

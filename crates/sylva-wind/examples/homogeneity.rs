@@ -47,7 +47,8 @@ fn main() {
     let (middle, edge) = (part(10..14), part(0..4));
     let (mut worst_split, mut worst_model) = (0.0f64, 0.0f64);
     for iz in 0..grid.nz() - 1 {
-        let (m, e) = (ensemble_stats_at(&middle, Some(256), iz), ensemble_stats_at(&edge, Some(256), iz));
+        let (m, e) =
+            (ensemble_stats_at(&middle, Some(256), iz), ensemble_stats_at(&edge, Some(256), iz));
         for (cm, ce) in m.components.iter().zip(&e.components) {
             let z = |c: &sylva_wind::stats::ComponentStats| {
                 c.coherence.iter().find(|r| r.axis == "z").expect("z row").bands.clone()
