@@ -3,6 +3,24 @@
 //!
 //! GPU-free: the renderer reads [`FrameData`] (plain `Pod` arrays) and the tree models; it
 //! never calls back into the simulation.
+//!
+//! The flow: a [`SceneSpec`] (a built-in scene or a TOML file) → [`Forest::new`] (layout,
+//! trees, simulations, wind) → per frame [`Forest::step`] (seconds of simulated time) and
+//! [`Forest::frame`] for a [`Camera`] → [`FrameData`], which `sylva-render` draws or a
+//! renderer of your own reads. World space is Z-up, in metres; time in seconds; wind in m/s.
+//! The level functions behind the geometry LOD are in [`driver`].
+//!
+//! ```
+//! use sylva_forest::{Forest, FrameData, SceneSpec};
+//! let spec = SceneSpec::builtin("small")?;          // or SceneSpec::load("my-scene.toml")
+//! let mut forest = Forest::new(&spec)?;
+//! let camera = forest.default_camera();
+//! let mut frame = FrameData::with_rows(768);         // one per view, for a 768-row image
+//! forest.step(1.0 / 30.0);                           // s
+//! forest.frame(&camera, 4.0 / 3.0, &mut frame);      // aspect = width / height
+//! assert!(frame.stats.drawn > 0 && !frame.palettes.is_empty());
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
@@ -17,9 +35,7 @@ pub mod wind;
 pub use camera::{Camera, Mat4, ShadowBox, ViewCone};
 pub use driver::{
     Bucket, Forest, ForestError, FrameData, FrameStats, Instance, LodSettings, MAX_NEAR_POINTS,
-    NEAR_REACH, REGROUP_FADE, REGROUP_TRAVEL, SHADOW_COARSER, SceneWind, SpeciesRuntime, TreeInfo,
-    blend_levels, error_coordinate, hysteresis, level_thresholds, lod_cap, lod_coordinate,
-    next_lod_state, past_cap_fraction, shadow_level, wind_field,
+    NEAR_REACH, REGROUP_FADE, REGROUP_TRAVEL, SceneWind, SpeciesRuntime, TreeInfo, wind_field,
 };
 pub use scene::{
     BUILTIN_PATHS, CameraKey, FLY_IN, LOW_FLIGHT, Lighting, LodSpec, Placement, SCENES, SceneError,

@@ -2,10 +2,8 @@
 //! pixels with distance, and the level drawn is the coarsest within the budget, held by
 //! the hysteresis about each threshold.
 
-use sylva_forest::{
-    Forest, FrameData, LodSettings, SceneSpec, blend_levels, error_coordinate, hysteresis,
-    level_thresholds,
-};
+use sylva_forest::driver::{blend_levels, error_coordinate, hysteresis, level_thresholds};
+use sylva_forest::{Forest, FrameData, LodSettings, SceneSpec};
 
 /// A species' level errors as shares of its height, from its geometry.
 fn errors(name: &str) -> Vec<f32> {

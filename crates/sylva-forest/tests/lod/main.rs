@@ -2,10 +2,11 @@
 //! cross-fade weights; what is uploaded and what is stepped; determinism.
 
 use sylva_forest::driver::SIM_MARGIN;
-use sylva_forest::{
-    Camera, Forest, FrameData, LodSettings, SceneSpec, ShadowBox, blend_levels, hysteresis,
-    lod_cap, lod_coordinate, next_lod_state, past_cap_fraction, shadow_level,
+use sylva_forest::driver::{
+    blend_levels, hysteresis, lod_cap, lod_coordinate, next_lod_state, past_cap_fraction,
+    shadow_level,
 };
+use sylva_forest::{Camera, Forest, FrameData, LodSettings, SceneSpec, ShadowBox};
 use sylva_sway::{LANES, STATE_BYTES, SwayBatch};
 
 mod error;
