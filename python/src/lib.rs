@@ -55,7 +55,15 @@ fn preset_params(name: &str) -> PyResult<String> {
         let names: Vec<&str> = Preset::ALL.iter().map(|p| p.name()).collect();
         PyValueError::new_err(format!("no preset named `{name}`; presets: {}", names.join(", ")))
     })?;
-    Ok(serde_json::to_string(&p.params()).unwrap_or_default())
+    Ok(serde_json::to_string(&p.field_params()).unwrap_or_default())
+}
+
+/// The coherence speed a field takes by default with `spectrum` (its JSON name), as the
+/// command line chooses it.
+#[pyfunction]
+fn default_coherence_speed(spectrum: &str) -> PyResult<String> {
+    let s: sylva_wind::SpectrumModel = parse("spectrum", &format!("\"{spectrum}\""))?;
+    Ok(serde_json::to_string(&sylva_wind::CoherenceSpeed::for_spectrum(s)).unwrap_or_default())
 }
 
 /// Synthesise a field: model, grid and synthesis settings as JSON (`method` may be
@@ -202,6 +210,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(presets, m)?)?;
     m.add_function(wrap_pyfunction!(param_docs, m)?)?;
     m.add_function(wrap_pyfunction!(preset_params, m)?)?;
+    m.add_function(wrap_pyfunction!(default_coherence_speed, m)?)?;
     m.add_function(wrap_pyfunction!(generate, m)?)?;
     m.add_function(wrap_pyfunction!(read, m)?)?;
     m.add_function(wrap_pyfunction!(write, m)?)?;

@@ -134,7 +134,9 @@ def describe(name: str) -> str:
 
 
 def default_params(preset: str = "breeze") -> Dict[str, Any]:
-    """A preset's model parameters (Rust ``WindParams`` names and values)."""
+    """A preset's model parameters for a field (Rust ``WindParams`` names and values): the
+    same as ``sylva wind generate --preset NAME`` takes, the paper's pair-mean coherence
+    speed with the paper's spectrum included."""
     return json.loads(_native.preset_params(preset))
 
 
@@ -169,6 +171,10 @@ def generate(
     if unknown:
         raise ValueError(f"unknown wind parameter(s) {unknown}; known: {sorted(model)}")
     model.update(overrides)
+    # A spectrum chosen here without a coherence speed takes the command line's for it.
+    if params is None and "spectrum" in overrides and "coherence_speed" not in overrides:
+        spectrum = json.dumps(model["spectrum"]).strip('"')
+        model["coherence_speed"] = json.loads(_native.default_coherence_speed(spectrum))
     grid = {
         "xs": list(xs) if xs is not None else [spacing * i for i in range(nx)],
         "ys": list(ys) if ys is not None else [spacing * j for j in range(ny)],

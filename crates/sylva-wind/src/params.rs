@@ -232,9 +232,30 @@ impl Preset {
         }
     }
 
-    /// Full parameters of the preset.
+    /// Full parameters of the preset (the coherence speed [`CoherenceSpeed::Reference`], as
+    /// a forest's two-height field takes it).
     pub fn params(self) -> WindParams {
         WindParams { u_star: self.u_star(), ..WindParams::default() }
+    }
+
+    /// The preset's parameters for a field of its own, as `sylva wind generate` and the
+    /// Python package's `generate` make it: [`Preset::params`] with the coherence speed
+    /// [`CoherenceSpeed::for_spectrum`] gives the paper's spectrum.
+    pub fn field_params(self) -> WindParams {
+        let p = self.params();
+        WindParams { coherence_speed: CoherenceSpeed::for_spectrum(p.spectrum), ..p }
+    }
+}
+
+impl CoherenceSpeed {
+    /// The coherence speed a field takes by default with `spectrum`: the paper's pair mean
+    /// with the paper's spectrum (its eq. 5), one reference speed with the IEC spectra (as
+    /// IEC 61400-1 defines their coherence). One rule for the command line and Python.
+    pub fn for_spectrum(spectrum: SpectrumModel) -> CoherenceSpeed {
+        match spectrum {
+            SpectrumModel::Paper => CoherenceSpeed::PairMean,
+            _ => CoherenceSpeed::Reference,
+        }
     }
 }
 

@@ -165,11 +165,10 @@ impl ModelArgs {
             SpectrumArg::Kaimal => SpectrumModel::Kaimal,
             SpectrumArg::VonKarman => SpectrumModel::VonKarman,
         };
-        p.coherence_speed = match (self.coherence_speed, self.spectrum) {
-            (Some(CoherenceSpeedArg::PairMean), _) | (None, SpectrumArg::Paper) => {
-                CoherenceSpeed::PairMean
-            }
-            (Some(CoherenceSpeedArg::Reference), _) | (None, _) => CoherenceSpeed::Reference,
+        p.coherence_speed = match self.coherence_speed {
+            Some(CoherenceSpeedArg::PairMean) => CoherenceSpeed::PairMean,
+            Some(CoherenceSpeedArg::Reference) => CoherenceSpeed::Reference,
+            None => CoherenceSpeed::for_spectrum(p.spectrum),
         };
         p.direction_deg = self.direction;
         p.advection = !self.no_advection;
