@@ -160,7 +160,9 @@ fn wind(ui: &mut Ui, v: &Viewer, out: &mut Vec<Action>) {
     if is_preset {
         let params = sylva_wind::Preset::from_name(&v.settings.wind).map(|p| p.params().u_star);
         let mut u = v.settings.u_star.or(params).unwrap_or(1.0);
-        let r = ui.add(egui::Slider::new(&mut u, 0.1..=3.0).text("U*, m/s (re-synthesised)"));
+        // Up to 8 m/s: every preset (the storm's 6) and beyond.
+        let r =
+            ui.add(egui::Slider::new(&mut u, 0.1..=U_STAR_MAX).text("U*, m/s (re-synthesised)"));
         if r.drag_stopped() || (r.changed() && !r.dragged()) {
             out.push(Action::UStar(u));
         }
@@ -197,8 +199,11 @@ fn wind(ui: &mut Ui, v: &Viewer, out: &mut Vec<Action>) {
         }
     });
     let w = v.frame.wind;
-    ui.label(format!("mean wind at 20 m: {:.1} m/s", (w[0] * w[0] + w[1] * w[1]).sqrt()));
+    ui.label(format!("wind at 20 m, now: {:.1} m/s", (w[0] * w[0] + w[1] * w[1]).sqrt()));
 }
+
+/// The U* slider's end, m/s: above every preset's (the storm's is 6).
+pub const U_STAR_MAX: f64 = 8.0;
 
 /// The mean profile's parameters (applied, and re-synthesised, when a drag ends).
 fn profile(ui: &mut Ui, v: &Viewer, out: &mut Vec<Action>) {

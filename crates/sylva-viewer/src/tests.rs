@@ -446,3 +446,12 @@ fn a_recorded_camera_path_is_written_read_back_and_replayed() {
     assert!(err.to_string().contains("camera_path.t"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The U* slider ended at 3 m/s: picking the storm (U* = 6) showed 3.00, and dragging to the
+/// end halved the storm. It now reaches past every preset.
+#[test]
+fn the_u_star_slider_covers_every_preset() {
+    for p in sylva_wind::Preset::ALL {
+        assert!(p.u_star() <= crate::panel::U_STAR_MAX, "{}: {}", p.name(), p.u_star());
+    }
+}
