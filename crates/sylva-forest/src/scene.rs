@@ -371,7 +371,15 @@ impl Default for LodSpec {
 }
 
 /// Check a camera path: finite eyes apart from their targets, times increasing.
-fn validate_camera_path(file: &str, path: &[CameraKey]) -> Result<(), SceneError> {
+fn validate_camera_path(file: &str, name: &str, path: &[CameraKey]) -> Result<(), SceneError> {
+    // `camera_path` itself, or a path of `paths` (named in the value).
+    let (eye_field, t_field) = if name.is_empty() {
+        ("camera_path.eye", "camera_path.t")
+    } else {
+        ("paths.eye", "paths.t")
+    };
+    let at =
+        |k: usize| if name.is_empty() { format!("key {k}") } else { format!("{name}, key {k}") };
     let bad = |field, value: String, expected| SceneError::Value {
         file: file.to_string(),
         field,
@@ -379,12 +387,14 @@ fn validate_camera_path(file: &str, path: &[CameraKey]) -> Result<(), SceneError
         expected,
     };
     for (k, key) in path.iter().enumerate() {
-        let finite = key.eye.iter().chain(&key.target).all(|v| v.is_finite());
-        if !finite || key.eye == key.target || !key.t.is_finite() {
-            return Err(bad("camera_path.eye", format!("{:?}", key.eye), "finite, not the target"));
+        if !key.t.is_finite() || (k > 0 && key.t <= path[k - 1].t) {
+            let value = format!("{} ({})", key.t, at(k));
+            return Err(bad(t_field, value, "finite, increasing from key to key"));
         }
-        if k > 0 && key.t <= path[k - 1].t {
-            return Err(bad("camera_path.t", key.t.to_string(), "increasing from key to key"));
+        let finite = key.eye.iter().chain(&key.target).all(|v| v.is_finite());
+        if !finite || key.eye == key.target {
+            let value = format!("{:?} ({}, target {:?})", key.eye, at(k), key.target);
+            return Err(bad(eye_field, value, "finite, eye and target apart"));
         }
     }
     Ok(())
@@ -403,7 +413,7 @@ struct CameraPathFile {
 pub fn camera_path_from_toml(file: &str, text: &str) -> Result<Vec<CameraKey>, SceneError> {
     let f: CameraPathFile = toml::from_str(text)
         .map_err(|e| SceneError::Parse { file: file.to_string(), message: e.to_string() })?;
-    validate_camera_path(file, &f.camera_path)?;
+    validate_camera_path(file, "", &f.camera_path)?;
     Ok(f.camera_path)
 }
 
@@ -705,9 +715,9 @@ impl SceneSpec {
         if !(1..=6).contains(&self.lod.far_level) {
             return Err(bad("lod.far_level", self.lod.far_level.to_string(), "1 … 6"));
         }
-        validate_camera_path(file, &self.camera_path)?;
-        for path in self.paths.values() {
-            validate_camera_path(file, path)?;
+        validate_camera_path(file, "", &self.camera_path)?;
+        for (name, path) in &self.paths {
+            validate_camera_path(file, name, path)?;
         }
         if !self.has_path(&self.path) {
             let expected = "fly-in, walk, low-flight or a name of `paths`";

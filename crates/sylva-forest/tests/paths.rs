@@ -88,4 +88,9 @@ fn a_forest_follows_the_path_it_is_set_to_and_refuses_one_it_lacks() {
     let bad = SceneSpec::from_toml("p.toml", &text.replace("path = \"orbit\"", "path = \"loop\""));
     let msg = bad.expect_err("unknown path").to_string();
     assert!(msg.contains("`path`") && msg.contains("loop"), "{msg}");
+    // A key time that is not a number was reported as a bad `camera_path.eye`: the error
+    // names the time, the path and the key.
+    let nan = SceneSpec::from_toml("p.toml", &text.replace("t = 4.0", "t = nan"));
+    let msg = nan.expect_err("NaN time").to_string();
+    assert!(msg.contains("`paths.t`") && msg.contains("orbit, key 1"), "{msg}");
 }
