@@ -82,9 +82,32 @@ fn generate<'py>(
     grid.validate().map_err(value_error)?;
     let method = match method {
         "auto" => Method::fastest(&params, &grid),
-        other => parse::<Method>("method", &format!("\"{other}\""))?,
+        other => serde_json::from_str::<Method>(&format!("\"{other}\"")).map_err(|_| {
+            PyValueError::new_err(format!(
+                "method `{other}`: one of auto, separable, embedding, cholesky"
+            ))
+        })?,
     };
     let synth = SynthParams { seed, method };
+    sylva_wind::synth::check_config(&params, &grid, synth).map_err(value_error)?;
+    // The command line's memory check: the field and the synthesis's working memory within
+    // three quarters of what the machine has free.
+    let need = sylva_wind::synth::memory_estimate(&grid, method);
+    if let Some(free) = sylva_core::memory::available_memory() {
+        let usable = sylva_core::memory::USABLE_SHARE * free;
+        if need > usable {
+            return Err(PyValueError::new_err(format!(
+                "this field needs about {:.2} GB ({} points × 3 components × {} frames, method \
+                 {}), more than the {:.2} GB usable of this machine's free memory; reduce \
+                 frames, nx/ny or heights",
+                need / 1e9,
+                grid.points(),
+                grid.frames,
+                method.name(),
+                usable / 1e9
+            )));
+        }
+    }
     let field = py
         .allow_threads(|| WindField::generate(&params, &grid, synth, &|_| {}))
         .map_err(value_error)?;

@@ -20,6 +20,7 @@ range. Errors from the library are raised as ``ValueError`` with the command lin
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import dataclass, field as _field
 from typing import Any, Dict, Iterable, List, Optional, Sequence, Tuple
 
@@ -93,7 +94,12 @@ class Field:
         model and synthesis settings as attributes (needs the ``xarray`` package)."""
         import xarray as xr
 
-        coords = {"t": self.t, "z": self.z, "y": self.y, "x": self.x}
+        coords = {
+            "t": ("t", self.t, {"units": "s"}),
+            "z": ("z", self.z, {"units": "m"}),
+            "y": ("y", self.y, {"units": "m"}),
+            "x": ("x", self.x, {"units": "m"}),
+        }
         variables = {
             c: (("t", "z", "y", "x"), self.data[:, k], {"units": "m/s"})
             for k, c in enumerate(COMPONENTS)
@@ -166,6 +172,16 @@ def generate(
     ``"separable"``, ``"embedding"`` or ``"cholesky"``. The GIL is released during
     synthesis.
     """
+    # The grid's numbers checked here, in the command line's words (JSON cannot carry NaN).
+    for name, value in (("spacing", spacing), ("dt", dt)):
+        if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+            raise ValueError(f"{name} = {value}: expected a finite number > 0")
+    for name, n in (("nx", nx), ("ny", ny), ("frames", frames)):
+        if not (isinstance(n, int) and n >= 1):
+            raise ValueError(f"{name} = {n}: expected a whole number ≥ 1")
+    for name, values in (("heights", heights), ("xs", xs), ("ys", ys)):
+        if values is not None and not all(math.isfinite(float(v)) for v in values):
+            raise ValueError(f"{name}: expected finite numbers, got {list(values)}")
     model = dict(params) if params is not None else default_params(preset)
     unknown = [k for k in overrides if k not in model]
     if unknown:

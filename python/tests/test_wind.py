@@ -85,6 +85,26 @@ def test_the_defaults_are_the_command_lines(tmp_path):
         assert p.data.tobytes() == c.data.tobytes()
 
 
+def test_bad_grid_numbers_and_methods_are_named_as_the_command_line_names_them():
+    # They spoke serde: "grid: expected value at line 1 column 894", "= 0" for nx = -1, and a
+    # column number for an unknown method.
+    for kw, named in (({"dt": float("nan")}, "dt = nan"), ({"nx": -1}, "nx = -1"),
+                      ({"spacing": 0.0}, "spacing = 0.0"), ({"heights": (10.0, float("inf"))}, "heights"),
+                      ({"method": "fft"}, "method `fft`: one of auto, separable")):
+        with pytest.raises(ValueError) as e:
+            sw.generate("breeze", **{"nx": 4, "ny": 4, "frames": 16, **kw})
+        assert named in str(e.value), str(e.value)
+        assert "line 1 column" not in str(e.value)
+
+
+def test_a_field_larger_than_memory_is_refused_before_synthesis():
+    # 2000 × 2000 points × 2048 frames: about 100 GB, refused by the command line's memory
+    # check instead of attempted.
+    with pytest.raises(ValueError) as e:
+        sw.generate("breeze", nx=2000, ny=2000, frames=2048)
+    assert "GB" in str(e.value) and "free memory" in str(e.value), str(e.value)
+
+
 def test_errors_carry_the_command_lines_message(tmp_path):
     with pytest.raises(ValueError) as e:
         sw.generate("strong", nx=4, ny=4, frames=16, u_star=-1.0)
