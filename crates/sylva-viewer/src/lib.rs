@@ -79,6 +79,9 @@ struct Surface {
     pending: PanelFrame,
     /// The GPU's time on each frame, taken off the frame loop.
     timer: GpuTimer,
+    /// Minimised or wholly covered: no frames are requested, so the loop sleeps until the
+    /// window shows again.
+    hidden: bool,
 }
 
 impl Drop for Surface {
@@ -148,8 +151,18 @@ impl App {
         );
         let pending = PanelFrame::default();
         let timer = GpuTimer::new(gpu.device.clone());
-        self.surface =
-            Some(Surface { window, surface, gpu, config, renderer, panel, egui, pending, timer });
+        self.surface = Some(Surface {
+            window,
+            surface,
+            gpu,
+            config,
+            renderer,
+            panel,
+            egui,
+            pending,
+            timer,
+            hidden: false,
+        });
         Ok(())
     }
 
@@ -339,7 +352,19 @@ impl ApplicationHandler for App {
                 el.exit();
                 return;
             }
+            WindowEvent::Occluded(covered) => {
+                s.hidden = covered;
+                if !covered {
+                    s.window.request_redraw();
+                }
+                return;
+            }
             WindowEvent::Resized(size) => {
+                // A minimised window is resized to nothing on some systems.
+                s.hidden = size.width == 0 || size.height == 0;
+                if !s.hidden {
+                    s.window.request_redraw();
+                }
                 if size.width > 0 && size.height > 0 {
                     s.config.width = size.width;
                     s.config.height = size.height;
@@ -381,7 +406,9 @@ impl ApplicationHandler for App {
     }
 
     fn about_to_wait(&mut self, _el: &ActiveEventLoop) {
-        if let Some(s) = &self.surface {
+        // Frames back to back while the window shows; none while it is hidden, and the
+        // event loop (ControlFlow::Wait, winit's default) sleeps until an event comes.
+        if let Some(s) = self.surface.as_ref().filter(|s| !s.hidden) {
             s.window.request_redraw();
         }
     }
