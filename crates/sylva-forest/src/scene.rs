@@ -172,6 +172,11 @@ pub struct SpeciesShare {
     /// Relative share of the trees (> 0).
     #[serde(default = "one")]
     pub weight: f32,
+    /// The seed the species' tree is grown from: the tree `sylva tree generate --seed N`
+    /// and `sylva tree stats --seed N` show (each placed tree then scaled by the scene's
+    /// `scale_variation`). Default: the scene's seed + 1 000 × the entry's index + 1.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub seed: Option<u64>,
 }
 
 fn one() -> f32 {

@@ -33,7 +33,11 @@ fn scene() -> impl Strategy<Value = SceneSpec> {
                 .0
                 .into_iter()
                 .zip(mix.1)
-                .map(|(name, weight)| sylva_forest::scene::SpeciesShare { name, weight })
+                .map(|(name, weight)| sylva_forest::scene::SpeciesShare {
+                    name,
+                    weight,
+                    seed: None,
+                })
                 .collect();
             (s.scale_variation, s.terrain_amplitude, s.terrain_wavelength) = ground;
             s.wind = ["calm", "breeze", "strong", "storm"][wind.0].to_string();

@@ -436,3 +436,25 @@ fn a_click_on_a_crown_picks_its_tree_and_one_beside_the_trunk_below_does_not() {
         assert_ne!(ray(0.1 * h), Some(t), "tree {t}: beside the bare trunk is not the tree");
     }
 }
+
+/// A scene's tree was grown from the scene's seed plus 1 000 per species, so the tree a
+/// user picked with `tree stats --seed 1` was not the one the scene grew. A species entry
+/// may pin the seed: the scene's tree is then that tree.
+#[test]
+fn a_species_entry_with_a_pinned_seed_grows_the_tree_of_that_seed() {
+    let text = "name = \"one\"\ntrees = 1\nspecies = [{ name = \"quaking_aspen\", seed = 11 }]\n";
+    let spec = SceneSpec::from_toml("one.toml", text).expect("scene");
+    let forest = Forest::new(&spec).expect("forest");
+    let alone = sylva_tree::Species::load("quaking_aspen")
+        .expect("preset")
+        .model(11, sylva_tree::mesh::LOD_LEVELS)
+        .expect("model");
+    let grown = &forest.species[0].model.tree;
+    assert_eq!(grown.stats, alone.tree.stats);
+    assert_eq!(grown.skeleton.len(), alone.tree.skeleton.len());
+    // Without the pin the scene grows another tree.
+    let unpinned =
+        SceneSpec::from_toml("one.toml", &text.replace(", seed = 11", "")).expect("scene");
+    let other = Forest::new(&unpinned).expect("forest");
+    assert_ne!(other.species[0].model.tree.stats, alone.tree.stats);
+}

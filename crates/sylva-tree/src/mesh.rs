@@ -625,6 +625,7 @@ pub fn lod_levels(
     // In joint order, as levels 0 and 1 show them.
     let mut base_clusters = leaf_clusters(sk, &coverage, span, seed);
     base_clusters.sort_by_key(|c| c.joint);
+    lift_above_ground(&mut base_clusters);
     let all = vec![true; n];
     let base_branch_tris = branch_triangles(&topo, 0, &all);
     // Stem start radii, sorted, for the bisection on the drop threshold.
@@ -675,11 +676,34 @@ pub fn lod_levels(
                 })
                 .collect();
             rehung.sort_by_key(|c| c.joint);
-            merge_clusters(&rehung, LOD_RATIO.powi(lod as i32).round() as usize, &coverage, span)
+            let mut merged = merge_clusters(
+                &rehung,
+                LOD_RATIO.powi(lod as i32).round() as usize,
+                &coverage,
+                span,
+            );
+            lift_above_ground(&mut merged);
+            merged
         };
         out.push(TreeLod { level: lod, min_radius: r_min, branches, clusters });
     }
     out
+}
+
+/// Height a leaf card keeps above the ground at its lowest, m.
+pub const CARD_CLEARANCE: f32 = 0.02;
+
+/// Raise every card whose square could reach below the ground, however it is turned (the
+/// renderer turns cards part way towards the viewer): its centre at least half its
+/// diagonal plus [`CARD_CLEARANCE`] up. The willow's and the oak's lowest cards reached
+/// 0.16 m into the ground.
+fn lift_above_ground(clusters: &mut [LeafCluster]) {
+    for c in clusters {
+        let lowest = c.center[2] - std::f32::consts::FRAC_1_SQRT_2 * c.size;
+        if lowest < CARD_CLEARANCE {
+            c.center[2] += CARD_CLEARANCE - lowest;
+        }
+    }
 }
 
 /// Everything the renderer and the exporter need of one tree: skeleton, LOD chain and

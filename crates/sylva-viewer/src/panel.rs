@@ -298,7 +298,7 @@ fn scene(ui: &mut Ui, v: &Viewer, draft: &mut Draft, out: &mut Vec<Action>) {
         }
     });
     if !add.is_empty() {
-        draft.species.push(sylva_forest::SpeciesShare { name: add, weight: 1.0 });
+        draft.species.push(sylva_forest::SpeciesShare { name: add, weight: 1.0, seed: None });
     }
     if ui.add_enabled(v.job.is_none(), egui::Button::new("rebuild")).clicked() {
         out.push(Action::Scene {

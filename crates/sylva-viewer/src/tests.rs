@@ -115,7 +115,8 @@ fn a_lod_switch_reaches_frame_data() {
 #[test]
 fn a_scene_change_rebuilds_in_the_background() {
     let mut v = viewer(5);
-    let mix = vec![sylva_forest::SpeciesShare { name: "douglas_fir".into(), weight: 1.0 }];
+    let mix =
+        vec![sylva_forest::SpeciesShare { name: "douglas_fir".into(), weight: 1.0, seed: None }];
     v.apply(Action::Scene { scene: "small".into(), trees: 3, seed: 9, species: mix });
     assert_eq!(v.busy().map(|b| b.0), Some("building the scene"));
     assert_eq!(v.poll(true), Finished::Scene);

@@ -25,7 +25,7 @@ pub enum TreeCommand {
     Generate(GenerateArgs),
     /// Generate a tree, sway it in a wind and write it as an animated glTF (.glb): the tree
     /// of `generate` plus one animation, a rotation channel per exported joint sampled from
-    /// the sway simulation (leaf flutter is not exported).
+    /// the sway simulation, and the leaves' flutter as two morph targets.
     Animate(AnimateArgs),
     /// Write a species' procedural textures as PNG: bark.png and leaves.png (the
     /// leaf-cluster atlas, drawn to scale: one cell spans the size its card is shown at).

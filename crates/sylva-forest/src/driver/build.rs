@@ -190,7 +190,8 @@ fn load_models(spec: &SceneSpec) -> Result<Vec<TreeModel>, ForestError> {
                 name: s.name.clone(),
                 message: e.to_string(),
             })?;
-            sp.model(spec.seed.wrapping_add(1000 * i as u64 + 1), LOD_LEVELS)
+            let seed = s.seed.unwrap_or_else(|| spec.seed.wrapping_add(1000 * i as u64 + 1));
+            sp.model(seed, LOD_LEVELS)
                 .map_err(|e| ForestError::Species { name: s.name.clone(), message: e.to_string() })
         })
         .collect();

@@ -8,7 +8,11 @@ fn a_species_the_layout_gave_no_tree_simulates_nothing() {
     // of them draws it: every tree is simulated on its own (wind-field LOD off), so each
     // species simulates exactly its own trees, and the one without trees none.
     let mut spec = SceneSpec::builtin("small").expect("small");
-    spec.species.push(crate::SpeciesShare { name: "black_tupelo".into(), weight: 1e-6 });
+    spec.species.push(crate::SpeciesShare {
+        name: "black_tupelo".into(),
+        weight: 1e-6,
+        seed: None,
+    });
     for wind in [false, true] {
         spec.lod.wind = wind;
         let mut forest = Forest::new(&spec).expect("forest");
