@@ -89,16 +89,25 @@ fn fly_out_popping(a: &Table3Bench, md: &mut String, gpu: &mut Headless) -> anyh
         ),
         "| level switch, compared with | frames with no tree fading or changing level: median / max | fading, no change: median / max | with a level change: median / max | a frame with a level change over the nearest frames either side without one, their mean: median / max | over the larger of the two: median / max |",
     );
-    for (label, geometry, instant) in [
-        ("cross-faded (default)", true, false),
-        ("instant (band 0)", true, true),
-        ("full detail throughout", false, false),
+    for (label, geometry, instant, error_budget) in [
+        ("cross-faded (default)", true, false, 0.0),
+        ("instant (band 0)", true, true, 0.0),
+        ("by error, 1 px, far level 2, cross-faded", true, false, 1.0),
+        ("full detail throughout", false, false, 0.0),
     ] {
         let mut forest = Forest::new(&spec)?;
         let lod = forest.lod();
         // Switched at once: no cross-fade band, and no hysteresis to hold a level.
         let (band, hysteresis) = if instant { (0.0, 0.0) } else { (lod.band, lod.hysteresis) };
-        forest.set_lod(sylva_forest::LodSettings { geometry, band, hysteresis, ..lod });
+        let far_level = if error_budget > 0.0 { 2 } else { lod.far_level };
+        forest.set_lod(sylva_forest::LodSettings {
+            geometry,
+            band,
+            hysteresis,
+            error_budget,
+            far_level,
+            ..lod
+        });
         let start = forest.default_camera();
         let back: [f32; 3] = std::array::from_fn(|k| start.eye[k] - start.target[k]);
         let mut frame = FrameData::with_rows(h);
