@@ -175,15 +175,16 @@ fn coarse_wind_field(spec: &SceneSpec, radius: f32) -> Result<WindField, ForestE
 /// (Shaw, Brunet, Finnigan & Raupach 1995; Finnigan 2000 gives 1.5–2).
 pub const CANOPY_CONVECTION: f64 = 1.8;
 
-/// The convection speed of a forest's gusts with a log-law `params`: [`CANOPY_CONVECTION`]
-/// times Ū at the canopy top h = 1.5 d (the displacement height is about two thirds of the
-/// canopy's, Thom 1971; the presets' d = 10 m stands for a 15 m forest). `None` for a power
-/// law or no displacement: the reference speed then.
+/// The convection speed of a forest's gusts: [`CANOPY_CONVECTION`] times Ū at the canopy
+/// top h, the canopy profile's own h or, with a log law, h = 1.5 d (the displacement height
+/// is about two thirds of the canopy's, Thom 1971; the presets' d = 10 m stands for a 15 m
+/// forest). `None` for a power law or no displacement: the reference speed then.
 pub fn canopy_convection(params: &WindParams) -> Option<f64> {
     match params.profile {
         sylva_wind::Profile::Log { d, .. } if d > 0.0 => {
             Some(CANOPY_CONVECTION * params.mean_speed(1.5 * d))
         }
+        sylva_wind::Profile::Canopy { h, .. } => Some(CANOPY_CONVECTION * params.mean_speed(h)),
         _ => None,
     }
 }

@@ -222,6 +222,13 @@ fn profile(ui: &mut Ui, v: &Viewer, out: &mut Vec<Action>) {
             slider(ui, z0, 0.05..=5.0, "z0, m");
             slider(ui, d, 0.0..=30.0, "d, m");
         }
+        Profile::Canopy { h, a, z0, d } => {
+            ui.label("canopy profile (log law over, exponential in)");
+            slider(ui, h, 2.0..=60.0, "canopy top h, m");
+            slider(ui, a, 0.1..=10.0, "attenuation a");
+            slider(ui, z0, 0.05..=5.0, "z0, m");
+            slider(ui, d, 0.0..=30.0, "d, m");
+        }
         Profile::Power { u_ref, z_ref, alpha } => {
             ui.label("power-law profile");
             slider(ui, u_ref, 0.5..=60.0, "U_ref, m/s");

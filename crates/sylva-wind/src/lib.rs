@@ -35,5 +35,6 @@ pub use grid::Grid;
 pub use near::NearField;
 pub use params::{
     AIR_DENSITY, CoherenceSpeed, Component, KARMAN, Preset, Profile, SpectrumModel, WindParams,
+    canopy_attenuation,
 };
 pub use synth::{Method, SynthParams};

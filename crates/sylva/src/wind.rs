@@ -47,6 +47,8 @@ pub enum ProfileArg {
     Log,
     /// Power law Ū = U_ref (z/z_ref)^alpha.
     Power,
+    /// The log law over a forest and Ū(h) exp(a (z/h − 1)) inside it (Cionco 1965).
+    Canopy,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -113,6 +115,13 @@ pub struct ModelArgs {
     /// Log law: zero-plane displacement d in m (forest ≈ ⅔ × canopy height).
     #[arg(value_parser = crate::finite::<f64>, long, default_value_t = 10.0, allow_negative_numbers = true)]
     displacement: f64,
+    /// Canopy profile: the canopy top h in m (log law above, exponential below).
+    #[arg(value_parser = crate::finite::<f64>, long, default_value_t = 15.0)]
+    canopy_height: f64,
+    /// Canopy profile: the attenuation a inside the canopy (forests about 1–4; from a leaf
+    /// area index L, c_d L / (2 · 0.3²) with c_d = 0.2: L = 3 gives 3.3).
+    #[arg(value_parser = crate::finite::<f64>, long, default_value_t = 3.0)]
+    attenuation: f64,
     /// Power law: reference speed in m/s.
     #[arg(value_parser = crate::finite::<f64>, long, default_value_t = 8.0)]
     u_ref: f64,
@@ -156,6 +165,12 @@ impl ModelArgs {
         }
         p.profile = match self.profile {
             ProfileArg::Log => Profile::Log { z0: self.z0, d: self.displacement },
+            ProfileArg::Canopy => Profile::Canopy {
+                h: self.canopy_height,
+                a: self.attenuation,
+                z0: self.z0,
+                d: self.displacement,
+            },
             ProfileArg::Power => {
                 Profile::Power { u_ref: self.u_ref, z_ref: self.z_ref, alpha: self.alpha }
             }

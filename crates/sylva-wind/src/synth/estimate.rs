@@ -121,7 +121,7 @@ fn check_profile(params: &WindParams, grid: &Grid) -> Result<(), WindError> {
                     ("profile.z_ref", z_ref)
                 }
             }
-            Profile::Log { z0, d } => {
+            Profile::Log { z0, d } | Profile::Canopy { z0, d, .. } => {
                 let ln = ((z - d).max(2.0 * z0) / z0).ln();
                 if ln.is_finite() { ("u_star", params.u_star) } else { ("profile.z0", z0) }
             }
