@@ -12,24 +12,6 @@
 use sylva_wind::stats::ensemble_stats_at;
 use sylva_wind::{CoherenceSpeed, Grid, Method, SynthParams, WindField, WindParams};
 
-/// The columns `cols` of `f` as a field of their own.
-fn columns(f: &WindField, cols: std::ops::Range<usize>) -> WindField {
-    let g = &f.grid;
-    let mut grid = g.clone();
-    grid.xs = g.xs[cols.clone()].to_vec();
-    let mut data = Vec::with_capacity(g.frames * 3 * g.nz() * g.ny() * cols.len());
-    for t in 0..g.frames {
-        for c in 0..3 {
-            for iz in 0..g.nz() {
-                for iy in 0..g.ny() {
-                    data.extend(cols.clone().map(|ix| f.data[f.index(t, c, iz, iy, ix)]));
-                }
-            }
-        }
-    }
-    WindField { grid, data, ..f.clone() }
-}
-
 fn main() {
     let seeds: u64 = std::env::args().nth(1).and_then(|s| s.parse().ok()).unwrap_or(8);
     let params = WindParams { coherence_speed: CoherenceSpeed::PairMean, ..WindParams::default() };
@@ -42,7 +24,7 @@ fn main() {
         })
         .collect();
     let part = |cols: std::ops::Range<usize>| -> Vec<WindField> {
-        fields.iter().map(|f| columns(f, cols.clone())).collect()
+        fields.iter().map(|f| f.columns(cols.clone())).collect()
     };
     let (middle, edge) = (part(10..14), part(0..4));
     let (mut worst_split, mut worst_model) = (0.0f64, 0.0f64);

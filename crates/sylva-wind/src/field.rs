@@ -137,6 +137,33 @@ impl WindField {
         (((t * 3 + c) * g.nz() + iz) * g.ny() + iy) * g.nx() + ix
     }
 
+    /// The columns `cols` (x indices) of the field as a field of their own: the same model,
+    /// time axis, heights and y, the x coordinates those columns have. For statistics over
+    /// part of a grid (its middle against its edges, say). Panics if `cols` reaches past the
+    /// grid.
+    pub fn columns(&self, cols: std::ops::Range<usize>) -> WindField {
+        let g = &self.grid;
+        let mut grid = g.clone();
+        grid.xs = g.xs[cols.clone()].to_vec();
+        let mut data = Vec::with_capacity(g.frames * 3 * g.nz() * g.ny() * cols.len());
+        for t in 0..g.frames {
+            for c in 0..3 {
+                for iz in 0..g.nz() {
+                    for iy in 0..g.ny() {
+                        data.extend(cols.clone().map(|ix| self.data[self.index(t, c, iz, iy, ix)]));
+                    }
+                }
+            }
+        }
+        WindField {
+            grid,
+            params: self.params.clone(),
+            synth: self.synth,
+            data,
+            coherence_error: self.coherence_error,
+        }
+    }
+
     /// The record of one component at one grid point (fluctuation plus mean), length `frames`.
     pub fn record(&self, c: Component, iz: usize, iy: usize, ix: usize) -> Vec<f64> {
         (0..self.grid.frames)
