@@ -108,28 +108,10 @@ impl Headless {
         camera: &Camera,
         host: impl FnOnce(&Gpu, &mut wgpu::CommandEncoder, &wgpu::TextureView, &wgpu::TextureView),
     ) -> Result<Vec<u8>, RenderError> {
+        // Targets as the renderer makes its own: the host's, here.
         let samples = self.renderer.samples();
-        let make = |format, label| {
-            self.gpu
-                .device
-                .create_texture(&wgpu::TextureDescriptor {
-                    label: Some(label),
-                    size: wgpu::Extent3d {
-                        width: self.width,
-                        height: self.height,
-                        depth_or_array_layers: 1,
-                    },
-                    mip_level_count: 1,
-                    sample_count: samples,
-                    dimension: wgpu::TextureDimension::D2,
-                    format,
-                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-                    view_formats: &[],
-                })
-                .create_view(&wgpu::TextureViewDescriptor::default())
-        };
-        let depth = make(crate::shared::DEPTH, "host depth");
-        let msaa = (samples > 1).then(|| make(FORMAT, "host colour"));
+        let (msaa, depth) =
+            crate::renderer::targets(&self.gpu.device, FORMAT, samples, self.width, self.height);
         let (color, resolve) = match &msaa {
             Some(m) => (m, Some(&self.view)),
             None => (&self.view, None),

@@ -724,7 +724,9 @@ impl Renderer {
     }
 }
 
-fn targets(
+/// A multisampled colour target of `format` (none with one sample) and a depth target
+/// ([`DEPTH`]), `samples` samples, `width × height`.
+pub(crate) fn targets(
     dev: &wgpu::Device,
     format: wgpu::TextureFormat,
     samples: u32,

@@ -65,6 +65,14 @@ pub(crate) fn regular(path: &Path, folder: bool) -> Result<(), WindError> {
     Err(WindError::io(path, std::io::Error::other(format!("not {what}"))))
 }
 
+/// The CRC-32 (IEEE) of `value`'s compact JSON (`serde_json`'s, fields in declaration
+/// order): what a sidecar or a store's attributes hold of themselves, computed with their
+/// own checksum field set to 0.
+pub(crate) fn json_crc32(value: &impl Serialize) -> Result<u32, WindError> {
+    let text = serde_json::to_string(value).map_err(|e| WindError::Export(e.to_string()))?;
+    Ok(crc32fast::hash(text.as_bytes()))
+}
+
 /// Magic bytes of an `.swf` file.
 pub const SWF_MAGIC: &[u8; 8] = b"SYLVAWND";
 /// Current `.swf` format version.

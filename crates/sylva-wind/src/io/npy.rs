@@ -72,9 +72,7 @@ pub struct NpySidecar {
 impl NpySidecar {
     /// The CRC-32 [`NpySidecar::sidecar_crc32`] holds for this sidecar's other fields.
     pub fn checksum(&self) -> Result<u32, WindError> {
-        let zeroed = NpySidecar { sidecar_crc32: 0, ..self.clone() };
-        let text = serde_json::to_string(&zeroed).map_err(|e| WindError::Export(e.to_string()))?;
-        Ok(crc32fast::hash(text.as_bytes()))
+        super::json_crc32(&NpySidecar { sidecar_crc32: 0, ..self.clone() })
     }
 
     /// Check the fields that repeat the grid and parameters for readers without Sylva

@@ -63,9 +63,7 @@ pub struct ZarrAttributes {
 impl ZarrAttributes {
     /// The CRC-32 [`ZarrAttributes::attributes_crc32`] holds for the other fields.
     pub fn checksum(&self) -> Result<u32, WindError> {
-        let zeroed = ZarrAttributes { attributes_crc32: 0, ..self.clone() };
-        let text = serde_json::to_string(&zeroed).map_err(|e| WindError::Export(e.to_string()))?;
-        Ok(crc32fast::hash(text.as_bytes()))
+        super::json_crc32(&ZarrAttributes { attributes_crc32: 0, ..self.clone() })
     }
 }
 
