@@ -25,26 +25,24 @@
 //! crown's surface, 0 at its centre, which darkens the inner foliage (ambient occlusion).
 //!
 //! **LOD chain.** Level k's branches aim at about `3^-k` of level 0's branch triangles:
-//! coarser cylinders (sides halved per level, at least 3), the thinnest stems dropped first
-//! (with everything they carry; the threshold radius is found by bisection so the branch
-//! triangles meet their share). From level 2 on, the clusters of dropped stems are re-hung
-//! on the nearest kept ancestor joint (they keep their place in the crown, so the crown
-//! keeps its volume) and runs of `3^k` neighbouring clusters (in joint order, so neighbours
-//! along the branches) are merged into one, placed at their area-weighted centre and
-//! enlarged so the merged billboard shows their summed area. Level 1 keeps level 0's leaf
-//! cards, card for card and each on its own joint (a card whose twig is dropped still hangs
-//! from the twig's joint and moves with it), on a third of its wood. The wood is most of a tree's triangles (85–96 %
-//! at level 0 but for the Douglas fir's 64 %), so level 1 costs 24–58 % of level 0, and its
-//! picture of the foliage — which pixels the leaves cover, and how they move — is level
-//! 0's: a tree between a fifth and a fifteenth of the image tall drawn at level 1 instead
-//! of as an impostor reads nearly as full detail does (scene B: FLIP 0.031 against full
-//! detail instead of 0.062, docs/decisions/0003-lod-thresholds.md), where merged cards change the pattern
-//! as much as an impostor does. The skeleton is shared: joint indices are valid at every
-//! level.
+//! coarser cylinders (sides halved per level, but at least [`MIN_SIDES`], so the trunk
+//! and the main branches stay round), the thinnest stems dropped first (with everything
+//! they carry; the threshold radius is found by bisection so the branch triangles meet
+//! their share). Level 1 keeps level 0's leaf cards, card for card and each on its own
+//! joint (a card whose twig is dropped still hangs from the twig's joint and moves with
+//! it), on a third of its wood. From level 2 on the cards are thinned stochastically
+//! (Cook et al. 2007): a level keeps a subset of level 0's cards, in
+//! place, and grows them so the crown shows its whole leaf area; it grows them no more
+//! than its dropped stems' diameter ([`leaf_growth`]), so the leaves never make a level
+//! coarser than its wood. The cards of dropped stems are re-hung on the nearest kept
+//! ancestor joint. The wood is most of a tree's triangles (85–96 % at level 0 but for
+//! the Douglas fir's 64 %), so level 1 costs 24–58 % of level 0, and its picture of the
+//! foliage — which pixels the leaves cover, and how they move — is level 0's. The
+//! skeleton is shared: joint indices are valid at every level.
 
 use std::f32::consts::{PI, TAU};
 
-use sylva_core::v3::{V3, add, cross, dot, norm, scale, sub};
+use sylva_core::v3::{V3, add, cross, dot, length, norm, scale, sub};
 
 use crate::generate::Tree;
 use crate::skeleton::{NO_PARENT, Skeleton, SkeletonError};
@@ -208,9 +206,17 @@ fn perpendicular(r: V3, axis: V3, fallback: V3) -> V3 {
     if dot(p, p) > 1e-8 { norm(p) } else { fallback }
 }
 
-/// Ring sides of a stem of `level` at LOD `lod`.
+/// Fewest ring sides per stem level at any LOD: the trunk and the main branches, the
+/// widest stems, keep their roundness, for their ring error (the radius times
+/// `1 − cos(π / sides)`) is most of a coarse level's geometric error otherwise (at 3
+/// sides, half the radius: 15 cm on a 60 cm trunk) and costs few triangles.
+pub const MIN_SIDES: [u32; 4] = [8, 5, 3, 3];
+
+/// Ring sides of a stem of `level` at LOD `lod`: [`SIDES`] halved per level, at least
+/// [`MIN_SIDES`].
 pub fn sides(level: u32, lod: usize) -> u32 {
-    (SIDES[level.min(3) as usize] >> lod).max(3)
+    let level = level.min(3) as usize;
+    (SIDES[level] >> lod).max(MIN_SIDES[level])
 }
 
 struct MeshBuilder<'a> {
@@ -418,7 +424,7 @@ fn kept_joints(sk: &Skeleton, topo: &Topology, r_min: f32, kept: &mut [bool]) {
     let js = sk.joints();
     for (i, j) in js.iter().enumerate() {
         let start = topo.stem_start[i] as usize;
-        let own = i == 0 || js[start].radius >= r_min;
+        let own = start == 0 || js[start].radius >= r_min;
         kept[i] = own && (j.parent == NO_PARENT || kept[j.parent as usize]);
     }
 }
@@ -547,47 +553,72 @@ fn leaf_clusters(sk: &Skeleton, coverage: &[f32], span: f32, seed: u64) -> Vec<L
     out
 }
 
-/// Merge runs of `m` consecutive clusters (already re-hung and in joint order).
-fn merge_clusters(
-    clusters: &[LeafCluster],
-    m: usize,
-    coverage: &[f32],
-    span: f32,
-) -> Vec<LeafCluster> {
-    clusters
-        .chunks(m.max(1))
-        .map(|run| {
-            let area: f32 = run.iter().map(|c| c.leaf_area).sum();
-            let w = |f: &dyn Fn(&LeafCluster) -> V3| {
-                run.iter()
-                    .fold([0.0; 3], |acc, c| add(acc, scale(f(c), c.leaf_area / area.max(1e-20))))
-            };
-            let center = w(&|c| c.center);
-            let exposure =
-                run.iter().map(|c| c.exposure * c.leaf_area).sum::<f32>() / area.max(1e-20);
-            // Hang on the joint of the member nearest the merged centre.
-            let lead = run
-                .iter()
-                .min_by(|a, b| {
-                    let da = sub(a.center, center);
-                    let db = sub(b.center, center);
-                    dot(da, da).total_cmp(&dot(db, db))
-                })
-                .unwrap_or(&run[0]);
-            // Keep the lead's offset from its branch: it points out of the crown, and the
-            // renderer shades and swings the cluster by it. (Averaged offsets of clusters
-            // around a branch cancel: merged cards would face random ways and render dark.)
-            let hang = sub(center, sub(lead.center, lead.hang));
-            LeafCluster {
-                hang,
-                center,
-                size: (area / coverage[lead.atlas as usize]).sqrt().max(span),
-                leaf_area: area,
-                exposure,
-                ..*lead
-            }
-        })
-        .collect()
+/// How far a grown leaf card's corners move out per metre of growth in side: half its
+/// diagonal, and its centre pushed out from the branch by 0.45 of the growth.
+pub const CARD_GROWTH_REACH: f32 = std::f32::consts::FRAC_1_SQRT_2 + 0.45;
+
+/// The most a mesh level may grow its leaf cards (each `side` across), as a factor on
+/// their side, when its wood lies up to `wood_error` from full detail (its dropped stems'
+/// diameter, `2 · min_radius`): the kept cards' corners then move out by at most that
+/// error ([`CARD_GROWTH_REACH`], the growth of `thin_clusters`), so the leaves never make a level coarser than its wood.
+/// The level keeps about `1 / growth²` of the cards.
+pub fn leaf_growth(wood_error: f32, side: f32) -> f32 {
+    if !(wood_error > 0.0) || !(side > 0.0) {
+        return 1.0;
+    }
+    (1.0 + wood_error / (CARD_GROWTH_REACH * side)).min(1e3)
+}
+
+/// The stratified key of level 0's card `i` (in joint order): the fractional part of
+/// `i / φ`. A level keeps the cards of the smallest keys, so a coarser level's cards are a
+/// subset of a finer one's, and neighbours along the branches are thinned evenly (by the
+/// three-distance theorem the gaps between kept cards take at most three lengths).
+pub fn thinning_key(i: usize) -> f32 {
+    const INV_PHI: f64 = 0.618_033_988_749_894_8;
+    ((i as f64 * INV_PHI).fract()) as f32
+}
+
+/// Stochastic simplification of the leaves (Cook, Halstead, Planck & Ryu 2007,
+/// "Stochastic simplification of aggregate detail"): of `clusters` (level 0's, in joint
+/// order) keep the fewest, in the order of their [`thinning_key`], that show at least
+/// `1 / max_growth²` of the leaf area `A`, and grow each in side by the one factor
+/// `s = √(A / A_kept) ≤ max_growth` so the level shows the whole leaf area again; each
+/// card's centre moves out from its hanging point with its larger half so it still hangs
+/// from its branch. Every kept card stays where it was: the crown's outline and the
+/// cards' texture and motion are level 0's, only sparser. A larger `max_growth` keeps a
+/// subset of a smaller one's cards.
+fn thin_clusters(clusters: &[LeafCluster], max_growth: f32) -> Vec<LeafCluster> {
+    let total: f32 = clusters.iter().map(|c| c.leaf_area).sum();
+    let mut order: Vec<usize> = (0..clusters.len()).collect();
+    order.sort_by(|&a, &b| thinning_key(a).total_cmp(&thinning_key(b)));
+    let need = total / (max_growth * max_growth).max(1.0);
+    let mut shown = 0.0f32;
+    let mut count = 0;
+    for &i in &order {
+        if shown >= need && count > 0 {
+            break;
+        }
+        shown += clusters[i].leaf_area;
+        count += 1;
+    }
+    let mut chosen = order[..count].to_vec();
+    chosen.sort_unstable();
+    let mut kept: Vec<LeafCluster> = chosen.iter().map(|&i| clusters[i]).collect();
+    if shown <= 0.0 {
+        return kept;
+    }
+    let s = (total / shown).sqrt();
+    for c in &mut kept {
+        let off = sub(c.center, c.hang);
+        let reach = length(off);
+        let grown = c.size * s;
+        if reach > 0.0 {
+            c.center = add(c.hang, scale(off, (reach + 0.45 * (grown - c.size)) / reach));
+        }
+        c.size = grown;
+        c.leaf_area *= s * s;
+    }
+    kept
 }
 
 /// The chain of `levels` LODs of `tree`, its leaf cards showing cells of `atlas` (their
@@ -626,6 +657,9 @@ pub fn lod_levels(
     let mut base_clusters = leaf_clusters(sk, &coverage, span, seed);
     base_clusters.sort_by_key(|c| c.joint);
     lift_above_ground(&mut base_clusters);
+    // Level 0's cards all have one side (the atlas span, or larger for a tree of very
+    // many leaves).
+    let span_used = base_clusters.first().map_or(span, |c| c.size);
     let all = vec![true; n];
     let base_branch_tris = branch_triangles(&topo, 0, &all);
     // Stem start radii, sorted, for the bisection on the drop threshold.
@@ -653,7 +687,10 @@ pub fn lod_levels(
                     lo = mid + 1;
                 }
             }
-            r_min = radii.get(lo).copied().unwrap_or(f32::INFINITY);
+            // Past the thickest branch: the trunk alone (which every level keeps).
+            r_min = radii.get(lo).copied().unwrap_or_else(|| {
+                radii.last().map_or(f32::INFINITY, |r| r * (1.0 + f32::EPSILON).max(1.0 + 1e-6))
+            });
             kept_joints(sk, &topo, r_min, &mut kept);
         }
         let branches =
@@ -663,27 +700,20 @@ pub fn lod_levels(
             // documentation): a card of a twig level 1 does not draw still moves with it.
             base_clusters.clone()
         } else {
-            // Re-hang the cards of dropped joints on the nearest kept ancestor, then merge
-            // runs of 3^k.
-            let mut rehung: Vec<LeafCluster> = base_clusters
-                .iter()
-                .map(|c| {
-                    let mut j = c.joint;
-                    while !kept[j as usize] {
-                        j = sk.joints()[j as usize].parent;
-                    }
-                    LeafCluster { joint: j, ..*c }
-                })
-                .collect();
-            rehung.sort_by_key(|c| c.joint);
-            let mut merged = merge_clusters(
-                &rehung,
-                LOD_RATIO.powi(lod as i32).round() as usize,
-                &coverage,
-                span,
-            );
-            lift_above_ground(&mut merged);
-            merged
+            // Thin the cards (in level 0's joint order), then re-hang those of dropped
+            // joints on the nearest kept ancestor: they keep their place in the crown.
+            let growth = leaf_growth(2.0 * r_min, span_used);
+            let mut thinned = thin_clusters(&base_clusters, growth);
+            for c in &mut thinned {
+                let mut j = c.joint;
+                while !kept[j as usize] {
+                    j = sk.joints()[j as usize].parent;
+                }
+                c.joint = j;
+            }
+            thinned.sort_by_key(|c| c.joint);
+            lift_above_ground(&mut thinned);
+            thinned
         };
         out.push(TreeLod { level: lod, min_radius: r_min, branches, clusters });
     }

@@ -3,7 +3,7 @@
 //! the hysteresis about each threshold.
 
 use sylva_forest::driver::{blend_levels, error_coordinate, hysteresis, level_thresholds};
-use sylva_forest::{Forest, FrameData, LodSettings, SceneSpec};
+use sylva_forest::{Camera, Forest, FrameData, LodSettings, SceneSpec};
 
 /// A species' level errors as shares of its height, from its geometry.
 fn errors(name: &str) -> Vec<f32> {
@@ -77,4 +77,66 @@ fn a_larger_budget_draws_coarser_levels_and_fewer_triangles() {
     forest.frame(&camera, 4.0 / 3.0, &mut big);
     forest.frame(&camera, 4.0 / 3.0, &mut small);
     assert!(small.stats.triangles < big.stats.triangles);
+}
+
+#[test]
+fn the_leaf_area_drawn_holds_within_two_percent_from_full_detail_to_the_impostor() {
+    // One aspen seen from 1 to 40 heights away, its levels by error with every mesh level
+    // before the impostor: whatever level, or pair of levels cross-fading, the tree is
+    // drawn at, its cards show the crown's whole leaf area (coarser levels thin the cards
+    // and grow the ones kept).
+    let mut spec = SceneSpec::builtin("small").expect("small");
+    spec.species.retain(|s| s.name == "quaking_aspen");
+    spec.trees = 1;
+    let mut forest = Forest::new(&spec).expect("forest");
+    let levels = forest.species[0].model.lods.len() as u32;
+    forest.set_lod(LodSettings {
+        error_budget: 1.0,
+        far_level: levels,
+        fraction: 0.01,
+        ..forest.lod()
+    });
+    let p = forest.placement(0).expect("tree").position;
+    let tall = forest.tree_info(0).expect("tree").height;
+    let mut frame = FrameData::with_rows(768);
+    let (mut seen, mut blended, mut compared) = (vec![false; levels as usize], 0, 0);
+    for k in 0..400 {
+        let d = tall * 1.0095f32.powi(k);
+        let mid = [p[0], p[1], p[2] + 0.5 * tall];
+        let camera = Camera {
+            eye: [mid[0] - d, mid[1], mid[2]],
+            target: mid,
+            fov_deg: 60.0,
+            near: 0.5,
+            far: 1e4,
+        };
+        forest.frame(&camera, 4.0 / 3.0, &mut frame);
+        let (mut area, mut full, mut weight, mut impostor, mut drawn) =
+            (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0);
+        for b in frame.buckets.iter().filter(|b| !b.shadow_only) {
+            let lods = &forest.species[b.species as usize].model.lods;
+            for i in &frame.instances[b.first as usize..(b.first + b.count) as usize] {
+                let w = (i.fade[1].min(1.0) - i.fade[0].max(0.0)).max(0.0) as f64;
+                if i.tag & 0xF == 15 {
+                    impostor += w;
+                    continue;
+                }
+                let s2 = (i.scale * i.scale) as f64;
+                area += w * lods[b.lod as usize].leaf_area() as f64 * s2;
+                full += w * lods[0].leaf_area() as f64 * s2;
+                weight += w;
+                seen[b.lod as usize] = true;
+                drawn += usize::from(w > 0.0);
+            }
+        }
+        if impostor > 0.0 {
+            break;
+        }
+        assert!((weight - 1.0).abs() < 1e-4, "at {d} m the tree is drawn with weight {weight}");
+        assert!((area / full - 1.0).abs() <= 0.02, "at {d} m {area} of {full} m² of leaves drawn");
+        blended += usize::from(drawn > 1);
+        compared += 1;
+    }
+    assert!(seen.iter().filter(|&&s| s).count() >= 4, "levels drawn: {seen:?}");
+    assert!(blended > 0 && compared > 100, "{compared} distances, {blended} cross-fading");
 }
