@@ -560,13 +560,14 @@ pub const CARD_GROWTH_REACH: f32 = std::f32::consts::FRAC_1_SQRT_2 + 0.45;
 /// The most a mesh level may grow its leaf cards (each `side` across), as a factor on
 /// their side, when its wood lies up to `wood_error` from full detail (its dropped stems'
 /// diameter, `2 · min_radius`): the kept cards' corners then move out by at most that
-/// error ([`CARD_GROWTH_REACH`], the growth of `thin_clusters`), so the leaves never make a level coarser than its wood.
-/// The level keeps about `1 / growth²` of the cards.
+/// error ([`CARD_GROWTH_REACH`], the growth of `thin_clusters`), so the leaves never
+/// make a level coarser than its wood. The level keeps about `1 / growth²` of the cards.
 pub fn leaf_growth(wood_error: f32, side: f32) -> f32 {
-    if !(wood_error > 0.0) || !(side > 0.0) {
+    let allowed = wood_error / (CARD_GROWTH_REACH * side);
+    if allowed.is_nan() || allowed <= 0.0 {
         return 1.0;
     }
-    (1.0 + wood_error / (CARD_GROWTH_REACH * side)).min(1e3)
+    (1.0 + allowed).min(1e3)
 }
 
 /// The stratified key of level 0's card `i` (in joint order): the fractional part of
