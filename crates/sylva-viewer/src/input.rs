@@ -148,6 +148,14 @@ impl Controls {
     }
 }
 
+/// Whether a key event goes to the panel before the viewer: only while the panel edits text
+/// (`typing`: a text field has the keyboard focus), and never Tab, which shows and hides
+/// the panel. Otherwise the panel's keyboard navigation would take the viewer's keys: Tab
+/// would move the focus onto a checkbox and Space then tick it instead of pausing.
+pub fn panel_takes_key(code: KeyCode, typing: bool) -> bool {
+    typing && code != KeyCode::Tab
+}
+
 /// The action of a key press.
 fn key_action(v: &Viewer, code: KeyCode, repeat: bool) -> Option<Action> {
     let (gain, turn) = v.forest.wind_control();

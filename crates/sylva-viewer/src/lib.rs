@@ -343,8 +343,19 @@ impl ApplicationHandler for App {
     fn window_event(&mut self, el: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
         let Some(s) = self.surface.as_mut() else { return };
         // The panel sees every event first; what it takes (a click on a slider, typing in a
-        // field) goes no further.
+        // field) goes no further. Keys reach it only while it edits text
+        // (`input::panel_takes_key`): the viewer's shortcuts work whatever has the focus.
+        let to_panel = match &event {
+            WindowEvent::KeyboardInput { event, .. } => match event.physical_key {
+                PhysicalKey::Code(code) => {
+                    input::panel_takes_key(code, s.egui.egui_ctx().text_edit_focused())
+                }
+                _ => false,
+            },
+            _ => true,
+        };
         let consumed = (self.viewer.panel || self.viewer.help)
+            && to_panel
             && s.egui.on_window_event(&s.window, &event).consumed;
         let (w, h) = (s.config.width as f32, s.config.height as f32);
         let input = match event {

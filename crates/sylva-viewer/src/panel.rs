@@ -352,17 +352,34 @@ fn camera(ui: &mut Ui, v: &Viewer, out: &mut Vec<Action>) {
     }
 }
 
+/// A figure's plot: it follows its data, and takes neither the mouse wheel (which scrolls
+/// the panel over it) nor drags, so it never shows an empty stretch. The x axis is the
+/// simulation's time, s; the y axis starts at 0 and spans at least `min_span`.
+fn plot(name: &str, unit: &str, min_span: f64) -> Plot<'static> {
+    Plot::new(name.to_owned())
+        .height(90.0)
+        .allow_zoom(false)
+        .allow_scroll(false)
+        .allow_drag(false)
+        .allow_boxed_zoom(false)
+        .allow_double_click_reset(false)
+        .include_y(0.0)
+        .include_y(min_span)
+        .x_axis_label("time, s")
+        .y_axis_label(unit.to_owned())
+}
+
 fn plots(ui: &mut Ui, v: &Viewer) {
     let wind: Vec<[f64; 2]> = v.history.iter().map(|&(t, w, _)| [t, w as f64]).collect();
     let sway: Vec<[f64; 2]> = v.history.iter().map(|&(t, _, s)| [t, s as f64]).collect();
-    ui.label("wind speed at the probe, m/s");
-    Plot::new("wind").height(90.0).show(ui, |p| p.line(Line::new("wind", wind)));
+    ui.label("wind speed at the probe");
+    plot("wind", "m/s", 1.0).show(ui, |p| p.line(Line::new("wind", wind)));
     ui.label(if v.selected.is_some() {
-        "trunk-top displacement of the selected tree, m"
+        "trunk-top displacement of the selected tree"
     } else {
         "trunk-top displacement: click a tree"
     });
-    Plot::new("sway").height(90.0).show(ui, |p| p.line(Line::new("trunk top", sway)));
+    plot("sway", "m", 0.05).show(ui, |p| p.line(Line::new("trunk top", sway)));
 }
 
 fn selected(ui: &mut Ui, v: &Viewer) {

@@ -203,6 +203,11 @@ fn keys_change_the_wind_pause_and_panels() {
         }
     }
     assert!(v.settings.paused && v.help && !v.panel);
+    // Keys reach the panel only while it edits text, and Tab never: with a checkbox
+    // focused (no text field), Space still pauses and Tab still shows and hides the panel.
+    use crate::input::panel_takes_key;
+    assert!(!panel_takes_key(KeyCode::Tab, false) && !panel_takes_key(KeyCode::Tab, true));
+    assert!(!panel_takes_key(KeyCode::Space, false) && panel_takes_key(KeyCode::Space, true));
     // An auto-repeated Space does not toggle again.
     c.handle(
         &mut v,

@@ -148,8 +148,9 @@ pub const DEFAULT_LOD_FRACTION: f32 = 0.2;
 /// Default first level drawn as an impostor: 1, so a tree is either at full detail or an
 /// impostor, cross-faded between. A scene or `--far-level` can use the mesh levels in
 /// between: level 1 shows full detail's leaf cards on a third of its wood, close to full
-/// detail for several times the triangles; from level 2 on, merged cards look further from
-/// full detail than the impostor does (docs/decisions/0003-lod-thresholds.md).
+/// detail for several times the triangles; from level 2 on the cards are thinned, which
+/// the levels by screen-space error use ([`LodSettings::error_budget`];
+/// docs/decisions/0003-lod-thresholds.md, 0013-lod-by-error.md).
 pub const DEFAULT_FAR_LEVEL: u32 = 1;
 
 /// Image rows a [`FrameData`](super::FrameData) assumes until its caller sets
