@@ -65,6 +65,43 @@ fn joint_budget_folds_light_joints_into_ancestors() {
     assert_eq!(json.matches("\"name\":\"joint").count(), 100);
 }
 
+#[test]
+fn the_willows_default_export_keeps_its_hanging_twigs() {
+    // The command line's default budget, 1 024 of the willow's 80 000 joints: the twigs
+    // that hang keep joints of their own (with their paths to the limbs), so the exported
+    // twig tips (exported joints with no exported child) point down about as often as the
+    // tree's own tips do, and its curtains sway instead of riding rigidly on the limbs.
+    let m = Species::preset("weeping_willow").expect("preset").model(1, LOD_LEVELS).expect("tree");
+    let js = m.tree.skeleton.joints();
+    let down = |j: usize| js[j].axis[2] < 0.0;
+    let own_tips: Vec<usize> =
+        (0..js.len()).filter(|&j| m.tree.skeleton.children(j).is_empty()).collect();
+    let own = own_tips.iter().filter(|&&j| down(j)).count() as f32 / own_tips.len() as f32;
+    let exported = m.exported_joints(0, 1024);
+    assert_eq!(exported.len(), 1024);
+    let mut parent_of_exported = vec![false; js.len()];
+    for &j in &exported {
+        if js[j].parent != sylva_tree::NO_PARENT {
+            parent_of_exported[js[j].parent as usize] = true;
+        }
+    }
+    let tips: Vec<usize> = exported.iter().copied().filter(|&j| !parent_of_exported[j]).collect();
+    let share = tips.iter().filter(|&&j| down(j)).count() as f32 / tips.len() as f32;
+    assert!(
+        share >= 0.75,
+        "{share:.2} of {} exported twig tips point down (the tree: {own:.2})",
+        tips.len()
+    );
+    // Every exported joint's parent is exported (the skin is one tree).
+    let set: std::collections::HashSet<usize> = exported.iter().copied().collect();
+    assert!(
+        exported
+            .iter()
+            .all(|&j| js[j].parent == sylva_tree::NO_PARENT
+                || set.contains(&(js[j].parent as usize)))
+    );
+}
+
 /// Quaternion (x, y, z, w) applied to v.
 fn rotate(q: [f64; 4], v: [f64; 3]) -> [f64; 3] {
     let (x, y, z, w) = (q[0], q[1], q[2], q[3]);

@@ -14,8 +14,10 @@
 //!   the first exported level) with its own joints.
 //!
 //! glTF stores joint indices as unsigned 16-bit numbers, so at most 65 535 joints are
-//! exported: beyond `max_joints`, the lightest joints (least carried mass) are folded into
-//! their nearest exported ancestor. Leaf cards, which the renderer turns part way towards
+//! exported: beyond `max_joints`, joints are folded into their nearest exported ancestor;
+//! half the budget goes to the heaviest (carried mass), then to the twigs that hang, with
+//! their paths, so a weeping willow's curtains keep joints to sway on (84 % of the exported
+//! twig tips of its default 1 024-joint export point down, as 77 % of all its tips do). Leaf cards, which the renderer turns part way towards
 //! the viewer, are exported as their fixed oriented quads (facing out of the crown).
 
 mod animation;

@@ -1,13 +1,15 @@
-//! Which joints a `.glb` exports (the heaviest within `max_joints`, lighter ones folded
-//! into their ancestors) and their nodes and skin.
+//! Which joints a `.glb` exports (within `max_joints`: the heaviest, and the twigs that
+//! hang; the others folded into their ancestors) and their nodes and skin.
 
 use super::*;
 
 impl TreeModel {
     /// Joints exported for level `lod` with at most `max_joints` of them (as
-    /// [`to_glb`](Self::to_glb) picks them): those its vertices and clusters use, with
-    /// their ancestors, heaviest first (carried mass). Parents come before children; every
-    /// exported joint's parent is exported. A sway clip for `tree animate` records these.
+    /// [`to_glb`](Self::to_glb) picks them), of those its vertices and clusters use: half
+    /// the budget for the heaviest (carried mass), then every twig tip that
+    /// hangs (points down) with its path to them, the largest hanging runs first, then the
+    /// heaviest of the rest. Parents come before children; every exported joint's parent is
+    /// exported. A sway clip for `tree animate` records these.
     pub fn exported_joints(&self, lod: usize, max_joints: usize) -> Vec<usize> {
         let order = self.joint_priority();
         let keep = self.exported_mask(lod, max_joints.clamp(1, MAX_GLTF_JOINTS), &order);
@@ -47,13 +49,67 @@ impl TreeModel {
             }
         }
         let mut keep = vec![false; n];
-        for &j in order.iter().filter(|&&j| used[j]).take(limit) {
-            keep[j] = true;
+        let mut left = limit;
+        // Adds `j` and its ancestors not yet kept, if they fit in what is left.
+        let add_path = |j: usize, keep: &mut Vec<bool>, left: &mut usize| -> bool {
+            let mut path = Vec::new();
+            let mut k = j;
+            while !keep[k] {
+                path.push(k);
+                if js[k].parent == NO_PARENT {
+                    break;
+                }
+                k = js[k].parent as usize;
+            }
+            if path.len() > *left {
+                return false;
+            }
+            *left -= path.len();
+            for k in path {
+                keep[k] = true;
+            }
+            true
+        };
+        // 1. The scaffold: the heaviest half of the budget, by carried mass (a parent
+        //    carries at least what its child does, so these are whole paths from the root).
+        for &j in order.iter().filter(|&&j| used[j]).take(limit.div_ceil(2)) {
+            add_path(j, &mut keep, &mut left);
         }
-        for j in 0..n {
-            let p = js[j].parent;
-            if keep[j] && p != NO_PARENT && !keep[p as usize] {
-                keep[j] = false;
+        // 2. What hangs: every twig tip pointing down, with its path to the scaffold, the
+        //    largest hanging runs first (the mass carried where the run starts to point
+        //    down), so a weeping crown's curtains keep joints of their own to sway on
+        //    instead of folding into the limbs they hang from.
+        let mut has_child = vec![false; n];
+        for j in 1..n {
+            if used[j] {
+                has_child[js[j].parent as usize] = true;
+            }
+        }
+        let sk = &self.tree.skeleton;
+        let mut hanging: Vec<(f32, usize)> = (0..n)
+            .filter(|&j| used[j] && !has_child[j] && js[j].axis[2] < 0.0)
+            .map(|j| {
+                let mut start = j;
+                while js[start].parent != NO_PARENT && js[js[start].parent as usize].axis[2] < 0.0 {
+                    start = js[start].parent as usize;
+                }
+                (sk.carried_mass(start), j)
+            })
+            .collect();
+        hanging.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+        for &(_, j) in &hanging {
+            if left == 0 {
+                break;
+            }
+            add_path(j, &mut keep, &mut left);
+        }
+        // 3. The rest of the budget by carried mass, as the scaffold.
+        for &j in order.iter().filter(|&&j| used[j]) {
+            if left == 0 {
+                break;
+            }
+            if !keep[j] {
+                add_path(j, &mut keep, &mut left);
             }
         }
         keep
