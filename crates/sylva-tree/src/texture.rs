@@ -204,8 +204,8 @@ impl LeafShading {
         LeafShading {
             shape: species.leaf_shape,
             needle: is_needle(species),
-            base: lerp3([0.05, 0.15, 0.08], [0.26, 0.42, 0.08], shade),
-            tip: lerp3([0.09, 0.22, 0.12], [0.42, 0.56, 0.14], shade),
+            base: lerp3([0.07, 0.27, 0.15], [0.26, 0.42, 0.08], shade),
+            tip: lerp3([0.11, 0.34, 0.19], [0.42, 0.56, 0.14], shade),
         }
     }
 }
