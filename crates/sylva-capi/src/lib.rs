@@ -7,8 +7,11 @@
 //! (`SylvaInstance`: trunk base, yaw, scale, where its joint palettes lie, leaf flutter,
 //! cross-fade range, level tag), the buckets (one instanced draw per species and level) and
 //! the joint palettes (3×4 row-major matrices, rest pose → animated, tree space), indexed by
-//! the forest's joints in its LOD order (the meshes drawn with them are not yet handed out
-//! here). The arrays stay valid until the next `sylva_forest_frame` or `sylva_forest_free`.
+//! the forest's joints in its LOD order. The meshes those palettes skin are handed out per
+//! species and level (`sylva_species_mesh`: branch vertices and triangles, leaf cards),
+//! with the bark texture and the leaf atlas (`sylva_species_texture`), so a host can draw
+//! the trees itself. The frame arrays stay valid until the next `sylva_forest_frame` or
+//! `sylva_forest_free`; the meshes and textures until `sylva_forest_free`.
 //!
 //! Conventions: Z-up, metres, seconds, m/s. Errors: a function that fails returns NULL or
 //! a non-zero status and leaves a message for `sylva_last_error` on the calling thread.
@@ -19,9 +22,10 @@ use std::cell::RefCell;
 use std::ffi::{CStr, CString, c_char};
 
 use sylva_forest::{Bucket, Camera, Forest, FrameData, Instance, SceneSpec};
+use sylva_tree::mesh::LeafCluster;
 
 /// The version of this interface: raised by any change to a signature or a struct's layout.
-pub const SYLVA_ABI_VERSION: u32 = 1;
+pub const SYLVA_ABI_VERSION: u32 = 2;
 
 /// A forest and its last frame, behind an opaque pointer.
 #[derive(Debug)]
@@ -290,4 +294,144 @@ pub unsafe extern "C" fn sylva_forest_wind(
     let w = f.forest.wind_sample([p[0] as f64, p[1] as f64, p[2] as f64]);
     out.copy_from_slice(&w);
     0
+}
+
+/// The size of `SylvaLeafCard` in bytes, for a host to check its declaration against.
+#[unsafe(no_mangle)]
+pub extern "C" fn sylva_leaf_card_size() -> usize {
+    std::mem::size_of::<LeafCluster>()
+}
+
+/// The species of the forest's scene (0 for a NULL forest).
+///
+/// # Safety
+/// `f` is NULL or a live forest.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn sylva_species_count(f: *mut SylvaForest) -> u32 {
+    // SAFETY: guaranteed by the caller.
+    unsafe { forest(f) }.map_or(0, |f| f.forest.species.len() as u32)
+}
+
+/// The mesh levels of `species` (0 for a NULL forest or no such species): levels
+/// `0 … n − 1` are meshes, and a bucket of level `n` draws the species' impostor.
+///
+/// # Safety
+/// `f` is NULL or a live forest.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn sylva_species_levels(f: *mut SylvaForest, species: u32) -> u32 {
+    // SAFETY: guaranteed by the caller.
+    unsafe { forest(f) }
+        .and_then(|f| f.forest.species.get(species as usize))
+        .map_or(0, |s| s.model.lods.len() as u32)
+}
+
+/// One mesh level of a species, in tree space (before an instance's yaw, scale and
+/// position), in place: the branch vertices (`vertices` of them: 3 floats of position, 3
+/// of normal, 2 of bark texture coordinates, 4 joint indices and 4 weights each), the
+/// triangles (`indices` corners, counter-clockwise from outside) and the leaf cards. The
+/// joint indices are the forest's, so an instance's palettes skin the mesh as they are.
+#[repr(C)]
+#[derive(Debug, Clone, Copy)]
+pub struct SylvaMesh {
+    /// Branch vertices.
+    pub vertices: usize,
+    /// Rest positions, tree space, m: 3 floats a vertex.
+    pub positions: *const f32,
+    /// Unit normals: 3 floats a vertex.
+    pub normals: *const f32,
+    /// Bark texture coordinates: 2 floats a vertex.
+    pub uvs: *const f32,
+    /// Joint indices: 4 a vertex (unused slots repeat the first with weight 0).
+    pub joints: *const u32,
+    /// Joint weights: 4 a vertex, summing to 1.
+    pub weights: *const f32,
+    /// Triangle corners (3 a triangle).
+    pub indices: usize,
+    /// The corners' vertex indices.
+    pub index: *const u32,
+    /// Leaf cards.
+    pub cards: usize,
+    /// The cards (`SylvaLeafCard`: the Rust type `LeafCluster`).
+    pub card: *const LeafCluster,
+}
+
+/// Fill `out` with mesh `level` of `species` (see `SylvaMesh`). Returns 0; 1 for a NULL
+/// argument; 2 for a species or level out of range.
+///
+/// # Safety
+/// `f` is NULL or a live forest; `out` is NULL or points to a `SylvaMesh`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn sylva_species_mesh(
+    f: *mut SylvaForest,
+    species: u32,
+    level: u32,
+    out: *mut SylvaMesh,
+) -> i32 {
+    // SAFETY: guaranteed by the caller.
+    let (Some(f), Some(out)) = (unsafe { forest(f) }, unsafe { out.as_mut() }) else {
+        fail("sylva_species_mesh: forest or out is NULL".into());
+        return 1;
+    };
+    let Some(lod) =
+        f.forest.species.get(species as usize).and_then(|s| s.model.lods.get(level as usize))
+    else {
+        fail(format!("sylva_species_mesh: no species {species} with a mesh level {level}"));
+        return 2;
+    };
+    let b = &lod.branches;
+    *out = SylvaMesh {
+        vertices: b.positions.len(),
+        positions: b.positions.as_ptr().cast(),
+        normals: b.normals.as_ptr().cast(),
+        uvs: b.uvs.as_ptr().cast(),
+        joints: b.joints.as_ptr().cast(),
+        weights: b.weights.as_ptr().cast(),
+        indices: b.indices.len(),
+        index: b.indices.as_ptr(),
+        cards: lod.clusters.len(),
+        card: lod.clusters.as_ptr(),
+    };
+    0
+}
+
+/// A species' texture, RGBA8 (sRGB), rows top first: `which` 0 the bark (tiling; `u` around
+/// the stem, `v` along it), 1 the leaf atlas (`cells × cells` cells, a card showing cell
+/// `atlas` of it, alpha the leaves' outline). Sets `*width`, `*height` and, for the
+/// atlas, `*cells` (1 for the bark). NULL for a NULL forest, a species out of range or
+/// another `which`.
+///
+/// # Safety
+/// `f` is NULL or a live forest; `width`, `height` and `cells` are NULL or places for a
+/// `uint32_t` each.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn sylva_species_texture(
+    f: *mut SylvaForest,
+    species: u32,
+    which: u32,
+    width: *mut u32,
+    height: *mut u32,
+    cells: *mut u32,
+) -> *const u8 {
+    // SAFETY: guaranteed by the caller.
+    let Some(model) =
+        unsafe { forest(f) }.and_then(|f| f.forest.species.get(species as usize)).map(|s| &s.model)
+    else {
+        fail(format!("sylva_species_texture: no forest or no species {species}"));
+        return std::ptr::null();
+    };
+    let (image, n) = match which {
+        0 => (&model.bark, 1),
+        1 => (&model.leaves.image, model.leaves.cells),
+        _ => {
+            fail(format!("sylva_species_texture: which {which}: 0 (bark) or 1 (leaves)"));
+            return std::ptr::null();
+        }
+    };
+    for (place, v) in [(width, image.width), (height, image.height), (cells, n)] {
+        if !place.is_null() {
+            // SAFETY: checked non-NULL; the caller passes a place for a `uint32_t`.
+            unsafe { *place = v };
+        }
+    }
+    image.rgba.as_ptr()
 }

@@ -1,7 +1,7 @@
 //! The C interface from C: `tests/check.c`, compiled against `include/sylva.h` with the
 //! system's C compiler (`build.rs`, `-Wall -Werror`) and linked into this test, steps the
-//! small scene through the interface and writes what it reads; the same steps through the
-//! Rust API give the same bytes.
+//! small scene through the interface and writes what it reads (the frame, and every
+//! species' meshes and textures); the same through the Rust API give the same bytes.
 
 use std::ffi::{CString, c_char};
 
@@ -56,6 +56,31 @@ fn a_c_program_reads_the_frame_the_rust_api_builds_bit_for_bit() {
         }
     }
     want.extend(bytes(&forest.wind_sample([0.0, 0.0, 10.0])));
+    // The meshes and textures of every species, as the C program writes them.
+    want.extend_from_slice(&(forest.species.len() as u32).to_ne_bytes());
+    for sp in &forest.species {
+        let m = &sp.model;
+        want.extend_from_slice(&(m.lods.len() as u32).to_ne_bytes());
+        for lod in &m.lods {
+            let b = &lod.branches;
+            for n in [b.positions.len(), b.indices.len(), lod.clusters.len()] {
+                want.extend_from_slice(&(n as u64).to_ne_bytes());
+            }
+            want.extend(bytes(&b.positions));
+            want.extend(bytes(&b.normals));
+            want.extend(bytes(&b.uvs));
+            want.extend(bytes(&b.joints));
+            want.extend(bytes(&b.weights));
+            want.extend(bytes(&b.indices));
+            want.extend(bytes(&lod.clusters));
+        }
+        for (image, cells) in [(&m.bark, 1), (&m.leaves.image, m.leaves.cells)] {
+            for v in [image.width, image.height, cells] {
+                want.extend_from_slice(&v.to_ne_bytes());
+            }
+            want.extend_from_slice(&image.rgba);
+        }
+    }
     assert!(frame.palettes.len() > 1000 && !frame.buckets.is_empty());
     assert_eq!(got.len(), want.len(), "sizes");
     assert!(got == want, "the C program's frame differs from the Rust API's");

@@ -82,7 +82,9 @@ impl BranchMesh {
     }
 }
 
-/// One leaf-cluster card.
+/// One leaf-cluster card. Laid out as C lays out its fields (the C interface hands cards
+/// out in place).
+#[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LeafCluster {
     /// Joint the cluster hangs from.
