@@ -18,14 +18,27 @@ use winit::keyboard::{KeyCode, PhysicalKey};
 use winit::window::{Window, WindowId};
 
 /// The host's own object: a pillar 3 m square and 16 m tall, among the trees.
-const PILLAR: ([f32; 3], [f32; 3]) = ([4.0, 2.0, -1.0], [7.0, 5.0, 15.0]);
-const SHADER: &str = "
-@group(0) @binding(0) var<uniform> view_proj: mat4x4<f32>;
-struct Out { @builtin(position) pos: vec4<f32>, @location(0) shade: f32 };
-@vertex fn vs(@location(0) p: vec3<f32>, @location(1) shade: f32) -> Out {
-    return Out(view_proj * vec4(p, 1.0), shade);
+pub const PILLAR: ([f32; 3], [f32; 3]) = ([4.0, 2.0, -1.0], [7.0, 5.0, 15.0]);
+/// The pillar's shader: its 36 corners from the vertex index (face, triangle corner), a
+/// box from `lo` to `hi`, each face shaded by its index.
+fn shader() -> String {
+    let ((lo, hi), v) = (PILLAR, |p: [f32; 3]| format!("vec3({:?}, {:?}, {:?})", p[0], p[1], p[2]));
+    format!(
+        "@group(0) @binding(0) var<uniform> view_proj: mat4x4<f32>;
+struct Out {{ @builtin(position) pos: vec4<f32>, @location(0) shade: f32 }};
+@vertex fn vs(@builtin(vertex_index) i: u32) -> Out {{
+    var faces = array(vec4(0u, 1u, 3u, 2u), vec4(4u, 6u, 7u, 5u), vec4(0u, 4u, 5u, 1u),
+                      vec4(2u, 3u, 7u, 6u), vec4(0u, 2u, 6u, 4u), vec4(1u, 5u, 7u, 3u));
+    var corner = array(0u, 1u, 2u, 0u, 2u, 3u);
+    let c = faces[i / 6u][corner[i % 6u]];
+    let p = mix({}, {}, vec3<f32>(vec3(c & 1u, (c >> 1u) & 1u, c >> 2u)));
+    return Out(view_proj * vec4(p, 1.0), 0.3 + 0.13 * f32(i / 6u));
+}}
+@fragment fn fs(o: Out) -> @location(0) vec4<f32> {{ return vec4(o.shade, 0.1, o.shade, 1.0); }}",
+        v(lo),
+        v(hi)
+    )
 }
-@fragment fn fs(o: Out) -> @location(0) vec4<f32> { return vec4(o.shade, 0.1, o.shade, 1.0); }";
 
 /// Everything the host draws with: its pillar, its targets, and Sylva's forest.
 struct Scene {
@@ -36,7 +49,6 @@ struct Scene {
     pipeline: wgpu::RenderPipeline,
     uniform: wgpu::Buffer,
     bind: wgpu::BindGroup,
-    vertices: wgpu::Buffer,
     targets: (Option<wgpu::TextureView>, wgpu::TextureView),
     size: (u32, u32),
     angle: f32,
@@ -53,13 +65,8 @@ impl Scene {
         let dev = &gpu.device;
         let module = dev.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("pillar"),
-            source: wgpu::ShaderSource::Wgsl(SHADER.into()),
+            source: wgpu::ShaderSource::Wgsl(shader().into()),
         });
-        let vertex = wgpu::VertexBufferLayout {
-            array_stride: 16,
-            step_mode: wgpu::VertexStepMode::Vertex,
-            attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32],
-        };
         let pipeline = dev.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("pillar"),
             layout: None,
@@ -67,7 +74,7 @@ impl Scene {
                 module: &module,
                 entry_point: Some("vs"),
                 compilation_options: Default::default(),
-                buffers: &[Some(vertex)],
+                buffers: &[],
             },
             fragment: Some(wgpu::FragmentState {
                 module: &module,
@@ -87,14 +94,18 @@ impl Scene {
             multiview_mask: None,
             cache: None,
         });
-        let uniform = buffer(dev, &[0u8; 64], wgpu::BufferUsages::UNIFORM);
+        let uniform = dev.create_buffer(&wgpu::BufferDescriptor {
+            label: None,
+            size: 64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
         let bind = dev.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("pillar"),
             layout: &pipeline.get_bind_group_layout(0),
             entries: &[wgpu::BindGroupEntry { binding: 0, resource: uniform.as_entire_binding() }],
         });
-        let vertices = buffer(dev, &pillar_triangles(), wgpu::BufferUsages::VERTEX);
-        let targets = targets(&gpu, format, renderer.samples(), size);
+        let targets = renderer.host_targets(&gpu, size.0, size.1);
         let frame = FrameData::with_rows(size.1);
         Scene {
             gpu,
@@ -104,7 +115,6 @@ impl Scene {
             pipeline,
             uniform,
             bind,
-            vertices,
             targets,
             size,
             angle: 0.0,
@@ -143,7 +153,6 @@ impl Scene {
             dev.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("host") });
         {
             let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("pillar"),
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
                     view: color,
                     depth_slice: None,
@@ -161,13 +170,10 @@ impl Scene {
                     }),
                     stencil_ops: None,
                 }),
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
+                ..Default::default()
             });
             pass.set_pipeline(&self.pipeline);
             pass.set_bind_group(0, &self.bind, &[]);
-            pass.set_vertex_buffer(0, self.vertices.slice(..));
             pass.draw(0..if self.pillar { 36 } else { 0 }, 0..1);
         }
         let depth = &self.targets.1;
@@ -183,68 +189,10 @@ impl Scene {
     }
 }
 
-/// The pillar's 12 triangles: (position, shade) per vertex, sides shaded by facing.
-fn pillar_triangles() -> Vec<u8> {
+/// Corner `i` of the pillar (bit 0: x, bit 1: y, bit 2: z at the high side).
+pub fn corner(i: usize) -> [f32; 3] {
     let (lo, hi) = PILLAR;
-    let corner = |i: usize| {
-        [
-            if i & 1 == 0 { lo[0] } else { hi[0] },
-            if i & 2 == 0 { lo[1] } else { hi[1] },
-            if i & 4 == 0 { lo[2] } else { hi[2] },
-        ]
-    };
-    let faces: [([usize; 4], f32); 6] = [
-        ([0, 1, 3, 2], 0.3),
-        ([4, 6, 7, 5], 1.0),
-        ([0, 4, 5, 1], 0.6),
-        ([2, 3, 7, 6], 0.8),
-        ([0, 2, 6, 4], 0.5),
-        ([1, 5, 7, 3], 0.9),
-    ];
-    let mut out = Vec::new();
-    for (q, shade) in faces {
-        for k in [0, 1, 2, 0, 2, 3] {
-            for v in corner(q[k]).into_iter().chain([shade]) {
-                out.extend_from_slice(&v.to_le_bytes());
-            }
-        }
-    }
-    out
-}
-
-fn buffer(dev: &wgpu::Device, bytes: &[u8], usage: wgpu::BufferUsages) -> wgpu::Buffer {
-    let b = dev.create_buffer(&wgpu::BufferDescriptor {
-        label: None,
-        size: bytes.len() as u64,
-        usage: usage | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: true,
-    });
-    b.slice(..).get_mapped_range_mut().expect("mapped at creation").copy_from_slice(bytes);
-    b.unmap();
-    b
-}
-
-fn targets(
-    gpu: &Gpu,
-    format: wgpu::TextureFormat,
-    samples: u32,
-    (w, h): (u32, u32),
-) -> (Option<wgpu::TextureView>, wgpu::TextureView) {
-    let make = |format| {
-        gpu.device
-            .create_texture(&wgpu::TextureDescriptor {
-                label: None,
-                size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
-                mip_level_count: 1,
-                sample_count: samples,
-                dimension: wgpu::TextureDimension::D2,
-                format,
-                usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-                view_formats: &[],
-            })
-            .create_view(&wgpu::TextureViewDescriptor::default())
-    };
-    ((samples > 1).then(|| make(format)), make(DEPTH))
+    std::array::from_fn(|k| if i >> k & 1 == 0 { lo[k] } else { hi[k] })
 }
 
 /// The host's window: its surface and the scene drawn into it.
@@ -318,7 +266,7 @@ fn open(
 
 /// Offscreen: `frames` frames of 1/30 s drawn into a texture of the host's, the last one
 /// read back as RGBA8, rows top first.
-fn offscreen(size: (u32, u32), frames: usize, pillar: bool) -> Vec<u8> {
+pub fn offscreen(size: (u32, u32), frames: usize, pillar: bool) -> Vec<u8> {
     let instance = wgpu::Instance::default();
     let (adapter, device, queue) = open(&instance, None);
     let gpu = Gpu::from_host(&instance, &adapter, &device, &queue);
@@ -339,26 +287,7 @@ fn offscreen(size: (u32, u32), frames: usize, pillar: bool) -> Vec<u8> {
     for _ in 0..frames {
         scene.draw(1.0 / 30.0, &view);
     }
-    let row = (size.0 * 4).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
-    let read = buffer(&device, &vec![0; (row * size.1) as usize], wgpu::BufferUsages::MAP_READ);
-    let mut enc = device.create_command_encoder(&Default::default());
-    enc.copy_texture_to_buffer(
-        target.as_image_copy(),
-        wgpu::TexelCopyBufferInfo {
-            buffer: &read,
-            layout: wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(row),
-                rows_per_image: None,
-            },
-        },
-        wgpu::Extent3d { width: size.0, height: size.1, depth_or_array_layers: 1 },
-    );
-    queue.submit([enc.finish()]);
-    read.slice(..).map_async(wgpu::MapMode::Read, |r| r.expect("map"));
-    device.poll(wgpu::PollType::Wait { submission_index: None, timeout: None }).expect("poll");
-    let data = read.slice(..).get_mapped_range().expect("mapped");
-    data.chunks(row as usize).flat_map(|r| r[..(size.0 * 4) as usize].to_vec()).collect()
+    sylva_render::read_texture(&scene.gpu, &target).expect("read back")
 }
 
 fn main() {
@@ -375,56 +304,4 @@ fn main() {
     }
     let event_loop = EventLoop::new().expect("an event loop (a display)");
     event_loop.run_app(&mut App::default()).expect("event loop");
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The pillar and the trees hide each other: within the pillar's image some pixels are
-    /// the pillar's and some are the forest's own (trees and ground in front of it), the
-    /// same as in the frame drawn without the pillar.
-    #[test]
-    fn the_hosts_pillar_and_the_trees_hide_each_other() {
-        let (w, h) = (256u32, 192u32);
-        let (with, without) = (offscreen((w, h), 3, true), offscreen((w, h), 3, false));
-        let scene_camera = Camera {
-            eye: [40.0 * (-2.3f32).cos(), 40.0 * (-2.3f32).sin(), 9.0],
-            target: [0.0, 0.0, 7.0],
-            ..Forest::new(&SceneSpec::builtin("small").expect("scene"))
-                .expect("forest")
-                .default_camera()
-        };
-        let vp = scene_camera.view_projection(w as f32 / h as f32);
-        let (lo, hi) = PILLAR;
-        let (mut x0, mut x1, mut y0, mut y1) = (f32::MAX, f32::MIN, f32::MAX, f32::MIN);
-        for i in 0..8 {
-            let p = [
-                if i & 1 == 0 { lo[0] } else { hi[0] },
-                if i & 2 == 0 { lo[1] } else { hi[1] },
-                if i & 4 == 0 { lo[2] } else { hi[2] },
-            ];
-            let c: Vec<f32> =
-                (0..4).map(|r| (0..3).map(|k| vp[k][r] * p[k]).sum::<f32>() + vp[3][r]).collect();
-            let (x, y) =
-                ((c[0] / c[3] + 1.0) * 0.5 * w as f32, (1.0 - c[1] / c[3]) * 0.5 * h as f32);
-            (x0, x1, y0, y1) = (x0.min(x), x1.max(x), y0.min(y), y1.max(y));
-        }
-        let (mut pillar, mut forest, mut n) = (0, 0, 0);
-        for y in y0.max(0.0) as u32 + 1..(y1 as u32).min(h - 1) {
-            for x in x0.max(0.0) as u32 + 1..(x1 as u32).min(w - 1) {
-                let i = ((y * w + x) * 4) as usize;
-                let (a, b) = (&with[i..i + 3], &without[i..i + 3]);
-                n += 1;
-                let g = 2 * a[1].max(8) as u32;
-                pillar += (a[0] as u32 > g && a[2] as u32 > g) as usize;
-                forest += (a == b) as usize;
-            }
-        }
-        assert!(n > 100, "the pillar covers {n} pixels");
-        assert!(
-            pillar > n / 10 && forest > n / 20,
-            "pillar {pillar}, forest in front {forest} of {n}"
-        );
-    }
 }

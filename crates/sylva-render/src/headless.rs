@@ -163,49 +163,64 @@ impl Headless {
 
     /// The image last drawn, RGBA8 rows top first.
     pub fn read_back(&mut self) -> Result<Vec<u8>, RenderError> {
-        let mut enc = self
-            .gpu
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("copy") });
-        enc.copy_texture_to_buffer(
-            wgpu::TexelCopyTextureInfo {
-                texture: &self.target,
-                mip_level: 0,
-                origin: wgpu::Origin3d::ZERO,
-                aspect: wgpu::TextureAspect::All,
-            },
-            wgpu::TexelCopyBufferInfo {
-                buffer: &self.readback,
-                layout: wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(self.padded_row),
-                    rows_per_image: Some(self.height),
-                },
-            },
-            wgpu::Extent3d { width: self.width, height: self.height, depth_or_array_layers: 1 },
-        );
-        self.gpu.queue.submit([enc.finish()]);
-        let slice = self.readback.slice(..);
-        let (tx, rx) = std::sync::mpsc::channel();
-        slice.map_async(wgpu::MapMode::Read, move |r| {
-            let _ = tx.send(r);
-        });
-        self.gpu
-            .device
-            .poll(wgpu::PollType::Wait { submission_index: None, timeout: None })
-            .map_err(|e| RenderError::Readback(e.to_string()))?;
-        rx.recv()
-            .map_err(|e| RenderError::Readback(e.to_string()))?
-            .map_err(|e| RenderError::Readback(e.to_string()))?;
-        let mut out = Vec::with_capacity((self.width * self.height * 4) as usize);
-        {
-            let data =
-                slice.get_mapped_range().map_err(|e| RenderError::Readback(e.to_string()))?;
-            for row in data.chunks(self.padded_row as usize) {
-                out.extend_from_slice(&row[..(self.width * 4) as usize]);
-            }
-        }
-        self.readback.unmap();
-        Ok(out)
+        copy_out(&self.gpu, &self.target, &self.readback, self.padded_row)
     }
+}
+
+/// An RGBA8 texture's texels (a host's own target, `COPY_SRC`), rows top first: copied to
+/// a buffer of its own and read back, waiting for the GPU.
+pub fn read_texture(gpu: &Gpu, texture: &wgpu::Texture) -> Result<Vec<u8>, RenderError> {
+    let row = (texture.width() * 4).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
+    let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("read texture"),
+        size: u64::from(row) * u64::from(texture.height()),
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    copy_out(gpu, texture, &buffer, row)
+}
+
+/// Copy `texture` into `buffer` (rows `padded_row` bytes apart) and read it back.
+fn copy_out(
+    gpu: &Gpu,
+    texture: &wgpu::Texture,
+    buffer: &wgpu::Buffer,
+    padded_row: u32,
+) -> Result<Vec<u8>, RenderError> {
+    let (width, height) = (texture.width(), texture.height());
+    let mut enc =
+        gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("copy") });
+    enc.copy_texture_to_buffer(
+        texture.as_image_copy(),
+        wgpu::TexelCopyBufferInfo {
+            buffer,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(padded_row),
+                rows_per_image: Some(height),
+            },
+        },
+        wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+    );
+    gpu.queue.submit([enc.finish()]);
+    let slice = buffer.slice(..);
+    let (tx, rx) = std::sync::mpsc::channel();
+    slice.map_async(wgpu::MapMode::Read, move |r| {
+        let _ = tx.send(r);
+    });
+    gpu.device
+        .poll(wgpu::PollType::Wait { submission_index: None, timeout: None })
+        .map_err(|e| RenderError::Readback(e.to_string()))?;
+    rx.recv()
+        .map_err(|e| RenderError::Readback(e.to_string()))?
+        .map_err(|e| RenderError::Readback(e.to_string()))?;
+    let mut out = Vec::with_capacity((width * height * 4) as usize);
+    {
+        let data = slice.get_mapped_range().map_err(|e| RenderError::Readback(e.to_string()))?;
+        for row in data.chunks(padded_row as usize) {
+            out.extend_from_slice(&row[..(width * 4) as usize]);
+        }
+    }
+    buffer.unmap();
+    Ok(out)
 }

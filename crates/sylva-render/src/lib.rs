@@ -39,7 +39,7 @@ mod timer;
 
 pub use egui;
 pub use gpu::{Gpu, RenderError};
-pub use headless::Headless;
+pub use headless::{Headless, read_texture};
 pub use passes::panel::{PanelFrame, PanelPass};
 pub use passtimes::PARTS as PASS_PARTS;
 pub use renderer::{Overlay, Renderer, SceneAssets};

@@ -294,6 +294,20 @@ impl Renderer {
         self.timing.as_ref().and_then(|t| t.latest())
     }
 
+    /// Targets for a host that draws its own objects before the forest
+    /// ([`encode_over`](Self::encode_over)), made as the renderer makes its own: the
+    /// multisampled colour target in [`format`](Self::format) (`None` at one sample: the
+    /// host's colour target is drawn into directly) and the depth target
+    /// ([`DEPTH`](crate::DEPTH)), both `width × height` at [`samples`](Self::samples).
+    pub fn host_targets(
+        &self,
+        gpu: &Gpu,
+        width: u32,
+        height: u32,
+    ) -> (Option<wgpu::TextureView>, wgpu::TextureView) {
+        targets(&gpu.device, self.format(), self.samples(), width, height)
+    }
+
     /// MSAA sample count in use.
     pub fn samples(&self) -> u32 {
         self.samples
