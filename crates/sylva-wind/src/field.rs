@@ -207,6 +207,8 @@ fn advise_huge_pages(data: &mut [f32]) {
             unsafe { libc::madvise(a as *mut libc::c_void, b - a, libc::MADV_HUGEPAGE) };
         }
     }
+    #[cfg(not(target_os = "linux"))]
+    let _ = data;
 }
 
 /// What a loop on `grid` captures of the model variance of `params`.

@@ -132,8 +132,9 @@ pub enum ForestError {
 
 /// Default cap on the animation state of a forest (angles, rates, blend weights, loads and
 /// palettes of every simulated joint), bytes: 6 GB. A scene sets its own with
-/// `max_state_mb`.
-pub const MAX_STATE_BYTES: usize = 6_000_000_000;
+/// `max_state_mb`. (On a 32-bit target, such as WebAssembly, the whole address space.)
+pub const MAX_STATE_BYTES: usize =
+    if usize::MAX as u64 > 6_000_000_000 { 6_000_000_000u64 as usize } else { usize::MAX };
 
 /// What a viewer shows of one tree ([`Forest::tree_info`]).
 #[derive(Debug, Clone, PartialEq)]

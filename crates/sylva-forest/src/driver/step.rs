@@ -1,8 +1,6 @@
 //! One simulation step: the animation LOD's joints per lane group within the memory cap,
 //! the wind sampled per instance group, leaf flutter, and the batched sway step.
 
-use std::time::Instant;
-
 use rayon::prelude::*;
 use sylva_sway::{LANES, LeafParams, STATE_BYTES};
 use sylva_wind::{NearField, OwnedPyramid};
@@ -37,7 +35,7 @@ impl Forest {
         if !(dt > 0.0 && dt.is_finite()) {
             return;
         }
-        let start = Instant::now();
+        let start = clock();
         self.time += dt as f64;
         self.regroup();
         let inputs = StepInputs {
@@ -75,7 +73,7 @@ impl Forest {
             }
             _ => self.species.par_iter_mut().for_each(work),
         }
-        self.last_sim_ms = start.elapsed().as_secs_f64() * 1e3;
+        self.last_sim_ms = start.map_or(0.0, |s| s.elapsed().as_secs_f64() * 1e3);
     }
 }
 
@@ -204,4 +202,15 @@ fn tilt_along(shear: [f32; 2], t: [f32; 3]) -> [f32; 2] {
     let len = (shear[0] * shear[0] + shear[1] * shear[1]).sqrt();
     let along = if len > 1e-6 { (t[0] * shear[0] + t[1] * shear[1]) / len } else { 0.0 };
     [along, 1.0 - t[2]]
+}
+
+/// Now, for timing a step; `None` on WebAssembly without an operating system
+/// (`wasm32-unknown-unknown`), whose standard library has no clock (a step there reports
+/// 0 ms).
+fn clock() -> Option<std::time::Instant> {
+    if cfg!(all(target_family = "wasm", target_os = "unknown")) {
+        None
+    } else {
+        Some(std::time::Instant::now())
+    }
 }
