@@ -90,23 +90,25 @@ class Field:
         return np.asarray(self.grid["zs"])
 
     def to_xarray(self):
-        """The field as an ``xarray.Dataset`` with variables u, v, w over (t, z, y, x) and the
-        model and synthesis settings as attributes (needs the ``xarray`` package)."""
+        """The field as an ``xarray.Dataset`` laid out as Sylva's Zarr stores are, so that
+        ``xarray.open_zarr(path, consolidated=False)`` on a store of the same field gives the same array: the
+        variable ``wind`` over ``(time, component, z, y, x)`` in m/s (``u`` includes the
+        mean wind), the coordinates ``time`` (s), ``z``, ``y``, ``x`` (m) with their units,
+        ``component`` labelled ``u``, ``v``, ``w`` (``ds.wind.sel(component="u")``), and
+        the model and synthesis settings as attributes (needs the ``xarray`` package)."""
         import xarray as xr
 
         coords = {
-            "t": ("t", self.t, {"units": "s"}),
+            "time": ("time", self.t, {"units": "s"}),
+            "component": ("component", list(COMPONENTS)),
             "z": ("z", self.z, {"units": "m"}),
             "y": ("y", self.y, {"units": "m"}),
             "x": ("x", self.x, {"units": "m"}),
         }
-        variables = {
-            c: (("t", "z", "y", "x"), self.data[:, k], {"units": "m/s"})
-            for k, c in enumerate(COMPONENTS)
-        }
+        wind = (("time", "component", "z", "y", "x"), self.data, {"units": "m/s"})
         attrs = {f"param_{k}": json.dumps(v) for k, v in self.params.items()}
         attrs.update({"seed": self.synth["seed"], "method": self.synth["method"]})
-        return xr.Dataset(variables, coords=coords, attrs=attrs)
+        return xr.Dataset({"wind": wind}, coords=coords, attrs=attrs)
 
     def _meta_json(self) -> str:
         return json.dumps(

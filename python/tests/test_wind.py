@@ -152,9 +152,33 @@ def test_spectrum_area_is_the_variance():
 
 def test_xarray_dataset_when_available():
     xr = pytest.importorskip("xarray")
-    ds = small().to_xarray()
-    assert set(ds.data_vars) == {"u", "v", "w"} and ds["u"].dims == ("t", "z", "y", "x")
+    f = small()
+    ds = f.to_xarray()
+    assert set(ds.data_vars) == {"wind"}
+    assert ds["wind"].dims == ("time", "component", "z", "y", "x")
     assert isinstance(ds, xr.Dataset) and ds.attrs["seed"] == 3
+    # Components by label; coordinates with their units.
+    assert np.array_equal(ds.wind.sel(component="w").values, f.data[:, 2])
+    assert ds.time.attrs["units"] == "s" and ds.x.attrs["units"] == "m"
+    assert ds.wind.attrs["units"] == "m/s"
+
+
+def test_one_layout_in_memory_in_zarr_and_read_back(tmp_path):
+    # A store written by the command line, opened by xarray itself, holds the array that
+    # `read(...).to_xarray()` gives, on the same dimensions and coordinates.
+    xr = pytest.importorskip("xarray")
+    pytest.importorskip("zarr")
+    out = tmp_path / "f.zarr"
+    r = cli("wind", "generate", "--preset", "breeze", "--nx", "40", "--ny", "6", "--heights",
+            "20", "--frames", "64", "--seed", "5", "--out", str(out))
+    assert r.returncode == 0, r.stderr
+    ours = sw.read(out).to_xarray()
+    theirs = xr.open_zarr(out, consolidated=False)
+    assert theirs["wind"].dims == ours["wind"].dims
+    assert np.array_equal(theirs["wind"].values, ours["wind"].values)
+    for c in ("time", "z", "y", "x"):
+        assert np.array_equal(theirs[c].values, ours[c].values), c
+        assert theirs[c].attrs["units"] == ours[c].attrs["units"], c
 
 
 def test_stats_are_the_command_lines(tmp_path):
