@@ -428,9 +428,9 @@ fn a_stand_drawn_as_impostors_keeps_the_brightness_of_full_detail_under_shadows(
     // (its mean over the leaves' depths, the outer texel of the shadow map left lit)
     // 1.016 0.987 0.993 | 0.995 0.987 0.987 | 0.999 0.983 0.982 | 0.978 (2.2 %, 1.25 %;
     // at one depth, half a free path, nothing left lit: 3.3 %, 1.24 %).
-    // With the fir's and the oak's lighter foliage (the crowns a larger share of the
-    // image) and the extinction at 1.25 instead of 1.5: 1.009 0.986 0.996 | 0.987 0.985
-    // 0.989 | 0.979 0.983 0.983 | 0.962 (3.8 %, 1.4 %).
+    // With the fir's and the oak's lighter foliage and the maple's denser crown (the
+    // crowns a larger share of the image) and the extinction at 1.1 instead of 1.5:
+    // 1.004 0.978 0.994 | 0.977 0.991 0.990 | 0.972 0.995 0.988 | 0.962 (3.8 %, 1.6 %).
     let (mut full, mut spec) = stand(200, "calm");
     full.lighting.shadows = true;
     spec.lighting.shadows = true;

@@ -67,7 +67,7 @@ pub const BAKE_FINEST: usize = 1;
 /// detail in scenes B, C and D and in a stand seen from several sides
 /// (`a_stand_drawn_as_impostors_keeps_the_brightness_of_full_detail_under_shadows` holds
 /// the stand's brightness to full detail's; docs/decisions/0005-impostors.md).
-pub const CROWN_EXTINCTION: f32 = 1.25;
+pub const CROWN_EXTINCTION: f32 = 1.1;
 
 /// The crown of leaf `clusters` as an ellipsoid about the trunk axis: centre height,
 /// horizontal and vertical radii (those of a uniformly filled ellipsoid with the clusters'
