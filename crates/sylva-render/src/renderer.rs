@@ -99,6 +99,9 @@ pub struct Renderer {
     depth: wgpu::TextureView,
     lighting: Lighting,
     overlay: Overlay,
+    /// Where the image's centre of projection lies, in clip-space x (see
+    /// [`Renderer::set_view_shift`]).
+    view_shift: f32,
     /// Timestamps between the passes, once [`Renderer::time_passes`] turned them on.
     timing: Option<PassTimes>,
 }
@@ -260,6 +263,7 @@ impl Renderer {
             depth,
             lighting: assets.lighting,
             overlay: Overlay::Off,
+            view_shift: 0.0,
             timing: None,
         })
     }
@@ -316,6 +320,15 @@ impl Renderer {
     /// The colour format it draws.
     pub fn format(&self) -> wgpu::TextureFormat {
         self.format
+    }
+
+    /// Move the camera's centre of projection `shift` of the image's half-width to the
+    /// right (clip-space x, −1 … 1; 0 by default): a panel covering the left `p` pixels of
+    /// a `w`-pixel window sets `p / w`, so the scene is centred in the part left free. The
+    /// frustum is not narrowed: what moves off the right edge was inside the camera's
+    /// field of view, and what comes in on the left lies under the panel.
+    pub fn set_view_shift(&mut self, shift: f32) {
+        self.view_shift = if shift.is_finite() { shift.clamp(-1.0, 1.0) } else { 0.0 };
     }
 
     /// Palette windows the last frame was bound through (1 when its palettes fit one
@@ -436,7 +449,12 @@ impl Renderer {
         attach: Attach<'_>,
     ) {
         let aspect = self.width as f32 / self.height as f32;
-        let mut g = Globals::for_camera(camera, aspect, frame.time as f32, &self.lighting);
+        let mut view_proj = camera.view_projection(aspect);
+        // Clip-space x += shift · w: the image's centre moves right by `shift`.
+        for column in &mut view_proj {
+            column[0] += self.view_shift * column[3];
+        }
+        let mut g = Globals::new(view_proj, camera.eye, frame.time as f32, &self.lighting);
         g.overlay = match self.overlay {
             Overlay::Off => 0.0,
             Overlay::Level => 1.0,

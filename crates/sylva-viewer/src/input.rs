@@ -103,7 +103,10 @@ impl Controls {
                     && self.dragged <= CLICK_SLOP
                     && let Some((x, y)) = self.cursor
                 {
-                    let (o, d) = v.orbit.ray(x as f32, y as f32, width, height);
+                    // The pixel as the unshifted camera sees it (the view is centred
+                    // beside the panel: `Viewer::view_shift`).
+                    let x = x as f32 - 0.5 * v.view_shift * width;
+                    let (o, d) = v.orbit.ray(x, y as f32, width, height);
                     v.apply(Action::Select(v.forest.pick(o, d)));
                 }
                 self.dragging = false;

@@ -195,10 +195,18 @@ impl App {
         // The panel first; what it asks for applies now, and shows from the next frame on.
         let mut actions = Vec::new();
         let with_panel = v.panel || v.help || v.clock.slow;
+        if !v.panel {
+            v.view_shift = 0.0;
+        }
         if with_panel {
             let raw = s.egui.take_egui_input(&s.window);
             let ctx = s.egui.egui_ctx().clone();
-            let full = ctx.run_ui(raw, |ui| panel::show(ui, v, &mut self.draft, &mut actions));
+            let mut panel_width = 0.0;
+            let full = ctx.run_ui(raw, |ui| {
+                panel_width = panel::show(ui, v, &mut self.draft, &mut actions);
+            });
+            // The scene centred in what the panel leaves free.
+            v.view_shift = (panel_width * full.pixels_per_point / w as f32).clamp(0.0, 0.9);
             s.egui.handle_platform_output(&s.window, full.platform_output);
             s.pending.primitives = ctx.tessellate(full.shapes, full.pixels_per_point);
             s.pending.textures.append(full.textures_delta);
@@ -220,6 +228,7 @@ impl App {
         let camera = v.orbit.camera();
         let began = Instant::now();
         s.renderer.set_overlay(v.overlay);
+        s.renderer.set_view_shift(v.view_shift);
         if v.gpu_passes {
             s.renderer.time_passes(&s.gpu);
         } else {

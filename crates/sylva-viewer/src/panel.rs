@@ -33,11 +33,14 @@ impl Draft {
 }
 
 /// Draw the panel (when shown), the key help (when asked) and the slow-motion mark.
-pub fn show(ui: &mut Ui, v: &Viewer, draft: &mut Draft, out: &mut Vec<Action>) {
+/// Returns the width the panel takes on the left, in egui points (0 without it).
+pub fn show(ui: &mut Ui, v: &Viewer, draft: &mut Draft, out: &mut Vec<Action>) -> f32 {
+    let mut width = 0.0;
     if v.panel {
-        egui::Panel::left("sylva-panel").default_size(300.0).show(ui, |ui| {
+        let shown = egui::Panel::left("sylva-panel").default_size(300.0).show(ui, |ui| {
             egui::ScrollArea::vertical().show(ui, |ui| contents(ui, v, draft, out));
         });
+        width = shown.response.rect.width();
     }
     if v.clock.slow {
         egui::Area::new(egui::Id::unique("slow"))
@@ -66,6 +69,7 @@ pub fn show(ui: &mut Ui, v: &Viewer, draft: &mut Draft, out: &mut Vec<Action>) {
             });
         });
     }
+    width
 }
 
 fn contents(ui: &mut Ui, v: &Viewer, draft: &mut Draft, out: &mut Vec<Action>) {

@@ -264,6 +264,10 @@ pub struct Viewer {
     pub error: Option<String>,
     /// Panel shown.
     pub panel: bool,
+    /// Where the 3-D view's centre lies, in clip-space x: the panel's share of the window's
+    /// width while it shows (so the scene is centred beside it), else 0
+    /// (`Renderer::set_view_shift`; picking takes it off the cursor).
+    pub view_shift: f32,
     /// Key help shown.
     pub help: bool,
     /// The renderer's colour overlay.
@@ -321,6 +325,7 @@ impl Viewer {
             job: None,
             error: None,
             panel: true,
+            view_shift: 0.0,
             help: false,
             overlay: sylva_render::Overlay::Off,
             gpu_passes: false,

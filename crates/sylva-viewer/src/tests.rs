@@ -255,7 +255,8 @@ fn project(v: &Viewer, p: [f32; 3], w: f32, h: f32) -> (f64, f64) {
     let clip: [f32; 4] =
         std::array::from_fn(|r| (0..3).map(|c| m[c][r] * p[c]).sum::<f32>() + m[3][r]);
     let (x, y) = (clip[0] / clip[3], clip[1] / clip[3]);
-    (((x + 1.0) * 0.5 * w) as f64, ((1.0 - y) * 0.5 * h) as f64)
+    // The image's centre is moved right by the panel's share (`Viewer::view_shift`).
+    (((x + v.view_shift + 1.0) * 0.5 * w) as f64, ((1.0 - y) * 0.5 * h) as f64)
 }
 
 #[test]
@@ -263,27 +264,32 @@ fn clicking_a_tree_selects_it_and_dragging_orbits_instead() {
     let mut v = viewer(5);
     let mut c = Controls::default();
     let (w, h) = (800.0, 600.0);
-    // Each tree, clicked at the middle of its trunk, is picked (or one standing in front).
-    let mut hits = 0;
-    for t in 0..v.forest.trees() {
-        let p = v.forest.placement(t).expect("tree");
-        let height = v.forest.tree_info(t).expect("info").height;
-        let mid = [p.position[0], p.position[1], p.position[2] + 0.4 * height];
-        let (x, y) = project(&v, mid, w, h);
-        if !(0.0..w as f64).contains(&x) || !(0.0..h as f64).contains(&y) {
-            continue;
+    // Each tree, clicked at the middle of its trunk, is picked (or one standing in front),
+    // with the view centred in the whole window and beside a panel taking 30 % of it.
+    for shift in [0.0f32, 0.3] {
+        v.view_shift = shift;
+        let mut hits = 0;
+        for t in 0..v.forest.trees() {
+            let p = v.forest.placement(t).expect("tree");
+            let height = v.forest.tree_info(t).expect("info").height;
+            let mid = [p.position[0], p.position[1], p.position[2] + 0.4 * height];
+            let (x, y) = project(&v, mid, w, h);
+            if !(0.0..w as f64).contains(&x) || !(0.0..h as f64).contains(&y) {
+                continue;
+            }
+            for i in [Input::Cursor(x, y), Input::Left(true), Input::Left(false)] {
+                c.handle(&mut v, i, w, h);
+            }
+            let s = v.selected.expect("a click on a trunk selects a tree");
+            let eye = v.orbit.camera().eye;
+            let dist = |q: [f32; 3]| ((q[0] - eye[0]).powi(2) + (q[1] - eye[1]).powi(2)).sqrt();
+            let chosen = v.forest.placement(s).expect("selected").position;
+            assert!(s == t || dist(chosen) < dist(p.position), "tree {t}: picked {s}, behind it");
+            hits += (s == t) as usize;
         }
-        for i in [Input::Cursor(x, y), Input::Left(true), Input::Left(false)] {
-            c.handle(&mut v, i, w, h);
-        }
-        let s = v.selected.expect("a click on a trunk selects a tree");
-        let eye = v.orbit.camera().eye;
-        let dist = |q: [f32; 3]| ((q[0] - eye[0]).powi(2) + (q[1] - eye[1]).powi(2)).sqrt();
-        let chosen = v.forest.placement(s).expect("selected").position;
-        assert!(s == t || dist(chosen) < dist(p.position), "tree {t}: picked {s}, behind it");
-        hits += (s == t) as usize;
+        assert!(hits >= 2, "only {hits} trees picked where they stand");
     }
-    assert!(hits >= 2, "only {hits} trees picked where they stand");
+    v.view_shift = 0.0;
     // A click where no trunk stands (the first such pixel of the top row) selects nothing.
     let empty = (0..80)
         .map(|k| (10.0 * k as f32, 2.0))
@@ -346,8 +352,12 @@ fn the_panel_renders_headless_like_its_golden_image() {
     let mut draft = Draft::of(&v);
     let mut actions = Vec::new();
     // Two passes: the first lays out, the second draws settled sizes.
-    let first = ctx.run_ui(raw.clone(), |ui| panel::show(ui, &v, &mut draft, &mut actions));
-    let full = ctx.run_ui(raw, |ui| panel::show(ui, &v, &mut draft, &mut actions));
+    let first = ctx.run_ui(raw.clone(), |ui| {
+        panel::show(ui, &v, &mut draft, &mut actions);
+    });
+    let full = ctx.run_ui(raw, |ui| {
+        panel::show(ui, &v, &mut draft, &mut actions);
+    });
     assert!(actions.is_empty(), "drawing alone changes nothing: {actions:?}");
     let mut textures = first.textures_delta;
     textures.append(full.textures_delta);

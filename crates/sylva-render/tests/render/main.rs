@@ -600,3 +600,29 @@ fn the_level_overlay_tints_each_tree_by_the_level_it_is_drawn_at() {
     assert!(!impostors || cyan > 20, "impostors drawn: {impostors}, cyan pixels {cyan}");
     assert!(warm > warm_before + 200, "mesh levels tinted warm: {warm} vs {warm_before}");
 }
+
+#[test]
+fn a_view_shift_moves_the_image_sideways_and_nothing_else() {
+    // A panel over the left of a window: the scene is drawn centred in what is left, the
+    // same picture moved right by the shift's share of half the width (here 32 pixels of
+    // 256), so column x of the plain image is column x + 32 of the shifted one.
+    let spec = SceneSpec::builtin("small").expect("small");
+    let (mut gpu, frame, camera) = one_frame(&spec, None);
+    let plain = gpu.render(&frame, &camera).expect("render");
+    gpu.renderer_mut().set_view_shift(0.25);
+    let shifted = gpu.render(&frame, &camera).expect("render");
+    let dx = (0.25 * 0.5 * W as f32).round() as u32;
+    let diff = |offset: u32| {
+        let mut sum = 0i64;
+        for y in 0..H {
+            for x in 0..W - dx {
+                let (a, b) = (px(&plain, x, y), px(&shifted, x + offset, y));
+                sum += (0..3).map(|k| (a[k] - b[k]).abs() as i64).sum::<i64>();
+            }
+        }
+        sum as f64 / (3 * H * (W - dx)) as f64
+    };
+    let (moved, unmoved) = (diff(dx), diff(0));
+    eprintln!("mean |Δ| moved back {moved:.3}, in place {unmoved:.3}");
+    assert!(moved < 2.0 && unmoved > 4.0 * moved, "moved: {moved:.2}, in place: {unmoved:.2}");
+}
