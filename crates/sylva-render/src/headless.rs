@@ -203,6 +203,17 @@ fn copy_out(
         wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
     );
     gpu.queue.submit([enc.finish()]);
+    map_rows(gpu, buffer, width, padded_row)
+}
+
+/// Wait for the GPU, map `buffer` and read its rows (`padded_row` bytes apart) of `width`
+/// RGBA8 texels each, unpadded; the buffer is unmapped again.
+pub(crate) fn map_rows(
+    gpu: &Gpu,
+    buffer: &wgpu::Buffer,
+    width: u32,
+    padded_row: u32,
+) -> Result<Vec<u8>, RenderError> {
     let slice = buffer.slice(..);
     let (tx, rx) = std::sync::mpsc::channel();
     slice.map_async(wgpu::MapMode::Read, move |r| {
@@ -214,7 +225,7 @@ fn copy_out(
     rx.recv()
         .map_err(|e| RenderError::Readback(e.to_string()))?
         .map_err(|e| RenderError::Readback(e.to_string()))?;
-    let mut out = Vec::with_capacity((width * height * 4) as usize);
+    let mut out = Vec::new();
     {
         let data = slice.get_mapped_range().map_err(|e| RenderError::Readback(e.to_string()))?;
         for row in data.chunks(padded_row as usize) {

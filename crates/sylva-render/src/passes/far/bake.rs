@@ -336,29 +336,5 @@ pub(super) fn read_back(
         })
         .collect();
     gpu.queue.submit([enc.finish()]);
-    let mut out = Vec::with_capacity(buffers.len());
-    for b in &buffers {
-        let slice = b.slice(..);
-        let (tx, rx) = std::sync::mpsc::channel();
-        slice.map_async(wgpu::MapMode::Read, move |r| {
-            let _ = tx.send(r);
-        });
-        gpu.device
-            .poll(wgpu::PollType::Wait { submission_index: None, timeout: None })
-            .map_err(|e| RenderError::Readback(e.to_string()))?;
-        rx.recv()
-            .map_err(|e| RenderError::Readback(e.to_string()))?
-            .map_err(|e| RenderError::Readback(e.to_string()))?;
-        let mut img = Vec::with_capacity((w * h * 4) as usize);
-        {
-            let data =
-                slice.get_mapped_range().map_err(|e| RenderError::Readback(e.to_string()))?;
-            for row in data.chunks(padded as usize) {
-                img.extend_from_slice(&row[..(w * 4) as usize]);
-            }
-        }
-        b.unmap();
-        out.push(img);
-    }
-    Ok(out)
+    buffers.iter().map(|b| crate::headless::map_rows(gpu, b, w, padded)).collect()
 }
