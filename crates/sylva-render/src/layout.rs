@@ -94,9 +94,21 @@ impl Globals {
         }
     }
 
-    /// The globals of a perspective `camera` for an image of `aspect` = width / height.
-    pub fn for_camera(camera: &Camera, aspect: f32, time: f32, light: &Lighting) -> Globals {
-        Globals::new(camera.view_projection(aspect), camera.eye, time, light)
+    /// The globals of a perspective `camera` for an image of `aspect` = width / height,
+    /// its centre of projection moved `view_shift` of the half-width to the right
+    /// (clip-space x += `view_shift` · w; see `Renderer::set_view_shift`).
+    pub fn for_camera(
+        camera: &Camera,
+        aspect: f32,
+        view_shift: f32,
+        time: f32,
+        light: &Lighting,
+    ) -> Globals {
+        let mut view_proj = camera.view_projection(aspect);
+        for column in &mut view_proj {
+            column[0] += view_shift * column[3];
+        }
+        Globals::new(view_proj, camera.eye, time, light)
     }
 }
 

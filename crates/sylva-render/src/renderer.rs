@@ -449,12 +449,8 @@ impl Renderer {
         attach: Attach<'_>,
     ) {
         let aspect = self.width as f32 / self.height as f32;
-        let mut view_proj = camera.view_projection(aspect);
-        // Clip-space x += shift · w: the image's centre moves right by `shift`.
-        for column in &mut view_proj {
-            column[0] += self.view_shift * column[3];
-        }
-        let mut g = Globals::new(view_proj, camera.eye, frame.time as f32, &self.lighting);
+        let mut g =
+            Globals::for_camera(camera, aspect, self.view_shift, frame.time as f32, &self.lighting);
         g.overlay = match self.overlay {
             Overlay::Off => 0.0,
             Overlay::Level => 1.0,

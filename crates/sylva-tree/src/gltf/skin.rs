@@ -80,8 +80,8 @@ impl TreeModel {
         //    down), so a weeping crown's curtains keep joints of their own to sway on
         //    instead of folding into the limbs they hang from.
         let mut has_child = vec![false; n];
-        for j in 1..n {
-            if used[j] {
+        for j in 0..n {
+            if used[j] && js[j].parent != NO_PARENT {
                 has_child[js[j].parent as usize] = true;
             }
         }
