@@ -46,7 +46,7 @@ fn nvidia_hint(nvidia: bool, chosen: bool) -> Option<&'static str> {
 }
 
 /// An adapter, its device and queue.
-#[derive(Debug)]
+#[derive(Debug, Clone)]
 pub struct Gpu {
     /// The wgpu instance.
     pub instance: wgpu::Instance,

@@ -41,16 +41,7 @@ impl Headless {
             return Err(RenderError::Size(width, height, max));
         }
         let renderer = Renderer::for_forest(&gpu, forest, FORMAT, width, height)?;
-        let target = gpu.device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("capture"),
-            size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: FORMAT,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        });
+        let target = capture_texture(&gpu.device, (width, height), FORMAT, "capture");
         let view = target.create_view(&wgpu::TextureViewDescriptor::default());
         let padded_row = (width * 4).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
         let readback = gpu.device.create_buffer(&wgpu::BufferDescriptor {
@@ -165,6 +156,26 @@ impl Headless {
     pub fn read_back(&mut self) -> Result<Vec<u8>, RenderError> {
         copy_out(&self.gpu, &self.target, &self.readback, self.padded_row)
     }
+}
+
+/// A single-sampled texture of `size` pixels to draw into and read back
+/// ([`read_texture`]): a render attachment that copies out.
+pub fn capture_texture(
+    device: &wgpu::Device,
+    (width, height): (u32, u32),
+    format: wgpu::TextureFormat,
+    label: &str,
+) -> wgpu::Texture {
+    device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    })
 }
 
 /// An RGBA8 texture's texels (a host's own target, `COPY_SRC`), rows top first: copied to

@@ -39,10 +39,10 @@ mod timer;
 
 pub use egui;
 pub use gpu::{Gpu, RenderError};
-pub use headless::{Headless, read_texture};
+pub use headless::{Headless, capture_texture, read_texture};
 pub use passes::panel::{PanelFrame, PanelPass};
 pub use passtimes::PARTS as PASS_PARTS;
 pub use renderer::{Overlay, Renderer, SceneAssets};
-pub use shared::{DEPTH, SHADER_PARTS, SHADERS, shader_source};
+pub use shared::{DEPTH, SHADER_PARTS, SHADERS, host_depth_state, shader_source};
 pub use timer::GpuTimer;
 pub use wgpu;

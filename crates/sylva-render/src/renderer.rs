@@ -317,6 +317,11 @@ impl Renderer {
         self.samples
     }
 
+    /// The size of the image it draws, `(width, height)` pixels.
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
     /// The colour format it draws.
     pub fn format(&self) -> wgpu::TextureFormat {
         self.format

@@ -5,8 +5,22 @@ use wgpu::util::DeviceExt;
 
 use crate::gpu::Gpu;
 
-/// Depth buffer format.
+/// Depth buffer format. Depth is not reversed: 0 at the near plane, 1 at the far one,
+/// cleared to 1, nearer wins ([`host_depth_state`]).
 pub const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+/// The depth state a host's own opaque pipeline needs to share a depth buffer with the
+/// forest ([`Renderer::encode_over`](crate::Renderer::encode_over)): [`DEPTH`], written,
+/// nearer (smaller) wins, as the forest's own opaque passes test.
+pub fn host_depth_state() -> wgpu::DepthStencilState {
+    wgpu::DepthStencilState {
+        format: DEPTH,
+        depth_write_enabled: Some(true),
+        depth_compare: Some(wgpu::CompareFunction::Less),
+        stencil: Default::default(),
+        bias: Default::default(),
+    }
+}
 
 const COMMON: &str = include_str!("common.wgsl");
 

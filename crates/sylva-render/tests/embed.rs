@@ -5,8 +5,14 @@
 #[path = "../examples/embed.rs"]
 mod embed;
 
-use embed::{corner, offscreen};
+use embed::{PILLAR, offscreen};
 use sylva_forest::{Camera, Forest, SceneSpec};
+
+/// Corner `i` of the pillar (bit 0: x, bit 1: y, bit 2: z at the high side).
+fn corner(i: usize) -> [f32; 3] {
+    let (lo, hi) = PILLAR;
+    std::array::from_fn(|k| if i >> k & 1 == 0 { lo[k] } else { hi[k] })
+}
 
 /// The pillar and the trees hide each other: within the pillar's image some pixels are
 /// the pillar's and some are the forest's own (trees and ground in front of it), the

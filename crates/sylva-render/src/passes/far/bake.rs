@@ -177,18 +177,7 @@ fn render_views(
         buffer(gpu, "bake instance", bytemuck::bytes_of(&instance), wgpu::BufferUsages::VERTEX);
     let groups = view_groups(gpu, ctx, fr, &palettes);
     let (w, h) = (VIEWS * VIEW_SIZE, ROWS * VIEW_SIZE);
-    let target = |format, label| {
-        dev.create_texture(&wgpu::TextureDescriptor {
-            label: Some(label),
-            size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        })
-    };
+    let target = |format, label| crate::headless::capture_texture(dev, (w, h), format, label);
     let albedo_tex = target(BAKE_TARGETS[0], "impostor albedo");
     let normal_tex = target(BAKE_TARGETS[1], "impostor normals");
     let depth_tex = target(crate::shared::DEPTH, "impostor depth");
