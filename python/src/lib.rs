@@ -24,15 +24,25 @@ fn parse<T: serde::de::DeserializeOwned>(what: &str, text: &str) -> PyResult<T> 
 }
 
 /// The field's data as bytes and its settings as JSON.
-fn to_python<'py>(py: Python<'py>, f: &WindField) -> (Bound<'py, PyBytes>, String) {
-    let bytes: Vec<u8> = f.data.iter().flat_map(|v| v.to_le_bytes()).collect();
+fn to_python<'py>(py: Python<'py>, f: &WindField) -> PyResult<(Bound<'py, PyBytes>, String)> {
+    let bytes = le_bytes(py, &f.data)?;
     let meta = json!({
         "grid": f.grid,
         "params": f.params,
         "synth": f.synth,
         "coherence_error": f.coherence_error,
     });
-    (PyBytes::new(py, &bytes), meta.to_string())
+    Ok((bytes, meta.to_string()))
+}
+
+/// Samples as little-endian bytes, written straight into a Python `bytes` (no copy between).
+fn le_bytes<'py>(py: Python<'py>, data: &[f32]) -> PyResult<Bound<'py, PyBytes>> {
+    PyBytes::new_with(py, 4 * data.len(), |buf| {
+        for (b, v) in buf.chunks_exact_mut(4).zip(data) {
+            b.copy_from_slice(&v.to_le_bytes());
+        }
+        Ok(())
+    })
 }
 
 /// Names of the wind presets.
@@ -66,16 +76,9 @@ fn default_coherence_speed(spectrum: &str) -> PyResult<String> {
     Ok(serde_json::to_string(&sylva_wind::CoherenceSpeed::for_spectrum(s)).unwrap_or_default())
 }
 
-/// Synthesise a field: model, grid and synthesis settings as JSON (`method` may be
-/// `"auto"`: the fastest exact method for the grid). The GIL is released while it runs.
-#[pyfunction]
-fn generate<'py>(
-    py: Python<'py>,
-    params: &str,
-    grid: &str,
-    seed: u64,
-    method: &str,
-) -> PyResult<(Bound<'py, PyBytes>, String)> {
+/// Model, grid and synthesis settings from their JSON, validated as the command line
+/// validates them (`method` may be `"auto"`: the fastest exact method for the grid).
+fn setup(params: &str, grid: &str, seed: u64, method: &str) -> PyResult<(WindParams, Grid, SynthParams)> {
     let params: WindParams = parse("params", params)?;
     let grid: Grid = parse("grid", grid)?;
     params.validate().map_err(value_error)?;
@@ -90,6 +93,21 @@ fn generate<'py>(
     };
     let synth = SynthParams { seed, method };
     sylva_wind::synth::check_config(&params, &grid, synth).map_err(value_error)?;
+    Ok((params, grid, synth))
+}
+
+/// Synthesise a field: model, grid and synthesis settings as JSON (`method` may be
+/// `"auto"`: the fastest exact method for the grid). The GIL is released while it runs.
+#[pyfunction]
+fn generate<'py>(
+    py: Python<'py>,
+    params: &str,
+    grid: &str,
+    seed: u64,
+    method: &str,
+) -> PyResult<(Bound<'py, PyBytes>, String)> {
+    let (params, grid, synth) = setup(params, grid, seed, method)?;
+    let method = synth.method;
     // The command line's memory check: the field and the synthesis's working memory within
     // three quarters of what the machine has free.
     let need = sylva_wind::synth::memory_estimate(&grid, method);
@@ -99,7 +117,8 @@ fn generate<'py>(
             return Err(PyValueError::new_err(format!(
                 "this field needs about {:.2} GB ({} points × 3 components × {} frames, method \
                  {}), more than the {:.2} GB usable of this machine's free memory; reduce \
-                 frames, nx/ny or heights",
+                 frames, nx/ny or heights, or make it lazily, a block at a time \
+                 (generate_lazy)",
                 need / 1e9,
                 grid.points(),
                 grid.frames,
@@ -111,7 +130,47 @@ fn generate<'py>(
     let field = py
         .allow_threads(|| WindField::generate(&params, &grid, synth, &|_| {}))
         .map_err(value_error)?;
-    Ok(to_python(py, &field))
+    to_python(py, &field)
+}
+
+/// The settings of a field to be made a block of x-columns at a time (JSON as `generate`
+/// gives them, without data): refused unless the method can make a block alone.
+#[pyfunction]
+fn plan_blocks(params: &str, grid: &str, seed: u64, method: &str) -> PyResult<String> {
+    let (params, grid, synth) = setup(params, grid, seed, method)?;
+    if synth.method != Method::Separable {
+        return Err(PyValueError::new_err(format!(
+            "a lazy field is made a block of x-columns at a time, which needs the separable \
+             method (the reference coherence speed, or one height); the {} method holds \
+             every point's coefficients at once: pass coherence_speed=\"reference\" or one \
+             height",
+            synth.method.name()
+        )));
+    }
+    let meta = json!({ "grid": grid, "params": params, "synth": synth, "coherence_error": 0.0 });
+    Ok(meta.to_string())
+}
+
+/// The x-columns `x0 .. x1` of a field, laid out (frame, component, z, y, column) as
+/// little-endian f32 bytes: the whole field's records there, bit for bit. The GIL is
+/// released while it runs.
+#[pyfunction]
+#[allow(clippy::too_many_arguments)]
+fn generate_columns<'py>(
+    py: Python<'py>,
+    params: &str,
+    grid: &str,
+    seed: u64,
+    method: &str,
+    x0: usize,
+    x1: usize,
+) -> PyResult<Bound<'py, PyBytes>> {
+    let (params, grid, synth) = setup(params, grid, seed, method)?;
+    let data = py
+        .allow_threads(|| sylva_wind::synth::synthesize_columns(&params, &grid, synth, x0..x1))
+        .map_err(value_error)?;
+    // Written straight into the Python bytes: a block is held twice at most, not three times.
+    le_bytes(py, &data)
 }
 
 /// Read a field file: `.swf`, `.npy` (with its sidecar) or a `.zarr` store.
@@ -119,7 +178,7 @@ fn generate<'py>(
 fn read<'py>(py: Python<'py>, path: &str) -> PyResult<(Bound<'py, PyBytes>, String)> {
     let p = Path::new(path);
     let field = py.allow_threads(|| sylva_wind::io::read_field(p)).map_err(value_error)?;
-    Ok(to_python(py, &field))
+    to_python(py, &field)
 }
 
 /// Write a field (bytes and JSON settings as `read` gives them) by the path's extension:
@@ -235,6 +294,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(preset_params, m)?)?;
     m.add_function(wrap_pyfunction!(default_coherence_speed, m)?)?;
     m.add_function(wrap_pyfunction!(generate, m)?)?;
+    m.add_function(wrap_pyfunction!(plan_blocks, m)?)?;
+    m.add_function(wrap_pyfunction!(generate_columns, m)?)?;
     m.add_function(wrap_pyfunction!(read, m)?)?;
     m.add_function(wrap_pyfunction!(write, m)?)?;
     m.add_function(wrap_pyfunction!(psd, m)?)?;

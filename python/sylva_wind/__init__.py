@@ -36,6 +36,7 @@ __all__ = [
     "describe",
     "PARAMETER_DOCS",
     "generate",
+    "generate_lazy",
     "read",
     "write",
     "psd",
@@ -174,6 +175,15 @@ def generate(
     ``"separable"``, ``"embedding"`` or ``"cholesky"``. The GIL is released during
     synthesis.
     """
+    model, grid = _model_and_grid(locals(), overrides)
+    return _field_from(_native.generate(json.dumps(model), json.dumps(grid), int(seed), method))
+
+
+def _model_and_grid(a: Dict[str, Any], overrides: Dict[str, Any]) -> Tuple[Dict[str, Any], Dict[str, Any]]:
+    """The model and grid of ``generate``'s arguments ``a``, checked in the command line's
+    words."""
+    spacing, dt, heights, xs, ys = a["spacing"], a["dt"], a["heights"], a["xs"], a["ys"]
+    nx, ny, frames, params, preset = a["nx"], a["ny"], a["frames"], a["params"], a["preset"]
     # The grid's numbers checked here, in the command line's words (JSON cannot carry NaN).
     for name, value in (("spacing", spacing), ("dt", dt)):
         if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
@@ -200,7 +210,73 @@ def generate(
         "frames": int(frames),
         "dt": float(dt),
     }
-    return _field_from(_native.generate(json.dumps(model), json.dumps(grid), int(seed), method))
+    return model, grid
+
+
+def generate_lazy(
+    preset: str = "breeze",
+    *,
+    nx: int = 64,
+    ny: int = 64,
+    spacing: float = 4.0,
+    heights: Sequence[float] = (20.0,),
+    xs: Optional[Iterable[float]] = None,
+    ys: Optional[Iterable[float]] = None,
+    frames: int = 2048,
+    dt: float = 0.1,
+    seed: int = 1,
+    method: str = "auto",
+    params: Optional[Dict[str, Any]] = None,
+    chunks: int = 32,
+    **overrides: Any,
+):
+    """The field ``generate`` makes with the same arguments, as a lazy ``xarray.Dataset``
+    laid out as ``Field.to_xarray()`` (``wind`` over ``(time, component, z, y, x)``, m/s),
+    whose ``x`` axis is a Dask array in blocks of ``chunks`` columns (needs the ``dask``
+    extra: ``pip install sylva-wind[dask]``).
+
+    Nothing is synthesised until a block is computed; each block is then made on its own,
+    on whichever worker computes it, and equals the in-memory field's columns bit for bit:
+    the synthesis runs the x recursion of each frequency line over the columns before the
+    block from the same counter-based phases (no FFT there), which carries its state into
+    the block exactly. A block costs its share of the field plus that phase sweep, and
+    holds ``frames × 3 × len(heights) × ny × chunks`` float32 values. So
+    ``ds.to_zarr(path)`` on a ``dask.distributed`` cluster writes a field no single machine
+    could hold, each worker holding a few blocks at a time.
+
+    Only the separable method can make a block alone (the embedding and the dense Cholesky
+    hold every point's coefficients at once): one height, or the reference coherence speed
+    (``coherence_speed="reference"``) on several; anything else is refused with a
+    ``ValueError``.
+    """
+    import dask
+    import dask.array as da
+    import xarray as xr
+
+    if not (isinstance(chunks, int) and chunks >= 1):
+        raise ValueError(f"chunks = {chunks}: expected a whole number ≥ 1 of x-columns")
+    model, grid = _model_and_grid(locals(), overrides)
+    model_json, grid_json = json.dumps(model), json.dumps(grid)
+    meta = json.loads(_native.plan_blocks(model_json, grid_json, int(seed), method))
+    g = meta["grid"]
+    shape = (g["frames"], 3, len(g["zs"]), len(g["ys"]))
+    blocks = []
+    for x0 in range(0, len(g["xs"]), chunks):
+        x1 = min(x0 + chunks, len(g["xs"]))
+        block = dask.delayed(_block, pure=True)(model_json, grid_json, int(seed), method, x0, x1)
+        blocks.append(da.from_delayed(block, shape=shape + (x1 - x0,), dtype=np.float32))
+    wind = da.concatenate(blocks, axis=4)
+    field = Field(wind, g, meta["params"], meta["synth"], 0.0)
+    return field.to_xarray()
+
+
+def _block(model_json: str, grid_json: str, seed: int, method: str, x0: int, x1: int) -> np.ndarray:
+    """Columns ``x0 .. x1`` of a field, (t, component, z, y, x) float32: one block of
+    ``generate_lazy``, made wherever it runs."""
+    g = json.loads(grid_json)
+    data = _native.generate_columns(model_json, grid_json, seed, method, x0, x1)
+    shape = (g["frames"], 3, len(g["zs"]), len(g["ys"]), x1 - x0)
+    return np.frombuffer(data, dtype="<f4").reshape(shape)
 
 
 def read(path: str) -> Field:

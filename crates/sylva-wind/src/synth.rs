@@ -375,6 +375,11 @@ struct OutLayout {
     frame_stride: usize,
     /// Offset of this component's first point in a frame.
     offset: usize,
+    /// Elements between consecutive point rows (the output's x-columns: the grid's nx, or
+    /// a block's width).
+    row: usize,
+    /// The grid's x index of the output's first column (0, or a block's first column).
+    x0: usize,
     /// Added to every sample at height index z (the mean speed for `u`, else 0).
     add: Vec<f64>,
 }
@@ -399,6 +404,8 @@ struct Emitter<'a, T> {
     /// First x index of the batch and columns staged.
     x0: usize,
     staged: usize,
+    /// One past the last column emitted: the staged columns are flushed there.
+    end: usize,
 }
 
 /// Where emitted records go: a frame-major buffer, or a callback that takes each block of
@@ -412,7 +419,7 @@ enum Sink<'a, T> {
 type StreamFn<'a, T> = dyn FnMut(usize, usize, &[T]) -> Result<(), WindError> + 'a;
 
 impl<'a, T: Sample> Emitter<'a, T> {
-    fn new(grid: &'a Grid, layout: &'a OutLayout, out: Sink<'a, T>) -> Self {
+    fn new(grid: &'a Grid, layout: &'a OutLayout, out: Sink<'a, T>, end: usize) -> Self {
         let np = grid.nz() * grid.ny();
         let c2r = RealFftPlanner::<T>::new().plan_fft_inverse(grid.frames);
         Emitter {
@@ -423,6 +430,7 @@ impl<'a, T: Sample> Emitter<'a, T> {
             rec: vec![T::default(); EMIT_COLUMNS.min(grid.nx()) * np * grid.frames],
             x0: 0,
             staged: 0,
+            end,
         }
     }
 
@@ -457,7 +465,7 @@ impl<'a, T: Sample> Emitter<'a, T> {
             self.x0 = ix;
         }
         self.staged += 1;
-        if self.staged == EMIT_COLUMNS || ix + 1 == self.grid.nx() {
+        if self.staged == EMIT_COLUMNS || ix + 1 == self.end {
             self.flush()?;
         }
         Ok(())
@@ -467,7 +475,7 @@ impl<'a, T: Sample> Emitter<'a, T> {
     /// hand them to the stream).
     fn flush(&mut self) -> Result<(), WindError> {
         const TILE: usize = 64;
-        let (nx, m) = (self.grid.nx(), self.grid.frames);
+        let m = self.grid.frames;
         let np = self.grid.nz() * self.grid.ny();
         let (bw, x0, rec, layout) = (self.staged, self.x0, &self.rec, self.layout);
         self.staged = 0;
@@ -476,7 +484,7 @@ impl<'a, T: Sample> Emitter<'a, T> {
             Sink::Stream(f) => return f(x0, bw, &rec[..bw * np * m]),
         };
         (0..np).into_par_iter().for_each(|p| {
-            let base = layout.offset + p * nx + x0;
+            let base = layout.offset + p * layout.row + x0 - layout.x0;
             for t0 in (0..m).step_by(TILE) {
                 let t1 = (t0 + TILE).min(m);
                 for t in t0..t1 {
@@ -496,6 +504,7 @@ impl<'a, T: Sample> Emitter<'a, T> {
 /// Synthesise the fluctuations of one component into `out` (frame-major, layout described
 /// by `layout`), calling `progress` with the fraction of this component done. Returns the
 /// bound on the coherence error (0 for an exact synthesis; see `synth/embed.rs`).
+#[allow(clippy::too_many_arguments)]
 fn synth_component<'a, T: Sample>(
     params: &WindParams,
     grid: &'a Grid,
@@ -503,14 +512,17 @@ fn synth_component<'a, T: Sample>(
     comp: Component,
     out: Sink<'a, T>,
     layout: &'a OutLayout,
+    columns: std::ops::Range<usize>,
     progress: &(dyn Fn(f64) + Sync),
 ) -> Result<f64, WindError> {
     let lines = Lines::new(params, grid, comp, synth.seed);
     let mut coherence_error = 0.0;
-    let mut emitter = Emitter::new(grid, layout, out);
+    let mut emitter = Emitter::new(grid, layout, out, columns.end);
     use methods::{cholesky, embedding, separable};
     match synth.method {
-        Method::Separable => separable(params, grid, comp, &lines, &mut emitter, progress)?,
+        Method::Separable => {
+            separable(params, grid, comp, &lines, &mut emitter, columns, progress)?;
+        }
         Method::Cholesky => cholesky(params, grid, comp, &lines, &mut emitter, progress)?,
         Method::Embedding => {
             coherence_error = embedding(params, grid, comp, &lines, &mut emitter, progress)?;
@@ -557,9 +569,10 @@ pub fn synthesize_component_f64(
     check_config(params, grid, synth)?;
     let n = grid.points();
     let mut out = vec![0.0f64; n * grid.frames];
-    let layout = OutLayout { frame_stride: n, offset: 0, add: vec![0.0; grid.nz()] };
+    let add = vec![0.0; grid.nz()];
+    let layout = OutLayout { frame_stride: n, offset: 0, row: grid.nx(), x0: 0, add };
     let sink = Sink::Buffer(OutPtr(out.as_mut_ptr(), out.len()));
-    synth_component(params, grid, synth, comp, sink, &layout, &|_| {})?;
+    synth_component(params, grid, synth, comp, sink, &layout, 0..grid.nx(), &|_| {})?;
     Ok(out)
 }
 
@@ -583,10 +596,11 @@ pub(crate) fn synthesize_into(
     let mut worst: f64 = 0.0;
     for comp in Component::ALL {
         let add = mean_added(params, grid, comp);
-        let layout = OutLayout { frame_stride: 3 * n, offset: comp.index() * n, add };
+        let (offset, row) = (comp.index() * n, grid.nx());
+        let layout = OutLayout { frame_stride: 3 * n, offset, row, x0: 0, add };
         let c = comp.index() as f64;
         let sink = Sink::Buffer(OutPtr(out.as_mut_ptr(), out.len()));
-        let e = synth_component(params, grid, synth, comp, sink, &layout, &|f| {
+        let e = synth_component(params, grid, synth, comp, sink, &layout, 0..grid.nx(), &|f| {
             progress((c + f) / 3.0)
         })?;
         worst = worst.max(e);
@@ -611,19 +625,96 @@ pub fn synthesize_streaming(
     emit: &mut ColumnSink<'_>,
     progress: &(dyn Fn(f64) + Sync),
 ) -> Result<(), WindError> {
+    stream_columns(params, grid, synth, 0..grid.nx(), emit, progress)
+}
+
+/// [`synthesize_streaming`] for the x-columns `columns` alone: the same records, bit for
+/// bit, as the whole field holds there. Each block of columns can be made on its own, in
+/// any order, on any machine: the x recursion of each frequency line is run over the
+/// columns before `columns.start` from the same counter-based phases (no FFT), which
+/// carries its state into the block exactly as the whole field's synthesis does. Costs
+/// the block's share of the field plus a phase sweep over the columns before it.
+pub fn synthesize_columns_streaming(
+    params: &WindParams,
+    grid: &Grid,
+    synth: SynthParams,
+    columns: std::ops::Range<usize>,
+    emit: &mut ColumnSink<'_>,
+    progress: &(dyn Fn(f64) + Sync),
+) -> Result<(), WindError> {
+    if columns.start >= columns.end || columns.end > grid.nx() {
+        return Err(bad_columns(&columns, grid));
+    }
+    stream_columns(params, grid, synth, columns, emit, progress)
+}
+
+/// The x-columns `columns` of all three components, laid out (frame, component, z, y,
+/// column) as a [`crate::WindField`]'s data is over the whole grid, full velocities: the
+/// whole field's records there, bit for bit ([`synthesize_columns_streaming`]). A block of
+/// a field larger than memory, or than one machine (Python's `generate_lazy`).
+pub fn synthesize_columns(
+    params: &WindParams,
+    grid: &Grid,
+    synth: SynthParams,
+    columns: std::ops::Range<usize>,
+) -> Result<Vec<f32>, WindError> {
+    if columns.start >= columns.end || columns.end > grid.nx() {
+        return Err(bad_columns(&columns, grid));
+    }
     check_config(params, grid, synth)?;
     if synth.method != Method::Separable {
-        return Err(WindError::Unsupported(format!(
-            "streaming to disk needs the separable method (one coherence speed, or one height); \
-             the {} method holds every point's coefficients at once",
-            synth.method.name()
-        )));
+        return Err(needs_separable(synth.method));
+    }
+    let (np, w) = (grid.nz() * grid.ny(), columns.len());
+    let mut out = vec![0.0f32; grid.frames * 3 * np * w];
+    for comp in Component::ALL {
+        let add = mean_added(params, grid, comp);
+        let (offset, x0) = (comp.index() * np * w, columns.start);
+        let layout = OutLayout { frame_stride: 3 * np * w, offset, row: w, x0, add };
+        let sink = Sink::Buffer(OutPtr(out.as_mut_ptr(), out.len()));
+        synth_component(params, grid, synth, comp, sink, &layout, columns.clone(), &|_| {})?;
+    }
+    Ok(out)
+}
+
+/// The error for a block of columns outside the grid.
+fn bad_columns(columns: &std::ops::Range<usize>, grid: &Grid) -> WindError {
+    WindError::Unsupported(format!(
+        "columns {}..{}: expected a non-empty range within the grid's {} x-columns",
+        columns.start,
+        columns.end,
+        grid.nx()
+    ))
+}
+
+/// The error for streaming or a block of columns with a method that holds every point.
+fn needs_separable(method: Method) -> WindError {
+    WindError::Unsupported(format!(
+        "streaming and blocks of columns need the separable method (one coherence speed, or \
+         one height); the {} method holds every point's coefficients at once",
+        method.name()
+    ))
+}
+
+fn stream_columns(
+    params: &WindParams,
+    grid: &Grid,
+    synth: SynthParams,
+    columns: std::ops::Range<usize>,
+    emit: &mut ColumnSink<'_>,
+    progress: &(dyn Fn(f64) + Sync),
+) -> Result<(), WindError> {
+    check_config(params, grid, synth)?;
+    if synth.method != Method::Separable {
+        return Err(needs_separable(synth.method));
     }
     for comp in Component::ALL {
-        let layout = OutLayout { frame_stride: 0, offset: 0, add: mean_added(params, grid, comp) };
+        let add = mean_added(params, grid, comp);
+        let layout = OutLayout { frame_stride: 0, offset: 0, row: 0, x0: 0, add };
         let c = comp.index() as f64;
         let mut each = |x0: usize, cols: usize, rec: &[f32]| emit(comp, x0, cols, rec);
-        synth_component(params, grid, synth, comp, Sink::Stream(&mut each), &layout, &|f| {
+        let sink = Sink::Stream(&mut each);
+        synth_component(params, grid, synth, comp, sink, &layout, columns.clone(), &|f| {
             progress((c + f) / 3.0)
         })?;
     }

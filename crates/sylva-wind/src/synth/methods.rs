@@ -4,13 +4,15 @@
 use super::*;
 
 /// The separable method: the AR(1) recursions along x, y and z per frequency line, a
-/// column of points at a time (exact where one speed divides every separation).
+/// column of points at a time (exact where one speed divides every separation). Emits the
+/// x-columns `columns`; before them only the x recursion runs, to carry its state.
 pub(super) fn separable<T: Sample>(
     params: &WindParams,
     grid: &Grid,
     comp: Component,
     lines: &Lines,
     emitter: &mut Emitter<'_, T>,
+    columns: std::ops::Range<usize>,
     progress: &(dyn Fn(f64) + Sync),
 ) -> Result<(), WindError> {
     let (nx, ny, nz) = (grid.nx(), grid.ny(), grid.nz());
@@ -35,10 +37,13 @@ pub(super) fn separable<T: Sample>(
         .step_by(LINES_PER_TASK)
         .map(|j0| j0..(j0 + LINES_PER_TASK).min(nc - 1))
         .collect();
-    for ix in 0..nx {
+    for ix in 0..columns.end {
+        let emitted = ix >= columns.start;
         // √Δω·√S0(z) times this column's advection factor, per (height, line): one
         // complex factor applied at emission.
-        lines.column_factors(params.advection, grid.xs[ix], true, &mut fac);
+        if emitted {
+            lines.column_factors(params.advection, grid.xs[ix], true, &mut fac);
+        }
         let (xs_ptr, col_ptr) =
             (RowsPtr(xstate.as_mut_ptr(), xstate.len()), RowsPtr(col.as_mut_ptr(), col.len()));
         ranges.par_iter().for_each(|r| {
@@ -61,6 +66,9 @@ pub(super) fn separable<T: Sample>(
                     let k = (p * nx + ix) as u64; // Cholesky column of point (ix, iy, iz)
                     let ar = (ix > 0).then(|| (part(&gx[ix - 1].0, r), part(&gx[ix - 1].1, r)));
                     phasor_row(&lines.keys[r.clone()], k, x, ar);
+                    if !emitted {
+                        continue;
+                    }
                     let ay = if iy > 0 {
                         (part(&gy[iy - 1].0, r), part(&gy[iy - 1].1, r))
                     } else {
@@ -69,7 +77,7 @@ pub(super) fn separable<T: Sample>(
                     y_row(x, prev, ay, out);
                 }
             }
-            for iz in 1..nz {
+            for iz in (1..nz).filter(|_| emitted) {
                 let (rho, s) = (part(&gz[iz - 1].0, r), part(&gz[iz - 1].1, r));
                 for iy in 0..ny {
                     let (p, q) = ((iz - 1) * ny + iy, iz * ny + iy);
@@ -80,8 +88,10 @@ pub(super) fn separable<T: Sample>(
                 }
             }
         });
-        emitter.push(ix, &col, &fac)?;
-        progress((ix + 1) as f64 / nx as f64);
+        if emitted {
+            emitter.push(ix, &col, &fac)?;
+        }
+        progress((ix + 1) as f64 / columns.end as f64);
     }
 
     Ok(())
