@@ -82,6 +82,11 @@ pub struct Controls {
 const CLICK_SLOP: f64 = 4.0;
 
 impl Controls {
+    /// The cursor's last position, pixels from the window's top left (none before it moved).
+    pub fn cursor(&self) -> Option<(f64, f64)> {
+        self.cursor
+    }
+
     /// Turn `input` into actions on `v` (a `width × height` pixel view).
     pub fn handle(&mut self, v: &mut Viewer, input: Input, width: f32, height: f32) {
         match input {
@@ -157,6 +162,15 @@ impl Controls {
 /// would move the focus onto a checkbox and Space then tick it instead of pausing.
 pub fn panel_takes_key(code: KeyCode, typing: bool) -> bool {
     typing && code != KeyCode::Tab
+}
+
+/// Whether a mouse button or wheel event goes to the panel rather than the 3-D view,
+/// decided at the event from where the cursor is then: over the panel's strip (the left
+/// `panel_px` pixels), or while the panel holds the pointer (a slider being dragged). egui's
+/// own answer is the last frame's: at a few frames a second, a cursor moved off the panel
+/// and clicked before the next frame would have its click taken by the panel and lost.
+pub fn panel_takes_pointer(cursor_x: Option<f64>, panel_px: f32, panel_dragging: bool) -> bool {
+    panel_dragging || cursor_x.is_some_and(|x| x < panel_px as f64)
 }
 
 /// The action of a key press.

@@ -367,6 +367,18 @@ impl ApplicationHandler for App {
             && to_panel
             && s.egui.on_window_event(&s.window, &event).consumed;
         let (w, h) = (s.config.width as f32, s.config.height as f32);
+        // Clicks and the wheel by where the cursor is now, not where egui saw it last frame
+        // (the help window floats anywhere: egui's answer stands while it shows).
+        let consumed = match &event {
+            WindowEvent::MouseInput { .. } | WindowEvent::MouseWheel { .. }
+                if self.viewer.panel && !self.viewer.help =>
+            {
+                let dragging = s.egui.egui_ctx().dragged_id().is_some();
+                let x = self.controls.cursor().map(|c| c.0);
+                input::panel_takes_pointer(x, self.viewer.view_shift * w, dragging)
+            }
+            _ => consumed,
+        };
         let input = match event {
             WindowEvent::CloseRequested => {
                 el.exit();

@@ -248,6 +248,29 @@ fn keys_change_the_wind_pause_and_panels() {
     }
     assert!(v.quit);
 }
+#[test]
+fn a_click_goes_where_the_cursor_is_at_the_click_not_where_it_was_last_frame() {
+    use crate::input::panel_takes_pointer;
+    // A 330-pixel panel: a click at x 200 is the panel's, at x 500 the view's, whatever the
+    // panel's hover state of the last frame (the viewer asks this at the event).
+    assert!(panel_takes_pointer(Some(200.0), 330.0, false));
+    assert!(!panel_takes_pointer(Some(500.0), 330.0, false));
+    // A slider being dragged keeps the pointer, out over the view as well.
+    assert!(panel_takes_pointer(Some(500.0), 330.0, true));
+    // Without a panel, or before the cursor has moved, clicks are the view's.
+    assert!(!panel_takes_pointer(Some(200.0), 0.0, false));
+    assert!(!panel_takes_pointer(None, 330.0, false));
+    // Moving off the panel and clicking before a frame is drawn: the viewer asks with the
+    // cursor of the latest event, off the panel.
+    let mut v = viewer(3);
+    let mut c = Controls::default();
+    let (w, h) = (640.0, 480.0);
+    c.handle(&mut v, Input::Cursor(100.0, 240.0), w, h);
+    c.handle(&mut v, Input::Cursor(400.0, 240.0), w, h);
+    assert!(!panel_takes_pointer(c.cursor().map(|p| p.0), 0.3 * w, false));
+    assert_eq!(c.cursor(), Some((400.0, 240.0)));
+}
+
 
 /// Pixel of world point `p` in a `w × h` image from the viewer's camera.
 fn project(v: &Viewer, p: [f32; 3], w: f32, h: f32) -> (f64, f64) {
