@@ -82,6 +82,8 @@ struct Surface {
     /// Minimised or wholly covered: no frames are requested, so the loop sleeps until the
     /// window shows again.
     hidden: bool,
+    /// The window's title as last set.
+    title: String,
 }
 
 impl Drop for Surface {
@@ -162,6 +164,7 @@ impl App {
             pending,
             timer,
             hidden: false,
+            title: String::new(),
         });
         Ok(())
     }
@@ -251,10 +254,10 @@ impl App {
                 Err(e) => v.error = Some(format!("screenshot: {e:#}")),
             }
         }
-        if !v.panel {
+        let title = if !v.panel {
             let st = v.frame.stats;
             let (gain, turn) = v.forest.wind_control();
-            s.window.set_title(&format!(
+            format!(
                 "sylva — {:.1} fps — {} of {} trees — {:.2} M triangles — wind ×{gain:.2} {turn:+.0}° — sim {:.1} ms{}{}",
                 v.figures.fps,
                 st.drawn,
@@ -263,9 +266,16 @@ impl App {
                 v.figures.sim_ms,
                 if v.settings.paused { " — paused" } else { "" },
                 if v.clock.slow { " — slow motion" } else { "" }
-            ));
+            )
         } else {
-            s.window.set_title("sylva");
+            "sylva".to_string()
+        };
+        if title != s.title {
+            if window_call(|| s.window.set_title(&title)).is_none() {
+                self.error = Some(anyhow::anyhow!(DISPLAY_LOST));
+                return;
+            }
+            s.title = title;
         }
         self.clip_frame(w, h);
     }
@@ -407,7 +417,7 @@ impl ApplicationHandler for App {
             }
             WindowEvent::RedrawRequested => {
                 self.redraw();
-                if self.viewer.quit {
+                if self.viewer.quit || self.error.is_some() {
                     el.exit();
                 }
                 return;
@@ -446,7 +456,39 @@ impl ApplicationHandler for App {
     }
 }
 
+/// What the viewer says when the window system went away under it.
+const DISPLAY_LOST: &str = "the connection to the display was lost; the viewer stopped";
+
+std::thread_local! {
+    /// Set while a [`window_call`] runs: its panic is expected and not printed.
+    static QUIET: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// Run a call into the window system that winit answers with a panic once the display has
+/// gone (on X11 `set_title` panics with "Failed to set window title: Connection(…)"):
+/// `None` if it panicked, and its panic is not printed ([`quiet_window_panics`]).
+fn window_call<R>(f: impl FnOnce() -> R) -> Option<R> {
+    QUIET.with(|q| q.set(true));
+    let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)).ok();
+    QUIET.with(|q| q.set(false));
+    r
+}
+
+/// Keep the process's panic hook for every panic but those inside a [`window_call`].
+fn quiet_window_panics() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        let previous = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            if !QUIET.with(|q| q.get()) {
+                previous(info);
+            }
+        }));
+    });
+}
+
 pub fn view(a: &ViewArgs) -> anyhow::Result<()> {
+    quiet_window_panics();
     let mut spec = SceneSpec::load(&a.scene)?;
     a.lod.apply(&mut spec)?;
     if let Some(w) = &a.wind {
