@@ -199,6 +199,9 @@ def _model_and_grid(a: Dict[str, Any], overrides: Dict[str, Any]) -> Tuple[Dict[
     if unknown:
         raise ValueError(f"unknown wind parameter(s) {unknown}; known: {sorted(model)}")
     model.update(overrides)
+    for name, value in _numbers(model):
+        if not math.isfinite(value):
+            raise ValueError(f"{name} = {value}: expected a finite number")
     # A spectrum chosen here without a coherence speed takes the command line's for it.
     if params is None and "spectrum" in overrides and "coherence_speed" not in overrides:
         spectrum = json.dumps(model["spectrum"]).strip('"')
@@ -211,6 +214,19 @@ def _model_and_grid(a: Dict[str, Any], overrides: Dict[str, Any]) -> Tuple[Dict[
         "dt": float(dt),
     }
     return model, grid
+
+
+def _numbers(value: Any, name: str = "") -> Iterable[Tuple[str, float]]:
+    """Every float in a model, with its name as the library's errors give it
+    (``profile.z0``, ``coherence[1].cy``): JSON cannot carry NaN, so they are checked here."""
+    if isinstance(value, float):
+        yield name, value
+    elif isinstance(value, dict):
+        for k, v in value.items():
+            yield from _numbers(v, f"{name}.{k}" if name else str(k))
+    elif isinstance(value, (list, tuple)):
+        for i, v in enumerate(value):
+            yield from _numbers(v, f"{name}[{i}]")
 
 
 def generate_lazy(

@@ -90,7 +90,9 @@ def test_bad_grid_numbers_and_methods_are_named_as_the_command_line_names_them()
     # column number for an unknown method.
     for kw, named in (({"dt": float("nan")}, "dt = nan"), ({"nx": -1}, "nx = -1"),
                       ({"spacing": 0.0}, "spacing = 0.0"), ({"heights": (10.0, float("inf"))}, "heights"),
-                      ({"method": "fft"}, "method `fft`: one of auto, separable")):
+                      ({"method": "fft"}, "method `fft`: one of auto, separable"),
+                      ({"u_star": float("nan")}, "u_star = nan"),
+                      ({"profile": {"kind": "log", "z0": float("inf"), "d": 10.0}}, "profile.z0 = inf")):
         with pytest.raises(ValueError) as e:
             sw.generate("breeze", **{"nx": 4, "ny": 4, "frames": 16, **kw})
         assert named in str(e.value), str(e.value)
