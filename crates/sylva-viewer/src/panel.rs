@@ -106,7 +106,9 @@ fn figures(ui: &mut Ui, v: &Viewer) {
             ui.label(val);
             ui.end_row();
         };
-        row("frames per second", format!("{:.1} ({:.0} ms a frame)", f.fps, f.frame_ms));
+        // Both from the smoothed rate, so they agree (the last frame alone jumps about).
+        let ms = if f.fps > 0.0 { 1e3 / f.fps } else { 0.0 };
+        row("frames per second", format!("{:.1} ({ms:.0} ms a frame)", f.fps));
         row("simulation", format!("{:.1} ms ({} substeps)", f.sim_ms, f.substeps));
         row("frame building", format!("{:.1} ms", f.build_ms));
         row("rendering", format!("{:.1} ms", f.render_ms));
@@ -114,7 +116,14 @@ fn figures(ui: &mut Ui, v: &Viewer) {
         row("draw calls", s.draw_calls.to_string());
         row("trees drawn", format!("{} of {} ({} impostors)", s.drawn, s.trees, s.impostors));
         row("shadow only", format!("{} trees out of view", s.shadow_only));
-        row("joints stepped", s.joints.to_string());
+        row(
+            "joints stepped",
+            if v.settings.paused {
+                format!("none, paused ({} in the last step)", s.joints)
+            } else {
+                s.joints.to_string()
+            },
+        );
         row("uploaded", format!("{:.2} MB a frame", s.uploaded_bytes as f64 / 1e6));
         let capped = match s.state_capped {
             0 => String::new(),
