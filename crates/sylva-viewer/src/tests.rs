@@ -271,7 +271,6 @@ fn a_click_goes_where_the_cursor_is_at_the_click_not_where_it_was_last_frame() {
     assert_eq!(c.cursor(), Some((400.0, 240.0)));
 }
 
-
 /// Pixel of world point `p` in a `w × h` image from the viewer's camera.
 fn project(v: &Viewer, p: [f32; 3], w: f32, h: f32) -> (f64, f64) {
     let m = v.orbit.camera().view_projection(w / h);
