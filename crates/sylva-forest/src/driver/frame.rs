@@ -49,6 +49,10 @@ struct View {
     far: Vec<u32>,
     past_cap: Vec<f32>,
     thresholds: Vec<Vec<f32>>,
+    /// Per species, with levels by error: the coarsest mesh level whose error on its
+    /// largest tree spans at most a texel of the shadow map's near cascade, the level its
+    /// trees cast their shadows with (or the level drawn, if coarser).
+    cast_floor: Vec<u32>,
 }
 
 impl View {
@@ -131,11 +135,27 @@ impl Forest {
         } else {
             (ANIMATION_FRACTION / lod.fraction).ln() / 3f32.ln()
         };
+        // A caster's error under a texel of the near cascade does not show in the map.
+        let near_box =
+            ShadowBox::new(camera, aspect, camera.shadow_reach().0, lighting.sun_unit());
+        let texel = 2.0 * near_box.radius / ShadowBox::TEXELS as f32;
+        let largest = 1.0 + self.spec.scale_variation;
+        let cast_floor = self
+            .species
+            .iter()
+            .map(|sp| {
+                let height = sp.model.tree.stats.height * largest;
+                let meshes = sp.level_error.len().min(sp.model.lods.len());
+                let fine = |k: &usize| sp.level_error[*k] * height <= texel;
+                (0..meshes).take_while(|k| fine(k)).last().unwrap_or(0) as u32
+            })
+            .collect();
         View {
             cone,
             sweep,
             far_box,
             box_margin,
+            cast_floor,
             n_species,
             n_keys,
             all_keys,
@@ -150,12 +170,13 @@ impl Forest {
 
     /// The level a tree of `species` drawn at mesh level `level` casts its shadow with,
     /// no finer than it is drawn (its joints are then a prefix of the drawn ones): by
-    /// fraction [`shadow_level`]; by error the level full detail casts with, for the
-    /// shadow map's texels, whatever finer level the camera's error budget picked.
+    /// fraction [`shadow_level`]; by error the coarsest level whose error fits a texel of
+    /// the shadow map's near cascade (`View::cast_floor`), whatever finer level the
+    /// camera's error budget picked.
     fn cast_level(&self, view: &View, species: u32, level: u32) -> u32 {
         let chain = self.species[species as usize].model.lods.len() as u32;
         if view.lod.error_budget > 0.0 {
-            level.max(shadow_level(0, chain))
+            level.max(view.cast_floor[species as usize])
         } else {
             shadow_level(level, chain)
         }
