@@ -4,7 +4,7 @@
 //!
 //!     cargo run --release -p sylva-wind --example homogeneity -- [SEEDS]
 //!
-//! Grid: 24 × 6 points 5 m apart, heights 15, 20 and 30 m, 2048 frames of 0.1 s; middle
+//! Grid: 24 × 24 points 5 m apart, heights 15, 20 and 30 m, 2048 frames of 0.1 s; middle
 //! columns 10–13, edge columns 0–3 (45–57 m from the middle). Prints, per component and
 //! pair of heights, each band with eq. 5 above 0.1: middle, edge, model, and the largest
 //! |middle − edge| and |edge − model|.
@@ -15,7 +15,7 @@ use sylva_wind::{CoherenceSpeed, Grid, Method, SynthParams, WindField, WindParam
 fn main() {
     let seeds: u64 = std::env::args().nth(1).and_then(|s| s.parse().ok()).unwrap_or(8);
     let params = WindParams { coherence_speed: CoherenceSpeed::PairMean, ..WindParams::default() };
-    let grid = Grid::regular(24, 6, 5.0, &[15.0, 20.0, 30.0], 2048, 0.1);
+    let grid = Grid::regular(24, 24, 5.0, &[15.0, 20.0, 30.0], 2048, 0.1);
     let method = Method::fastest(&params, &grid);
     let fields: Vec<WindField> = (0..seeds)
         .map(|s| {
