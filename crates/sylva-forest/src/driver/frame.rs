@@ -49,9 +49,11 @@ struct View {
     far: Vec<u32>,
     past_cap: Vec<f32>,
     thresholds: Vec<Vec<f32>>,
+    /// The side of a texel of the shadow map's near cascade, m.
+    shadow_texel: f32,
     /// Per species, with levels by error: the coarsest mesh level whose error on its
-    /// largest tree spans at most a texel of the shadow map's near cascade, the level its
-    /// trees cast their shadows with (or the level drawn, if coarser).
+    /// largest tree spans at most `shadow_texel`, the level its trees cast their shadows
+    /// with (or the level drawn, if coarser). Scratch of the `FrameData`.
     cast_floor: Vec<u32>,
 }
 
@@ -108,6 +110,7 @@ impl Forest {
         }
         self.write_instances(&view, out);
         (out.far, out.past_cap, out.thresholds) = (view.far, view.past_cap, view.thresholds);
+        out.cast_floor = view.cast_floor;
         stats.uploaded_bytes =
             4 * out.palettes.len() + std::mem::size_of::<Instance>() * out.instances.len();
         stats.sim_ms = self.last_sim_ms;
@@ -138,24 +141,14 @@ impl Forest {
         // A caster's error under a texel of the near cascade does not show in the map.
         let near_box =
             ShadowBox::new(camera, aspect, camera.shadow_reach().0, lighting.sun_unit());
-        let texel = 2.0 * near_box.radius / ShadowBox::TEXELS as f32;
-        let largest = 1.0 + self.spec.scale_variation;
-        let cast_floor = self
-            .species
-            .iter()
-            .map(|sp| {
-                let height = sp.model.tree.stats.height * largest;
-                let meshes = sp.level_error.len().min(sp.model.lods.len());
-                let fine = |k: &usize| sp.level_error[*k] * height <= texel;
-                (0..meshes).take_while(|k| fine(k)).last().unwrap_or(0) as u32
-            })
-            .collect();
+        let shadow_texel = 2.0 * near_box.radius / ShadowBox::TEXELS as f32;
         View {
             cone,
             sweep,
             far_box,
             box_margin,
-            cast_floor,
+            shadow_texel,
+            cast_floor: Vec::new(),
             n_species,
             n_keys,
             all_keys,
@@ -196,6 +189,16 @@ impl Forest {
         );
         far.clear();
         past_cap.clear();
+        let mut cast_floor = std::mem::take(&mut out.cast_floor);
+        cast_floor.clear();
+        let largest = 1.0 + self.spec.scale_variation;
+        cast_floor.extend(self.species.iter().map(|sp| {
+            let height = sp.model.tree.stats.height * largest;
+            let meshes = sp.level_error.len().min(sp.model.lods.len());
+            let fine = |k: &usize| sp.level_error[*k] * height <= view.shadow_texel;
+            (0..meshes).take_while(fine).last().unwrap_or(0) as u32
+        }));
+        view.cast_floor = cast_floor;
         thresholds.resize_with(self.species.len(), Vec::new);
         for (sp, f) in self.species.iter().zip(thresholds.iter_mut()) {
             let chain_far = lod.far_level.min(sp.model.lods.len() as u32);

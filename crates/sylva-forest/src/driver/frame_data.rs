@@ -170,6 +170,8 @@ pub struct FrameData {
     /// the first level drawn as its impostor.
     pub(super) thresholds: Vec<Vec<f32>>,
     pub(super) far: Vec<u32>,
+    /// Scratch: per species, the level its trees cast their shadows with at least.
+    pub(super) cast_floor: Vec<u32>,
     /// Per lane group drawn: where its palettes go.
     pub(super) copies: Vec<PaletteCopy>,
     /// `need` and `want` as the runs raise them, and `need` of the trees in view alone.
