@@ -139,8 +139,7 @@ impl Forest {
             (ANIMATION_FRACTION / lod.fraction).ln() / 3f32.ln()
         };
         // A caster's error under a texel of the near cascade does not show in the map.
-        let near_box =
-            ShadowBox::new(camera, aspect, camera.shadow_reach().0, lighting.sun_unit());
+        let near_box = ShadowBox::new(camera, aspect, camera.shadow_reach().0, lighting.sun_unit());
         let shadow_texel = 2.0 * near_box.radius / ShadowBox::TEXELS as f32;
         View {
             cone,
