@@ -88,8 +88,8 @@ typedef struct SylvaInstance {
    */
   float leaf_amplitude;
   /**
-   * Keep the pixels whose dither value d in [0, 1) lies in [fade[0], fade[1]): a tree
-   * between two levels comes as two draws with complementary ranges.
+   * Keep the pixels whose dither value d in `[0, 1)` lies in `[fade[0], fade[1])`: a
+   * tree between two levels comes as two draws with complementary ranges.
    */
   float fade[2];
   /**

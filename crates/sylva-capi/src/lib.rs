@@ -95,8 +95,8 @@ pub struct SylvaInstance {
     pub leaf_phase: f32,
     /// Leaf flutter amplitude, rad.
     pub leaf_amplitude: f32,
-    /// Keep the pixels whose dither value d in [0, 1) lies in [fade[0], fade[1]): a tree
-    /// between two levels comes as two draws with complementary ranges.
+    /// Keep the pixels whose dither value d in `[0, 1)` lies in `[fade[0], fade[1])`: a
+    /// tree between two levels comes as two draws with complementary ranges.
     pub fade: [f32; 2],
     /// Bits 0-3 the level (15: impostor), 4-7 the species, 8-31 the instance group.
     pub tag: u32,
