@@ -65,7 +65,7 @@ def test_two_workers_write_a_field_four_times_their_memory_to_zarr(tmp_path):
     pytest.importorskip("zarr")
     limit = 300 * 2**20
     # 3 200 columns × 64 × 2 heights × 3 components × 256 frames of float32: 1.26 GB, 4.2 ×
-    # the limit, in blocks of 128 columns (50 MB).
+    # the limit, in blocks of 64 columns (25 MB).
     nx = 3200
     kw = dict(nx=nx, ny=64, spacing=4.0, heights=(10.0, 20.0), frames=256, dt=0.1)
     kw.update(seed=9, coherence_speed="reference")
@@ -74,7 +74,7 @@ def test_two_workers_write_a_field_four_times_their_memory_to_zarr(tmp_path):
     with distributed.LocalCluster(
         n_workers=2, threads_per_worker=1, memory_limit=limit, processes=True, dashboard_address=None
     ) as cluster, distributed.Client(cluster) as client:
-        ds = sw.generate_lazy("strong", chunks=128, **kw)
+        ds = sw.generate_lazy("strong", chunks=64, **kw)
         client.run(_reset_peak)
         ds.to_zarr(tmp_path / "big.zarr", consolidated=False, compute=True)
         peaks = list(client.run(_peak_rss_bytes).values())
@@ -88,8 +88,8 @@ def test_two_workers_write_a_field_four_times_their_memory_to_zarr(tmp_path):
         xs=[4.0 * i for i in range(nx)], ys=[4.0 * j for j in range(64)], zs=[10.0, 20.0],
         frames=256, dt=0.1,
     )
-    want = sw._block(json.dumps(model), json.dumps(grid), 9, "auto", nx - 128, nx)
-    got = back.wind.isel(x=slice(nx - 128, nx)).values
+    want = sw._block(json.dumps(model), json.dumps(grid), 9, "auto", nx - 64, nx)
+    got = back.wind.isel(x=slice(nx - 64, nx)).values
     del back
     # The store goes now (pytest keeps the last runs' temporary folders): CI's disk is small.
     shutil.rmtree(tmp_path / "big.zarr")
