@@ -236,7 +236,8 @@ pub(crate) fn map_rows(
     rx.recv()
         .map_err(|e| RenderError::Readback(e.to_string()))?
         .map_err(|e| RenderError::Readback(e.to_string()))?;
-    let mut out = Vec::new();
+    let mut out =
+        Vec::with_capacity((width * 4) as usize * (buffer.size() / u64::from(padded_row)) as usize);
     {
         let data = slice.get_mapped_range().map_err(|e| RenderError::Readback(e.to_string()))?;
         for row in data.chunks(padded_row as usize) {

@@ -642,9 +642,6 @@ pub fn synthesize_columns_streaming(
     emit: &mut ColumnSink<'_>,
     progress: &(dyn Fn(f64) + Sync),
 ) -> Result<(), WindError> {
-    if columns.start >= columns.end || columns.end > grid.nx() {
-        return Err(bad_columns(&columns, grid));
-    }
     stream_columns(params, grid, synth, columns, emit, progress)
 }
 
@@ -658,13 +655,7 @@ pub fn synthesize_columns(
     synth: SynthParams,
     columns: std::ops::Range<usize>,
 ) -> Result<Vec<f32>, WindError> {
-    if columns.start >= columns.end || columns.end > grid.nx() {
-        return Err(bad_columns(&columns, grid));
-    }
-    check_config(params, grid, synth)?;
-    if synth.method != Method::Separable {
-        return Err(needs_separable(synth.method));
-    }
+    check_columns(params, grid, synth, &columns)?;
     let (np, w) = (grid.nz() * grid.ny(), columns.len());
     let mut out = vec![0.0f32; grid.frames * 3 * np * w];
     for comp in Component::ALL {
@@ -677,23 +668,32 @@ pub fn synthesize_columns(
     Ok(out)
 }
 
-/// The error for a block of columns outside the grid.
-fn bad_columns(columns: &std::ops::Range<usize>, grid: &Grid) -> WindError {
-    WindError::Unsupported(format!(
-        "columns {}..{}: expected a non-empty range within the grid's {} x-columns",
-        columns.start,
-        columns.end,
-        grid.nx()
-    ))
-}
-
-/// The error for streaming or a block of columns with a method that holds every point.
-fn needs_separable(method: Method) -> WindError {
-    WindError::Unsupported(format!(
-        "streaming and blocks of columns need the separable method (one coherence speed, or \
-         one height); the {} method holds every point's coefficients at once",
-        method.name()
-    ))
+/// What streaming and blocks of columns need before they start: the configuration the
+/// synthesis checks, the separable method (the others hold every point's coefficients at
+/// once) and a non-empty range of the grid's columns.
+fn check_columns(
+    params: &WindParams,
+    grid: &Grid,
+    synth: SynthParams,
+    columns: &std::ops::Range<usize>,
+) -> Result<(), WindError> {
+    check_config(params, grid, synth)?;
+    if synth.method != Method::Separable {
+        return Err(WindError::Unsupported(format!(
+            "streaming and blocks of columns need the separable method (one coherence speed, \
+             or one height); the {} method holds every point's coefficients at once",
+            synth.method.name()
+        )));
+    }
+    if columns.start >= columns.end || columns.end > grid.nx() {
+        return Err(WindError::Unsupported(format!(
+            "columns {}..{}: expected a non-empty range within the grid's {} x-columns",
+            columns.start,
+            columns.end,
+            grid.nx()
+        )));
+    }
+    Ok(())
 }
 
 fn stream_columns(
@@ -704,10 +704,7 @@ fn stream_columns(
     emit: &mut ColumnSink<'_>,
     progress: &(dyn Fn(f64) + Sync),
 ) -> Result<(), WindError> {
-    check_config(params, grid, synth)?;
-    if synth.method != Method::Separable {
-        return Err(needs_separable(synth.method));
-    }
+    check_columns(params, grid, synth, &columns)?;
     for comp in Component::ALL {
         let add = mean_added(params, grid, comp);
         let layout = OutLayout { frame_stride: 0, offset: 0, row: 0, x0: 0, add };

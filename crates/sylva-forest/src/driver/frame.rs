@@ -190,13 +190,16 @@ impl Forest {
         past_cap.clear();
         let mut cast_floor = std::mem::take(&mut out.cast_floor);
         cast_floor.clear();
-        let largest = 1.0 + self.spec.scale_variation;
-        cast_floor.extend(self.species.iter().map(|sp| {
-            let height = sp.model.tree.stats.height * largest;
-            let meshes = sp.level_error.len().min(sp.model.lods.len());
-            let fine = |k: &usize| sp.level_error[*k] * height <= view.shadow_texel;
-            (0..meshes).take_while(fine).last().unwrap_or(0) as u32
-        }));
+        // Only levels by error cast by the texel (`cast_level`).
+        if lod.error_budget > 0.0 {
+            let largest = 1.0 + self.spec.scale_variation;
+            cast_floor.extend(self.species.iter().map(|sp| {
+                let height = sp.model.tree.stats.height * largest;
+                let meshes = sp.level_error.len().min(sp.model.lods.len());
+                let fine = |k: &usize| sp.level_error[*k] * height <= view.shadow_texel;
+                (0..meshes).take_while(fine).last().unwrap_or(0) as u32
+            }));
+        }
         view.cast_floor = cast_floor;
         thresholds.resize_with(self.species.len(), Vec::new);
         for (sp, f) in self.species.iter().zip(thresholds.iter_mut()) {
