@@ -329,10 +329,26 @@ fn lighting(n: vec3<f32>, sun: f32) -> vec3<f32> {
     return sky + globals.sun_colour * direct;
 }
 
-// Thin leaves pass some light: a little sun shows through from behind.
-fn translucency(world: vec3<f32>) -> vec3<f32> {
-    let through = 0.25 * max(-dot(normalize(world - globals.eye), -globals.sun_dir), 0.0);
-    return vec3<f32>(0.5, 0.6, 0.2) * through;
+// Leaves are thin: the sun that falls on a leaf's inner face comes out of its outer face,
+// diffusely and yellower (chlorophyll passes green and absorbs red and blue). `n` is the
+// leaf's normal out of the crown, so a leaf on the crown's side away from the sun shows the
+// light that came through it: the glow of a crown seen against the sun, at the edges the
+// shadow map lets the sun reach. Green leaves transmit about as much as they reflect
+// (PROSPECT leaf spectra, Jacquemoud & Baret 1990: both near 0.1 at 550 nm, transmission
+// less in red and blue); this is the sun's share, before visibility, times the albedo.
+const LEAF_TRANSMIT: vec3<f32> = vec3<f32>(0.75, 0.9, 0.3);
+fn transmitted(n: vec3<f32>) -> vec3<f32> {
+    let back = max(-dot(n, globals.sun_dir), 0.0);
+    return LEAF_TRANSMIT * globals.sun_colour * (globals.sun_intensity * back);
+}
+
+// A leaf in the shade of other leaves still gets the sun they let through, green and
+// diffuse: a leaf layer passes about a tenth of it (as above) and scatters as much again,
+// so the inside of a crown is darker than its sunlit face but not black. The sun's share
+// before (1 - visibility), times the albedo.
+const LEAF_SHADE_THROUGH: f32 = 0.15;
+fn through_leaves() -> vec3<f32> {
+    return LEAF_TRANSMIT * globals.sun_colour * (globals.sun_intensity * LEAF_SHADE_THROUGH);
 }
 
 // What the impostor bake writes: albedo (alpha 1 where the tree is) and the tree-space unit

@@ -41,7 +41,7 @@ struct LeafOut {
     @location(4) @interpolate(flat) exposure: f32,
     @location(6) @interpolate(flat) tag: u32,
     // Sky light (times tint and crown occlusion), and the sun's share when fully lit
-    // (direct and through the leaf), so a fragment's light is ambient + sun * visibility.
+    // (on the leaf and through it), so a fragment's light is ambient + sun * visibility.
     @location(7) @interpolate(flat) ambient: vec3<f32>,
     @location(8) @interpolate(flat) sun: vec3<f32>,
     // Aerial perspective at the card (fog_at).
@@ -49,6 +49,9 @@ struct LeafOut {
     // The point in the shadow cascades (shadow_near, shadow_far).
     @location(10) shadow_near: vec4<f32>,
     @location(11) shadow_far: vec4<f32>,
+    // What reaches the leaf through the leaves that shade it (`through_leaves`), less
+    // deep inside the crown, so a fragment adds shade * (1 - visibility).
+    @location(12) @interpolate(flat) shade: vec3<f32>,
 };
 
 @vertex
@@ -94,10 +97,13 @@ fn vs_main(v: LeafIn, inst: InstanceIn) -> LeafOut {
         let shaded = tint * foliage_occlusion(v.exposure);
         let sky = lighting(out.normal, 0.0);
         out.ambient = shaded * sky;
-        out.sun = shaded * (lighting(out.normal, 1.0) - sky) + tint * translucency(world);
+        out.sun = shaded * (lighting(out.normal, 1.0) - sky + transmitted(out.normal));
+        out.shade = shaded * clamp(v.exposure, 0.0, 1.0) * through_leaves();
         out.fog = fog_at(world);
-        out.shadow_near = shadow_near(world, out.normal);
-        out.shadow_far = shadow_far(world, out.normal);
+        // Offset towards the sun, not along the normal: a card lit from behind would
+        // otherwise look up its shadow behind itself and shade its own glow.
+        out.shadow_near = shadow_near(world, globals.sun_dir);
+        out.shadow_far = shadow_far(world, globals.sun_dir);
     }
     return out;
 }
@@ -119,7 +125,7 @@ fn fs_main(in: LeafOut) -> @location(0) vec4<f32> {
     // One bilinear comparison per cascade: a leaf is small and the crown busy enough that
     // the wider filter of bark and ground shows no difference, at a quarter of the reads.
     let sun = cascades_visibility(in.shadow_near, in.shadow_far, true);
-    let lit = t.rgb * (in.ambient + sun * in.sun);
+    let lit = t.rgb * (in.ambient + sun * in.sun + (1.0 - sun) * in.shade);
     return vec4<f32>(finish(mix_fog(overlay(lit, in.tag), in.fog)).rgb, a);
 }
 

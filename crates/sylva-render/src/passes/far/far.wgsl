@@ -75,7 +75,6 @@ struct FarOut {
     @location(3) @interpolate(flat) fades: vec4<f32>,
     @location(4) @interpolate(flat) tint: vec3<f32>,
     @location(5) @interpolate(flat) tag: u32,
-    @location(6) glow: vec3<f32>,
     @location(7) shadow_near: vec4<f32>,
     @location(8) shadow_far: vec4<f32>,
     // The two baked views nearest the direction seen along, and the two elevations.
@@ -249,7 +248,6 @@ fn vs_main(@builtin(vertex_index) vi: u32, inst: InstanceIn, lean: LeanIn) -> Fa
     out.clip = project(world);
     if (!SHADOW) {
         out.fog = fog_at(world);
-        out.glow = translucency(world);
         // The shadow coordinates are interpolated on the upright plane through the trunk
         // facing the camera, the point moved back to it horizontally (the quad leans back
         // as the camera rises); the fragment moves them to the leaf it shows. The plane
@@ -416,7 +414,12 @@ fn fs_main(in: FarOut) -> @location(0) vec4<f32> {
     // map's empty texels held the depth beside them; so lengthened, 0.9 % too bright.
     let n_mean = baked.xyz * 2.0 - 1.0;
     let n_tree = n_mean / sqrt(max(length(n_mean), 1e-3));
-    let n = rotate_z(mix(n_tree, turn_leaves(n_tree, in.tilt), baked.a), in.yaw);
+    let turned = turn_leaves(n_tree, in.tilt);
+    let n = rotate_z(mix(n_tree, turned, baked.a), in.yaw);
+    // What the turn shrinks off the mean normal are leaves turned every which way: their
+    // mean light is the sun's over a sphere of normals, a quarter of it on each face, the
+    // lit face reflecting and the other passing light through (`transmitted`).
+    let scattered = max(length(n_tree) - length(turned), 0.0) * 0.25;
     // Leaf pixels (normal alpha 1) take the tree's colour variation, as near trees do.
     let tint = mix(vec3<f32>(1.0), in.tint, baked.a);
     // The shadow is looked up where the leaf the pixel shows is (the shadow coordinates are
@@ -455,6 +458,8 @@ fn fs_main(in: FarOut) -> @location(0) vec4<f32> {
     let lit_depth = SHADOW_BIAS_TEXELS * texel / size;
     let own = mix(1.0, crown_light(in.crown_at, look, rotate_z(globals.sun_dir, -in.yaw), lit_depth), cascades_reach(near, far_c));
     let sun = cascades_visibility(near, far_c, true) * own;
-    let lit = albedo.rgb * tint * (lighting(n, sun) + sun * baked.a * in.glow);
+    let spread = scattered * globals.sun_intensity * globals.sun_colour * (1.0 + LEAF_TRANSMIT);
+    let leaf = sun * (transmitted(n) + spread) + (1.0 - sun) * through_leaves();
+    let lit = albedo.rgb * tint * (lighting(n, sun) + baked.a * leaf);
     return vec4<f32>(finish(mix_fog(overlay(lit, in.tag), in.fog)).rgb, a);
 }
