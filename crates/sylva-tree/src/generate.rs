@@ -74,6 +74,9 @@ pub struct TreeStats {
     pub leaf_area: f32,
     /// Crown width along x and y, m: the extent of the joint tips.
     pub crown_width: [f32; 2],
+    /// Crown base, m: the height at which the lowest branch that carries leaves leaves the
+    /// trunk (foresters' height to the live crown; hanging twigs below it do not lower it).
+    pub crown_base: f32,
 }
 
 impl TreeStats {
@@ -167,9 +170,11 @@ impl Species {
     /// An upper bound on the memory, bytes, that growing this species' tree and building
     /// its meshes, LOD chain and textures takes at its peak: per joint of
     /// [`Species::joint_bound`], [`BYTES_PER_JOINT`] plus [`BYTES_PER_LEAF`] for each of up to
-    /// [`LEAVES_COUNTED`] leaves a stem carries, and [`FIXED_BYTES`] for the textures.
+    /// [`LEAVES_COUNTED`] leaves a stem of the species' largest tree carries, and [`FIXED_BYTES`] for the textures.
     pub fn memory_estimate(&self) -> f64 {
-        let leaves = (self.leaves.abs() as f64).min(LEAVES_COUNTED);
+        let largest = bounded_scale(self.scale, self.scale_v, 1.0);
+        let factor = f64::from(leaf_count_factor(self.scale, largest));
+        let leaves = (self.leaves.abs() as f64 * factor).min(LEAVES_COUNTED);
         self.joint_bound() as f64 * (BYTES_PER_JOINT + BYTES_PER_LEAF * leaves) + FIXED_BYTES
     }
 
@@ -257,7 +262,9 @@ impl Species {
                 hi[c] = hi[c].max(t[c]);
             }
         }
+        let crown_base = crown_base(&g.joints);
         let stats = TreeStats {
+            crown_base,
             height,
             trunk_length,
             trunk_radius,
@@ -268,6 +275,31 @@ impl Species {
         };
         Ok(Tree { skeleton: Skeleton::new(g.joints)?, stats })
     }
+}
+
+/// Where the lowest leafy branch leaves the trunk, m (`TreeStats::crown_base`): each joint
+/// off the trunk takes the height at which its first-order branch starts (joints in parent
+/// order, so a parent's is known first); a trunk with no leafy branch gives its height.
+fn crown_base(joints: &[Joint]) -> f32 {
+    let mut on_trunk = vec![true; joints.len()];
+    let mut start = vec![f32::INFINITY; joints.len()];
+    let mut base = f32::INFINITY;
+    for (i, j) in joints.iter().enumerate() {
+        if j.parent != NO_PARENT {
+            let p = j.parent as usize;
+            if on_trunk[p] {
+                on_trunk[i] = j.continues;
+                start[i] = if j.continues { f32::INFINITY } else { j.origin[2] };
+            } else {
+                on_trunk[i] = false;
+                start[i] = start[p];
+            }
+        }
+        if j.leaf_area > 0.0 && !on_trunk[i] {
+            base = base.min(start[i]);
+        }
+    }
+    if base.is_finite() { base } else { joints.iter().map(|j| j.tip()[2]).fold(0.0, f32::max) }
 }
 
 /// Height above the ground below which no stem of level ≥ 1 may reach, m.
@@ -281,6 +313,17 @@ pub const MAX_SHRINK: f32 = 0.5;
 /// WP95's.
 pub fn bounded_scale(scale: f32, scale_v: f32, r: f32) -> f32 {
     if r >= 0.0 { scale + scale_v * r } else { scale + scale_v.min(MAX_SHRINK * scale) * r }
+}
+
+/// How many more leaves a twig of a tree grown to `tree_scale` carries than one of the
+/// species' nominal `scale`: (tree_scale / scale)². WP95's branch counts are the same at
+/// every size, so a tree twice as tall has as many twigs over four times the ground; with
+/// its leaves at their true size, a fixed `Leaves` would leave it a quarter of the leaf
+/// area index (a 20 m black oak at 0.4 where the 7 m one has 3.7). Open-grown crowns of a
+/// species keep their leaf area index as they grow, so the count grows with the crown's
+/// area instead.
+fn leaf_count_factor(scale: f32, tree_scale: f32) -> f32 {
+    if scale > 0.0 { (tree_scale / scale).powi(2) } else { 1.0 }
 }
 
 impl Gen<'_> {
@@ -555,7 +598,7 @@ impl Gen<'_> {
     }
 
     fn leaf_count(&mut self, s: &StemSeed) -> f32 {
-        let l = self.sp.leaves.abs();
+        let l = self.sp.leaves.abs() * leaf_count_factor(self.sp.scale, self.tree_scale);
         let r = if s.parent_length > 0.0 { s.offset / s.parent_length } else { 1.0 };
         l * shape_ratio(4, r) * self.sp.leaf_quality
     }

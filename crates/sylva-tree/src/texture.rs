@@ -284,7 +284,7 @@ pub fn cluster_layout(species: &Species, seed: u64, cell: u32) -> (Vec<Twig>, Ve
         r(k)
     };
     if needle {
-        // A spray: a main twig up the cell and five side twigs a side, needles on both
+        // A spray: a main twig up the cell and three side twigs a side, needles on both
         // sides of every twig, spreading forwards.
         let lean = 0.25 * (next() - 0.5);
         let main = ([0.5 - 0.3 * lean.sin(), 0.96], [0.5 + 0.3 * lean.sin(), 0.06]);
@@ -295,14 +295,14 @@ pub fn cluster_layout(species: &Species, seed: u64, cell: u32) -> (Vec<Twig>, Ve
             [d[0] / n, d[1] / n]
         };
         let mut all = vec![(main.0, main.1)];
-        for s in 0..10 {
-            let at = 0.12 + 0.085 * (s / 2) as f32 + 0.03 * next();
+        for s in 0..6 {
+            let at = 0.14 + 0.15 * (s / 2) as f32 + 0.03 * next();
             let side = if s % 2 == 0 { 1.0 } else { -1.0 };
             let from = [
                 main.0[0] + (main.1[0] - main.0[0]) * at,
                 main.0[1] + (main.1[1] - main.0[1]) * at,
             ];
-            let d = rot(dir, side * (0.8 + 0.25 * next()));
+            let d = rot(dir, side * (0.9 + 0.25 * next()));
             let l = 0.45 * (1.0 - 0.75 * at) + 0.04 * next();
             let to = [from[0] + d[0] * l, from[1] + d[1] * l];
             twigs.push((from, to, 0.003));
@@ -312,11 +312,11 @@ pub fn cluster_layout(species: &Species, seed: u64, cell: u32) -> (Vec<Twig>, Ve
             let d = [b[0] - a[0], b[1] - a[1]];
             let l = (d[0] * d[0] + d[1] * d[1]).sqrt();
             let u = [d[0] / l, d[1] / l];
-            let n = (l / (0.09 * len)).ceil() as usize;
+            let n = (l / (0.1 * len)).ceil() as usize;
             for i in 0..n {
                 let t = (i as f32 + 0.5) / n as f32;
                 for side in [-1.0f32, 1.0] {
-                    let nd = rot(u, side * (0.9 + 0.3 * (next() - 0.5)));
+                    let nd = rot(u, side * (1.2 + 0.3 * (next() - 0.5)));
                     leaves.push(LeafStroke {
                         base: [a[0] + d[0] * t, a[1] + d[1] * t],
                         dir: nd,

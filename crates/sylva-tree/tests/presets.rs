@@ -77,3 +77,101 @@ fn every_crown_carries_a_measured_range_of_leaf_area() {
         );
     }
 }
+
+/// A `lo–hi` range of docs/presets.md (an en dash, or a single value for both ends).
+fn range(cell: &str) -> (f32, f32) {
+    let cell = cell.trim();
+    let (lo, hi) = cell.split_once('–').unwrap_or((cell, cell));
+    let num = |s: &str| s.trim().parse::<f32>().unwrap_or_else(|e| panic!("{cell:?}: {e}"));
+    (num(lo), num(hi))
+}
+
+/// The rows of docs/presets.md's "Ranges" table: preset, then its four ranges.
+fn documented_ranges() -> Vec<(String, [(f32, f32); 4])> {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../docs/presets.md");
+    let text = std::fs::read_to_string(path).expect("docs/presets.md");
+    let table = text.split("## Ranges").nth(1).expect("a Ranges section");
+    table
+        .lines()
+        .skip_while(|l| !l.starts_with("| preset |"))
+        .skip(2)
+        .take_while(|l| l.starts_with('|'))
+        .map(|l| {
+            let cells: Vec<&str> = l.trim_matches('|').split('|').collect();
+            assert_eq!(cells.len(), 5, "row {l:?}");
+            let r = [range(cells[1]), range(cells[2]), range(cells[3]), range(cells[4])];
+            (cells[0].trim().to_string(), r)
+        })
+        .collect()
+}
+
+#[test]
+fn every_preset_grows_within_its_species_documented_ranges() {
+    // docs/presets.md holds each species' height, crown width over height, crown base over
+    // height and leaf area index, with their sources; every preset, at four seeds (four
+    // tree sizes within its `Scale ± ScaleV`), must grow within them. A preset whose
+    // parameters drift, a generator change that moves a species, or a range edited in the
+    // docs alone fails here.
+    let ranges = documented_ranges();
+    let names: Vec<&str> = ranges.iter().map(|(n, _)| n.as_str()).collect();
+    for (name, _) in PRESETS {
+        assert!(names.contains(name), "docs/presets.md has no row for {name}");
+    }
+    for (name, [height, width, base, lai]) in &ranges {
+        let sp = Species::preset(name).unwrap_or_else(|| panic!("{name}: not a preset"));
+        for seed in 1..=4 {
+            let s = sp.generate(seed).expect("valid").stats;
+            let measured = [
+                ("height", s.height, height),
+                (
+                    "crown width / height",
+                    0.5 * (s.crown_width[0] + s.crown_width[1]) / s.height,
+                    width,
+                ),
+                ("crown base / height", s.crown_base / s.height, base),
+                ("leaf area index", s.leaf_area_index(), lai),
+            ];
+            for (what, value, (lo, hi)) in measured {
+                // Two decimals, as the table reads.
+                let shown = (value * 100.0).round() / 100.0;
+                assert!(
+                    (*lo..=*hi).contains(&shown),
+                    "{name} seed {seed}: {what} {value:.3} outside the documented {lo}–{hi}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn the_crown_base_is_where_the_lowest_leafy_branch_leaves_the_trunk() {
+    // The willow's twigs hang to within 0.3 m of the ground, but its crown starts where its
+    // limbs leave the trunk, metres up: the crown base is read at the trunk, not at the
+    // lowest leaf. And no leafy branch leaves the trunk below it.
+    let sp = Species::preset("weeping_willow").expect("preset");
+    let tree = sp.generate(1).expect("valid");
+    let sk = &tree.skeleton;
+    let levels = stem_levels(sk);
+    let lowest_leaf = sk
+        .joints()
+        .iter()
+        .filter(|j| j.leaf_area > 0.0)
+        .map(|j| j.origin[2])
+        .fold(f32::MAX, f32::min);
+    let base = tree.stats.crown_base;
+    assert!(
+        lowest_leaf < 1.0 && base > 1.0,
+        "lowest leaf {lowest_leaf:.2} m, crown base {base:.2} m"
+    );
+    let lowest_branch = sk
+        .joints()
+        .iter()
+        .zip(&levels)
+        .filter(|(j, l)| **l == 1 && !j.continues && levels[j.parent as usize] == 0)
+        .map(|(j, _)| j.origin[2])
+        .fold(f32::MAX, f32::min);
+    assert!(
+        (lowest_branch - base).abs() < 1e-4,
+        "lowest limb {lowest_branch} m, crown base {base} m"
+    );
+}

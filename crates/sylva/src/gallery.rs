@@ -25,6 +25,10 @@ pub struct GalleryArgs {
     /// Leave out scene D (50 000 trees: the slowest picture).
     #[arg(long)]
     no_scene_d: bool,
+    /// Only this preset's four pictures (no contact sheet, scenes or index): for trying a
+    /// preset's parameters.
+    #[arg(long)]
+    species: Option<String>,
 }
 
 /// Simulation step of the gallery, s.
@@ -129,7 +133,16 @@ pub fn gallery(a: &GalleryArgs) -> anyhow::Result<()> {
     let (sw, sh) = (size.0 / 2, size.1 / 2);
     let sheet_w = sw * PRESETS.len() as u32;
     let mut sheet = vec![0u8; (sheet_w * 2 * sh * 4) as usize];
+    if let Some(only) = &a.species {
+        anyhow::ensure!(
+            PRESETS.iter().any(|(name, _)| name == only),
+            "--species {only}: not a preset (`sylva tree list` names them)"
+        );
+    }
     for (column, (name, _)) in PRESETS.iter().enumerate() {
+        if a.species.as_ref().is_some_and(|only| only != name) {
+            continue;
+        }
         let mut row = format!("| {name} |");
         for (wind, seconds) in [("calm", 0.1f32), ("storm", 3.0)] {
             let spec = specimen(name, wind)?;
@@ -160,6 +173,9 @@ pub fn gallery(a: &GalleryArgs) -> anyhow::Result<()> {
         }
         index += &row;
         index += "\n";
+    }
+    if a.species.is_some() {
+        return Ok(());
     }
     write_png(&a.out.join("presets.png"), sheet_w, 2 * sh, &sheet)?;
     index += "\nAll six, calm above storm: ![presets](presets.png)\n\n";

@@ -293,6 +293,11 @@ fn stats(a: StatsArgs) -> anyhow::Result<()> {
         s.crown_width[1],
         s.leaf_area_index()
     );
+    println!(
+        "crown base       {:.2} m ({:.0} % of the height in crown)",
+        s.crown_base,
+        100.0 * (1.0 - s.crown_base / s.height.max(1e-6))
+    );
     println!("mass             {:.0} kg", sk.carried_mass(0));
     println!("generation       {:.2} ms (skeleton, meshes, LOD chain, textures)", secs * 1e3);
     println!("LOD  triangles  branch tris  clusters  leaf area m²  min radius cm");

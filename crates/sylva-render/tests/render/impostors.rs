@@ -163,7 +163,7 @@ fn impostors_darken_in_a_strong_wind_as_full_detail_does() {
     // A stand of 100 trees (about 80 m across) seen from 60 m off its centre, without
     // shadows, at rest and after 3 s of a steady 12 m/s wind. Full detail darkens
     // (measured 3–4 %): the bent limbs and twigs turn the leaves from the sky, the mean
-    // cosine of their tilt falling to 0.85–0.89 for the aspen, maple and fir
+    // cosine of their tilt falling to 0.88 for the aspen and 0.92 for the fir
     // (`CrownLean::tilt`). The impostors, which bend at the trunk alone, turn their baked
     // leaf normals by that mean and darken too, the light their spread loses going to
     // leaves that face the sun or pass it through (measured here 2.6 % against 3.6 %; 6.1

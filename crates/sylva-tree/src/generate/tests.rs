@@ -246,7 +246,9 @@ fn the_douglas_fir_has_a_firs_proportions() {
         let lv = levels(&t.skeleton);
         let h = t.stats.height;
         let leafy: Vec<&crate::skeleton::Joint> = js.iter().filter(|j| j.leaf_area > 0.0).collect();
-        let base = leafy.iter().map(|j| j.origin[2]).fold(f32::INFINITY, f32::min);
+        // The crown starts where its lowest leafy branch leaves the trunk; the branchlets
+        // that hang from the lowest branches reach lower still.
+        let base = t.stats.crown_base;
         let crown = (h - base) / h;
         assert!((0.6..=0.95).contains(&crown), "seed {seed}: crown ratio {crown}");
         let reach = |j: &crate::skeleton::Joint| j.tip()[0].hypot(j.tip()[1]);
