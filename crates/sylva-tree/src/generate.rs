@@ -170,7 +170,8 @@ impl Species {
     /// An upper bound on the memory, bytes, that growing this species' tree and building
     /// its meshes, LOD chain and textures takes at its peak: per joint of
     /// [`Species::joint_bound`], [`BYTES_PER_JOINT`] plus [`BYTES_PER_LEAF`] for each of up to
-    /// [`LEAVES_COUNTED`] leaves a stem of the species' largest tree carries, and [`FIXED_BYTES`] for the textures.
+    /// [`LEAVES_COUNTED`] leaves a stem of the species' largest tree carries, and
+    /// [`FIXED_BYTES`] for the textures.
     pub fn memory_estimate(&self) -> f64 {
         let largest = bounded_scale(self.scale, self.scale_v, 1.0);
         let factor = f64::from(leaf_count_factor(self.scale, largest));
