@@ -142,7 +142,7 @@ species_params! {
         max_joints: u32 = "MaxJoints", "joints", 1000 ..= 16_000_000, 1_000_000,
             "guard: the most joints a tree may grow (about 1 kB of memory each with its mesh); \
              generation is refused beyond it, before growing when the branch counts already \
-             exceed it; the weeping willow grows 80 000";
+             exceed it; the weeping willow grows 36 000";
         ratio: f32 = "Ratio", "", 0.001 ..= 0.5, 0.015, "trunk base radius divided by tree length";
         ratio_power: f32 = "RatioPower", "", 0.0 ..= 5.0, 1.2,
             "child radius = parent radius × (child length / parent length)^RatioPower";

@@ -67,7 +67,7 @@ fn joint_budget_folds_light_joints_into_ancestors() {
 
 #[test]
 fn the_willows_default_export_keeps_its_hanging_twigs() {
-    // The command line's default budget, 1 024 of the willow's 80 000 joints: the twigs
+    // The command line's default budget, 1 024 of the willow's 36 000 joints: the twigs
     // that hang keep joints of their own (with their paths to the limbs), so the exported
     // twig tips (exported joints with no exported child) point down about as often as the
     // tree's own tips do, and its curtains sway instead of riding rigidly on the limbs.

@@ -75,7 +75,7 @@ pub struct GenerateArgs {
     lod: String,
     /// Most joints to export, 1 … 65535 (glTF's 16-bit joint indices); lighter joints fold
     /// into their nearest exported ancestor. The default suits editors: Blender's importer
-    /// takes about a minute for 4096 bones and far longer for the willow's 80 000.
+    /// takes about a minute for 4096 bones and far longer for the willow's 36 000.
     #[arg(long, default_value_t = 1024)]
     max_joints: usize,
     /// Output file (.glb).
