@@ -13,7 +13,7 @@
 //!
 //! **Leaf clusters.** A leaf cluster is one square card showing a cell of the leaf atlas
 //! (see [`crate::texture`]): a twig with its leaves drawn at their true size, so the card's
-//! side is the atlas span (3.5 leaf lengths; 12 needles for a spray) and it shows
+//! side is the atlas span (3.5 leaf lengths; 15 needles for a spray) and it shows
 //! `coverage · span²` of leaf area. Walking the joints in order, each joint's leaf area is
 //! owed to cards; a card is hung when at least half its area is owed (so the tree's total
 //! leaf area is kept within half a card), spread along the joint's segment on a golden-angle

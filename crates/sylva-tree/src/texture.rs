@@ -258,9 +258,9 @@ fn rot(d: [f32; 2], a: f32) -> [f32; 2] {
 
 /// Cell side in leaf lengths: a broadleaf cluster spans three and a half leaves (tight
 /// around the twig, so little of a card is transparent), a needle spray (a shoot with its
-/// side shoots) twelve needles.
+/// side shoots) fifteen needles.
 fn span_in_leaves(needle: bool) -> f32 {
-    if needle { 12.0 } else { 3.5 }
+    if needle { 15.0 } else { 3.5 }
 }
 
 /// Whether `species` has needles (LeafShape 6).

@@ -166,7 +166,7 @@ fn impostors_darken_in_a_strong_wind_as_full_detail_does() {
     // cosine of their tilt falling to 0.88 for the aspen and 0.92 for the fir
     // (`CrownLean::tilt`). The impostors, which bend at the trunk alone, turn their baked
     // leaf normals by that mean and darken too, the light their spread loses going to
-    // leaves that face the sun or pass it through (measured here 3.1 % against 3.9 %; 6.1
+    // leaves that face the sun or pass it through (measured here 3.1 % against 4.0 %; 6.1
     // against 6.7 % before leaves passed light through); unturned they came out brighter.
     let (full, spec) = stand(100, "12");
     let camera = Camera {
