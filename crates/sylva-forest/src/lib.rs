@@ -29,6 +29,7 @@ pub mod clip;
 pub mod driver;
 mod groups;
 mod lanes;
+pub mod occlusion;
 pub mod scene;
 pub mod wind;
 

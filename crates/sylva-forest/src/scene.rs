@@ -360,6 +360,10 @@ pub struct LodSpec {
     /// coarsest level whose geometric error against full detail spans at most this many
     /// pixels, and `fraction` is unused. Default 0: levels by `fraction`.
     pub error_px: f32,
+    /// Occlusion culling: trees hidden behind nearer trunks and crown cores are not drawn
+    /// (they still cast their shadows). Default off: in the built-in scenes it hides few
+    /// trees for the time it costs (docs/decisions/0014-occlusion-culling.md).
+    pub occlusion: bool,
 }
 
 impl Default for LodSpec {
@@ -371,6 +375,7 @@ impl Default for LodSpec {
             fraction: crate::driver::DEFAULT_LOD_FRACTION,
             far_level: crate::driver::DEFAULT_FAR_LEVEL,
             error_px: 0.0,
+            occlusion: false,
         }
     }
 }

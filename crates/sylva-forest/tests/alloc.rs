@@ -11,7 +11,9 @@ static GLOBAL: CountingAllocator = CountingAllocator;
 #[test]
 fn steady_state_frames_do_not_allocate() {
     let _one = exclusive();
-    let spec = SceneSpec::builtin("small").expect("small scene");
+    let mut spec = SceneSpec::builtin("small").expect("small scene");
+    // With occlusion culling on: its depth buffer and lists are kept between frames too.
+    spec.lod.occlusion = true;
     let mut forest = Forest::new(&spec).expect("forest");
     let camera = forest.default_camera();
     let mut frame = FrameData::default();

@@ -63,6 +63,10 @@ pub struct LodArgs {
     /// Wind-field LOD off: every tree simulated on its own (no instance groups).
     #[arg(long)]
     pub no_wind_lod: bool,
+    /// Occlusion culling on: trees hidden behind nearer trunks and crowns are not drawn
+    /// (default: the scene's `[lod] occlusion`, off).
+    #[arg(long)]
+    pub occlusion: bool,
     /// First LOD level drawn as an impostor (1 … 6; the scene's, default 1: full detail,
     /// then the impostor).
     #[arg(long)]
@@ -99,6 +103,7 @@ impl LodArgs {
         spec.lod.geometry &= !self.no_geometry_lod;
         spec.lod.animation &= !self.no_animation_lod;
         spec.lod.wind &= !self.no_wind_lod;
+        spec.lod.occlusion |= self.occlusion;
         Ok(())
     }
 }

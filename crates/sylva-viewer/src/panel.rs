@@ -116,6 +116,7 @@ fn figures(ui: &mut Ui, v: &Viewer) {
         row("draw calls", s.draw_calls.to_string());
         row("trees drawn", format!("{} of {} ({} impostors)", s.drawn, s.trees, s.impostors));
         row("shadow only", format!("{} trees out of view", s.shadow_only));
+        row("occluded", format!("{} trees hidden by nearer ones", s.occluded));
         row(
             "joints stepped",
             if v.settings.paused {
@@ -268,6 +269,7 @@ fn lod(ui: &mut Ui, v: &Viewer, out: &mut Vec<Action>) {
     ui.add_enabled(l.geometry, egui::Slider::new(&mut l.hysteresis, 0.0..=0.5).text("hysteresis"));
     ui.add_enabled(l.geometry, egui::Slider::new(&mut l.far_level, 1..=6).text("impostor level"));
     ui.checkbox(&mut l.animation, "animation LOD (joints by projected size)");
+    ui.checkbox(&mut l.occlusion, "occlusion culling (hidden trees not drawn)");
     if l != lod {
         out.push(Action::Lod(l));
     }

@@ -42,6 +42,8 @@ pub(super) struct Cell {
     pub(super) impostors: f64,
     /// Trees out of view cast into the shadow map only, mean per timed frame.
     pub(super) shadow_only: f64,
+    /// Trees in the view cone hidden by nearer trees (not drawn), mean per timed frame.
+    pub(super) occluded: f64,
     pub(super) ssim: Option<f64>,
     pub(super) flip: Option<f64>,
     pub(super) image: Option<Vec<u8>>,
@@ -128,6 +130,7 @@ pub(super) fn configure(
         anyhow::ensure!((0.0..=64.0).contains(&px), "--lod-error {px}: must be 0 … 64 pixels");
         spec.lod.error_px = px;
     }
+    spec.lod.occlusion |= a.occlusion;
     sylva_frames::render::apply_max_memory(&mut spec, a.max_memory)?;
     Ok(spec)
 }
@@ -156,6 +159,9 @@ pub(super) fn command_line(a: &Table3Bench, (w, h): (u32, u32)) -> String {
     }
     if let Some(m) = a.max_memory {
         let _ = write!(c, " --max-memory {m}");
+    }
+    if a.occlusion {
+        c.push_str(" --occlusion");
     }
     if a.all_lods_only {
         c.push_str(" --all-lods-only");
@@ -192,6 +198,7 @@ impl Cell {
         self.capped = self.capped.max(s.state_capped);
         self.impostors += s.impostors as f64;
         self.shadow_only += s.shadow_only as f64;
+        self.occluded += s.occluded as f64;
     }
 
     /// After `frames` timed frames: the counts' means, the medians of the `samples`
@@ -204,6 +211,7 @@ impl Cell {
         }
         self.impostors /= k;
         self.shadow_only /= k;
+        self.occluded /= k;
         let [mut sim, mut build, mut draw] = samples;
         self.sim_ms = median(&mut sim);
         self.frame_ms = median(&mut build);

@@ -86,6 +86,10 @@ pub struct Table3Bench {
     /// scene's).
     #[arg(value_parser = sylva_frames::finite::<f32>, long)]
     lod_error: Option<f32>,
+    /// Occlusion culling on in every configuration: trees hidden behind nearer trunks and
+    /// crowns are not drawn (default: the scene's, off).
+    #[arg(long)]
+    occlusion: bool,
     /// Memory the animation state may take, GB (default: the scene's cap, at most three
     /// quarters of the free memory). Over it, lane groups are kept at coarser prefixes (a
     /// note says how many); without the animation LOD the forest is refused.

@@ -152,6 +152,7 @@ impl Forest {
                 fraction: spec.lod.fraction,
                 far_level: spec.lod.far_level,
                 error_budget: spec.lod.error_px,
+                occlusion: spec.lod.occlusion,
                 ..LodSettings::default()
             },
             lane_groups: lane_base,
@@ -262,7 +263,9 @@ fn new_species(
     prefixes.push(order.trunk);
     batch.set_prefixes(&prefixes);
     let level_error = level_errors(&model);
+    let occluder = crate::occlusion::Occluder::of(&model);
     Ok(SpeciesRuntime {
+        occluder,
         name: spec.species[si].name.clone(),
         level_error,
         model,

@@ -22,6 +22,10 @@ use super::{Forest, SpeciesRuntime};
 use crate::camera::{Camera, ShadowBox, ShadowSweep, ViewCone, may_see_trees, may_shade_trees};
 use crate::scene::Placement;
 
+fn sub3(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
 /// What stays fixed over one frame's passes: the view, the shadow's reach, the layout of
 /// bucket keys and the LOD settings.
 struct View {
@@ -95,6 +99,7 @@ impl Forest {
         out.seen_max.reset(sims);
         let mut view = self.view(camera, aspect, previous);
         self.plan_levels(&mut view, out);
+        self.fill_occlusion(&view, camera, aspect, out);
         let mut stats = FrameStats { trees: self.trees.len(), ..FrameStats::default() };
         let runs = self.classify(&view, out);
         out.gather(runs, view.all_keys, &mut stats);
@@ -243,6 +248,7 @@ impl Forest {
         }
         let (past_cap, thresholds) = (&view.past_cap, &view.thresholds);
         let (need_max, want_max, seen_max) = (&out.need_max, &out.want_max, &out.seen_max);
+        let occlusion = &out.occlusion;
         out.runs[..runs]
             .par_iter_mut()
             .zip(out.lod_state.par_chunks_mut(TREE_RUN))
@@ -259,6 +265,11 @@ impl Forest {
                 let (cx, cy) = (&cr.x[span.clone()], &cr.y[span.clone()]);
                 let (cz, ch) = (&cr.z[span.clone()], &cr.h[span]);
                 may_see_trees(&view.cone, cx, cy, cz, ch, &mut run.seen[..n]);
+                let occluded = if view.lod.occlusion {
+                    self.hide_occluded(occlusion, trees, cz, ch, &mut run.seen[..n])
+                } else {
+                    0
+                };
                 run.shade.resize(n, false);
                 match &view.sweep {
                     Some(sw) => may_shade_trees(
@@ -273,7 +284,7 @@ impl Forest {
                     ),
                     None => run.shade[..n].fill(false),
                 }
-                run.stats = FrameStats::default();
+                run.stats = FrameStats { occluded, ..FrameStats::default() };
                 let mut to = RunOut { run, need_max, want_max, seen_max };
                 for (k, ((p, g), state)) in trees.iter().zip(states).enumerate() {
                     // The crown's height and centre, as the culling took them.
@@ -284,6 +295,89 @@ impl Forest {
                 }
             });
         runs
+    }
+
+    /// Pass 0, with occlusion culling on: the trees in view that cover enough of the image
+    /// (a run at a time, in parallel) write their occluders into the frame's depth buffer,
+    /// near to far.
+    fn fill_occlusion(&self, view: &View, camera: &Camera, aspect: f32, out: &mut FrameData) {
+        out.occlusion.reset(camera, aspect);
+        if !view.lod.occlusion {
+            return;
+        }
+        let runs = self.trees.len().div_ceil(TREE_RUN);
+        if out.runs.len() < runs {
+            out.runs.resize_with(runs, TreeRun::default);
+        }
+        let cot = 1.0 / (0.5 * camera.fov_deg.to_radians()).tan();
+        let (buffer, forward) = (&out.occlusion, camera.forward());
+        out.runs[..runs].par_iter_mut().zip(self.trees.par_chunks(TREE_RUN)).enumerate().for_each(
+            |(r, (run, trees))| {
+                let (first, n) = (r * TREE_RUN, trees.len());
+                run.occluders.clear();
+                run.seen.resize(n, false);
+                let (cr, span) = (&self.crowns, first..first + n);
+                let (cx, cy) = (&cr.x[span.clone()], &cr.y[span.clone()]);
+                let (cz, ch) = (&cr.z[span.clone()], &cr.h[span]);
+                may_see_trees(&view.cone, cx, cy, cz, ch, &mut run.seen[..n]);
+                for (k, (p, _)) in trees.iter().enumerate() {
+                    let side = self.species[p.species as usize].occluder.smallest_side();
+                    if !run.seen[k] || side <= 0.0 {
+                        continue;
+                    }
+                    let d = sub3(p.position, camera.eye);
+                    let w = d[0] * forward[0] + d[1] * forward[1] + d[2] * forward[2];
+                    if buffer.worth_writing(side * p.scale, w, cot) {
+                        run.occluders.push((first + k) as u32);
+                    }
+                }
+            },
+        );
+        // Near to far (ties by tree), so each pixel's light falls in depth order.
+        let order = &mut out.occluder_order;
+        order.clear();
+        for run in &out.runs[..runs] {
+            order.extend(run.occluders.iter().map(|&i| {
+                let p = &self.trees[i as usize].0;
+                let o = &self.species[p.species as usize].occluder;
+                (out.occlusion.tree_depth(o, p.position, p.scale), i)
+            }));
+        }
+        order.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        for &(_, i) in order.iter() {
+            let p = &self.trees[i as usize].0;
+            let o = &self.species[p.species as usize].occluder;
+            out.occlusion.add_tree(o, p.position, p.scale);
+        }
+    }
+
+    /// Of a run's trees in view (`seen`), those whose bounds `buffer` hides are marked out
+    /// of view; returns how many.
+    fn hide_occluded(
+        &self,
+        buffer: &crate::occlusion::DepthBuffer,
+        trees: &[(Placement, u32)],
+        z: &[f32],
+        h: &[f32],
+        seen: &mut [bool],
+    ) -> usize {
+        let mut hidden = 0;
+        for (k, (p, _)) in trees.iter().enumerate() {
+            if !seen[k] {
+                continue;
+            }
+            let o = &self.species[p.species as usize].occluder;
+            // The tree's bounds at rest, widened by a tenth of its height for its sway.
+            let r = o.bound_radius * p.scale + 0.1 * h[k];
+            let (x, y) = (p.position[0], p.position[1]);
+            let lo = [x - r, y - r, z[k] + o.bound_bottom * p.scale - 0.1];
+            let hi = [x + r, y + r, z[k] + o.bound_top * p.scale + 0.1 * h[k]];
+            if buffer.hides_box(lo, hi) {
+                seen[k] = false;
+                hidden += 1;
+            }
+        }
+        hidden
     }
 
     /// One tree of pass 1 (`k` its index in its run): culled, or its level, cross-fade and
@@ -645,6 +739,7 @@ impl FrameData {
             stats.group_changes += r.group_changes;
             stats.drawn += r.drawn;
             stats.shadow_only += r.shadow_only;
+            stats.occluded += r.occluded;
             stats.regrouping += r.regrouping;
             stats.fading += r.fading;
             stats.impostors += r.impostors;

@@ -82,6 +82,11 @@ pub struct FrameStats {
     /// Trees outside the view drawn into the shadow map only, as their shadow may fall in
     /// view (not counted in `drawn`, `triangles` or `draw_calls`).
     pub shadow_only: usize,
+    /// Trees in the view cone hidden behind nearer trunks and crowns
+    /// ([`LodSettings::occlusion`](super::LodSettings::occlusion)): not drawn, and counted
+    /// in `shadow_only` where their shadow may fall in view. Trees in the view cone are
+    /// `drawn + occluded`.
+    pub occluded: usize,
     /// Triangles drawn (branches and leaf billboards).
     pub triangles: usize,
     /// Simulated instances (instance groups).
@@ -174,6 +179,10 @@ pub struct FrameData {
     pub(super) cast_floor: Vec<u32>,
     /// Per lane group drawn: where its palettes go.
     pub(super) copies: Vec<PaletteCopy>,
+    /// The occlusion depth buffer of this view's last frame.
+    pub(super) occlusion: crate::occlusion::DepthBuffer,
+    /// Scratch: the trees writing occluders, by depth.
+    pub(super) occluder_order: Vec<(f32, u32)>,
     /// `need` and `want` as the runs raise them, and `need` of the trees in view alone.
     pub(super) need_max: Maxima,
     pub(super) want_max: Maxima,
@@ -215,6 +224,8 @@ pub(super) struct TreeRun {
     pub(super) seen: Vec<bool>,
     /// Per tree of the run: whether its shadow may fall in view (first cut).
     pub(super) shade: Vec<bool>,
+    /// Trees of the run (indices in the forest) that write their occluders.
+    pub(super) occluders: Vec<u32>,
 }
 
 /// The trees' feet and heights as separate arrays (what culling reads, in the layout that

@@ -27,6 +27,11 @@ pub struct LodSettings {
     /// many pixels of the image ([`level_thresholds`]), and `fraction` places the impostor
     /// alone: a tree covering less of the image's height is one.
     pub error_budget: f32,
+    /// Occlusion culling on: trees in view hidden behind nearer trunks and crown cores
+    /// (`crate::occlusion`) are not drawn; like trees out of view they may still cast into
+    /// the shadow map and step their trunks only. Default off
+    /// (docs/decisions/0014-occlusion-culling.md).
+    pub occlusion: bool,
 }
 
 /// Pyramid level the wind of far groups is read from: averages of 4 × 4 grid points.
@@ -72,6 +77,7 @@ impl Default for LodSettings {
             hysteresis: 0.1,
             animation: true,
             error_budget: 0.0,
+            occlusion: false,
         }
     }
 }

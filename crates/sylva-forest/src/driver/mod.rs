@@ -192,6 +192,8 @@ pub struct SpeciesRuntime {
     packer: lanes::Packer,
     /// The skeleton's LOD order: joints each level uses, joints of the trunk.
     pub order: LodOrder,
+    /// What of its tree surely stops the eye (occlusion culling), and its bounds.
+    pub occluder: crate::occlusion::Occluder,
     /// Simulated instances that read the coarse wind in the last step.
     coarse_wind: usize,
     /// Simulated instances that read the near field in the last step.

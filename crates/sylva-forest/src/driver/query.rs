@@ -77,6 +77,7 @@ impl Forest {
             hysteresis: finite(lod.hysteresis, d.hysteresis).clamp(0.0, 0.5),
             animation: lod.animation,
             error_budget: finite(lod.error_budget, d.error_budget).clamp(0.0, 64.0),
+            occlusion: lod.occlusion,
         };
     }
 

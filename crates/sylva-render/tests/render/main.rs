@@ -9,6 +9,7 @@ use sylva_render::Headless;
 mod foliage;
 mod host;
 mod impostors;
+mod occlusion;
 mod woodland;
 
 const W: u32 = 256;
