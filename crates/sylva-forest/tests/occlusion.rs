@@ -40,11 +40,11 @@ fn camera_from(at: [f32; 3], offset: [f32; 3]) -> Camera {
 
 #[test]
 fn a_tree_behind_a_stand_is_not_drawn_and_alone_or_with_culling_off_it_is() {
-    // 3 000 maples 4 m apart (a stand 310 m across); the camera 150 m west of its centre,
-    // 20 m up (just over the canopy), looks across it.
-    let mut forest = stand(3000, 4.0);
+    // 3 000 maples 6 m apart (a stand 470 m across); the camera 250 m west of its centre
+    // (16 m out from its edge), 20 m up (level with the crowns' tops), looks across it.
+    let mut forest = stand(3000, 6.0);
     let centre = forest.placement(0).expect("a tree").position;
-    let offset = [-150.0, 0.0, 20.0];
+    let offset = [-250.0, 0.0, 20.0];
     let camera = camera_from(centre, offset);
     let mut f = FrameData::with_rows(768);
     forest.step(1.0 / 30.0);
@@ -78,7 +78,7 @@ fn a_tree_behind_a_stand_is_not_drawn_and_alone_or_with_culling_off_it_is() {
     // One of the hidden trees, with the stand in front of it gone: a lone tree seen from
     // where the camera saw it is drawn.
     let h = hidden[hidden.len() / 2];
-    let mut lone = stand(1, 4.0);
+    let mut lone = stand(1, 6.0);
     let at = lone.placement(0).expect("a tree").position;
     let seen_from = [camera.eye[0] - h[0], camera.eye[1] - h[1], camera.eye[2] - h[2]];
     let lone_camera = Camera {

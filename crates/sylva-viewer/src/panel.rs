@@ -116,7 +116,14 @@ fn figures(ui: &mut Ui, v: &Viewer) {
         row("draw calls", s.draw_calls.to_string());
         row("trees drawn", format!("{} of {} ({} impostors)", s.drawn, s.trees, s.impostors));
         row("shadow only", format!("{} trees out of view", s.shadow_only));
-        row("occluded", format!("{} trees hidden by nearer ones", s.occluded));
+        row(
+            "occluded",
+            if v.forest.lod().occlusion {
+                format!("{} trees hidden by nearer ones", s.occluded)
+            } else {
+                "culling off".to_string()
+            },
+        );
         row(
             "joints stepped",
             if v.settings.paused {
