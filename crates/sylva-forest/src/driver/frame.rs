@@ -301,10 +301,11 @@ impl Forest {
     /// (a run at a time, in parallel) write their occluders into the frame's depth buffer,
     /// near to far.
     fn fill_occlusion(&self, view: &View, camera: &Camera, aspect: f32, out: &mut FrameData) {
-        out.occlusion.reset(camera, aspect);
+        // Off, the buffer is neither filled nor read.
         if !view.lod.occlusion {
             return;
         }
+        out.occlusion.reset(camera, aspect);
         let runs = self.trees.len().div_ceil(TREE_RUN);
         if out.runs.len() < runs {
             out.runs.resize_with(runs, TreeRun::default);
