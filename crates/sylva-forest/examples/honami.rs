@@ -4,7 +4,14 @@
 //! trees one behind the other along the wind (at most 4 m apart across it), the
 //! correlation of the upwind tree's record with the downwind one's a lag later.
 //!
-//!     cargo run --release -p sylva-forest --example honami -- [SECONDS]
+//!     cargo run --release -p sylva-forest --example honami -- [SECONDS] [PICTURE.png]
+//!
+//! With a picture path, also draws the gusts crossing the stand: a strip of canopy along
+//! the wind through the stand's middle (50 m across), downwind to the right in 6 m columns,
+//! time downwards at 10 Hz for the first 60 s, each column's trees' displacement downwind
+//! (about its mean, in units of its spread, over a second's running mean that hides each
+//! tree's own swing) lighter, upwind darker. A gust is a light streak whose slope is its
+//! travel speed.
 //!
 //! Prints, per band of along-wind separation, the lag of the peak correlation and its
 //! value; the travel speed fitted through them against the field's convection speed U_c;
@@ -62,6 +69,9 @@ fn main() -> Result<()> {
         r.iter_mut().for_each(|x| *x = (*x - m) / s);
     }
     let pos: Vec<[f32; 3]> = (0..n).map(|t| forest.placement(t).expect("tree").position).collect();
+    if let Some(path) = std::env::args().nth(2) {
+        strip_picture(&path, &pos, &rec)?;
+    }
     let lags = (MAX_LAG / DT) as usize;
     let mut sum = vec![vec![0.0f64; lags + 1]; BANDS];
     let (mut pairs, mut sep) = (vec![0usize; BANDS], vec![0.0f64; BANDS]);
@@ -135,5 +145,74 @@ fn main() -> Result<()> {
             2.0 * BAND * BANDS as f32
         ),
     }
+    Ok(())
+}
+
+/// Columns of the strip picture, m; its half-width across the wind, m; its time step, in
+/// record frames (10 Hz); its length, s; pixels per column.
+const COLUMN: f32 = 6.0;
+const STRIP: f32 = 25.0;
+const EVERY: usize = 3;
+const PICTURE_SECONDS: f32 = 60.0;
+const COLUMN_PX: usize = 8;
+/// Running mean of the picture's records, frames (1 s).
+const SMOOTH: usize = 30;
+
+/// The strip of canopy over time (see the module's documentation) as an RGB PNG at `path`,
+/// from the trees at `pos` and their normalised records `rec`.
+fn strip_picture(path: &str, pos: &[[f32; 3]], rec: &[Vec<f32>]) -> Result<()> {
+    let y_mid = pos.iter().map(|p| p[1]).sum::<f32>() / pos.len().max(1) as f32;
+    let strip: Vec<usize> = (0..pos.len()).filter(|&t| (pos[t][1] - y_mid).abs() < STRIP).collect();
+    let x0 = strip.iter().map(|&t| pos[t][0]).fold(f32::INFINITY, f32::min);
+    let x1 = strip.iter().map(|&t| pos[t][0]).fold(f32::NEG_INFINITY, f32::max);
+    anyhow::ensure!(x1 > x0, "no trees in the strip");
+    let columns = ((x1 - x0) / COLUMN) as usize + 1;
+    let frames = rec.first().map_or(0, Vec::len);
+    let rows = (frames / EVERY).min((PICTURE_SECONDS / DT) as usize / EVERY);
+    let (width, height) = (columns * COLUMN_PX, rows);
+    // Per column and picture row: its trees' mean record, over the running mean.
+    let mean_at = |c: usize, f: usize| {
+        let members: Vec<usize> =
+            strip.iter().copied().filter(|&t| ((pos[t][0] - x0) / COLUMN) as usize == c).collect();
+        if members.is_empty() {
+            return None;
+        }
+        let (a, b) = (f.saturating_sub(SMOOTH / 2), (f + SMOOTH / 2).min(frames));
+        let sum: f32 = members.iter().map(|&t| rec[t][a..b].iter().sum::<f32>()).sum();
+        Some(sum / (members.len() * (b - a)) as f32)
+    };
+    let mut rgb = vec![0u8; width * height * 3];
+    for row in 0..rows {
+        let values: Vec<Option<f32>> = (0..columns).map(|c| mean_at(c, row * EVERY)).collect();
+        for c in 0..columns {
+            // A column without trees takes its neighbours' mean.
+            let v = values[c].or_else(|| {
+                let near: Vec<f32> = [c.wrapping_sub(1), c + 1]
+                    .iter()
+                    .filter_map(|&k| values.get(k).copied().flatten())
+                    .collect();
+                (!near.is_empty()).then(|| near.iter().sum::<f32>() / near.len() as f32)
+            });
+            // Canopy green, lighter where the column bends downwind (a gust), darker where
+            // it swings back.
+            let light = 0.5 + 0.3 * v.unwrap_or(0.0).clamp(-1.5, 1.5);
+            let colour = [60.0 + 150.0 * light, 110.0 + 140.0 * light, 40.0 + 80.0 * light];
+            for x in c * COLUMN_PX..(c + 1) * COLUMN_PX {
+                let i = (row * width + x) * 3;
+                for k in 0..3 {
+                    rgb[i + k] = colour[k].clamp(0.0, 255.0) as u8;
+                }
+            }
+        }
+    }
+    let file = std::io::BufWriter::new(std::fs::File::create(path)?);
+    let mut e = png::Encoder::new(file, width as u32, height as u32);
+    e.set_color(png::ColorType::Rgb);
+    e.set_depth(png::BitDepth::Eight);
+    e.write_header()?.write_image_data(&rgb)?;
+    println!(
+        "wrote {path}: {columns} columns of {COLUMN} m (downwind to the right), {rows} rows of {:.1} s",
+        EVERY as f32 * DT
+    );
     Ok(())
 }
