@@ -9,12 +9,13 @@
 //! [`HIDDEN_TRANSMISSION`]; from that depth on, the pixel is hidden. A tree whose bounding
 //! box lies behind that depth at every pixel it may cover is hidden.
 //!
-//! Conservative on both sides: a pixel takes a rectangle only where the rectangle covers it
-//! whole, at the depth of the far side of the crown (or bole) it stands in; a tree is hidden
-//! only where its nearest corner lies behind every pixel its box's image touches. A
-//! crown's rectangle and the light it lets through are measured once per species against
-//! its own leaves ([`Occluder::of`]), the cards' alpha taken as their leaf area over their
-//! area; wood inside the crown is not counted, so the cores err transparent.
+//! Conservative in its geometry: a pixel takes a rectangle only where the rectangle covers
+//! it whole, at the depth of the far side of the crown it stands in; a tree is hidden only
+//! where its nearest corner lies behind every pixel its box's image touches. The light a
+//! crown's rectangle lets through is measured once per species against its own leaves
+//! ([`Occluder::of`]), the cards' alpha taken as their leaf area over their area, and
+//! taken at the ninth decile of its lines of sight; wood inside the crown is not counted,
+//! so the cores err transparent.
 
 use rayon::prelude::*;
 use sylva_core::v3::{cross, dot, norm, sub};
@@ -70,8 +71,9 @@ pub struct Occluder {
     pub bound_top: f32,
 }
 
-/// A ray-card test's reach: a card hides a line of sight passing within its half
-/// diagonal.
+/// The light a line of sight through `p` along unit `d` keeps after the leaf cards it
+/// crosses, each taking its alpha (leaf area over card area). A card is tested only where
+/// the line passes within its half diagonal of its centre.
 fn card_transmission(clusters: &[Card], p: [f32; 3], d: [f32; 3]) -> f32 {
     let mut t = 1.0f32;
     for c in clusters {
