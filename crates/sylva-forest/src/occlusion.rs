@@ -264,7 +264,9 @@ impl Occluder {
     }
 
     /// The smallest side of its rectangles, m (0: none): a tree writes its occluder where
-    /// this spans a pixel of the depth buffer.
+    /// this spans a pixel of the depth buffer, so only near trees write, whose bole spans a
+    /// pixel too. Writing every tree whose largest rectangle spans one hides 129 trees
+    /// instead of 126 on scene D's walk, for twice the frame-building time.
     pub fn smallest_side(&self) -> f32 {
         let mut side = f32::INFINITY;
         for (w, h) in [
