@@ -44,6 +44,8 @@ pub(super) struct Cell {
     pub(super) shadow_only: f64,
     /// Trees in the view cone hidden by nearer trees (not drawn), mean per timed frame.
     pub(super) occluded: f64,
+    /// Trees drawn (in view and not hidden), mean per timed frame.
+    pub(super) drawn: f64,
     pub(super) ssim: Option<f64>,
     pub(super) flip: Option<f64>,
     pub(super) image: Option<Vec<u8>>,
@@ -199,6 +201,7 @@ impl Cell {
         self.impostors += s.impostors as f64;
         self.shadow_only += s.shadow_only as f64;
         self.occluded += s.occluded as f64;
+        self.drawn += s.drawn as f64;
     }
 
     /// After `frames` timed frames: the counts' means, the medians of the `samples`
@@ -212,6 +215,7 @@ impl Cell {
         self.impostors /= k;
         self.shadow_only /= k;
         self.occluded /= k;
+        self.drawn /= k;
         let [mut sim, mut build, mut draw] = samples;
         self.sim_ms = median(&mut sim);
         self.frame_ms = median(&mut build);

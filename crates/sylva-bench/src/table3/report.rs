@@ -131,19 +131,21 @@ fn per_configuration(md: &mut String, results: &[SceneCells]) -> String {
     );
     let _ = writeln!(
         md,
-        "| scene | configuration | sim ms | frame ms | slowest sim + frame ms | render ms | M triangles | draws | joint updates | MB uploaded: mean / max | MB animation state | simulated trees | impostors | shadow only | occluded | FLIP vs full detail | SSIM vs full detail | note |"
+        "| scene | configuration | sim ms | frame ms | slowest sim + frame ms | render ms | M triangles | draws | joint updates | MB uploaded: mean / max | MB animation state | simulated trees | trees drawn | impostors | shadow only | occluded | FLIP vs full detail | SSIM vs full detail | note |"
     );
-    let _ =
-        writeln!(md, "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    let _ = writeln!(
+        md,
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+    );
     let mut csv = String::from(
-        "scene,trees,configuration,fps,sim_ms,frame_ms,render_ms,triangles,draws,joint_updates,uploaded_mb,uploaded_max_mb,state_mb,simulated,impostors,shadow_only,flip,ssim,cpu_max_ms,overlapped_fps,gpu_shadows_ms,gpu_trees_ms,gpu_impostors_ms,gpu_ground_ms,gpu_sky_resolve_ms,occluded\n",
+        "scene,trees,configuration,fps,sim_ms,frame_ms,render_ms,triangles,draws,joint_updates,uploaded_mb,uploaded_max_mb,state_mb,simulated,impostors,shadow_only,flip,ssim,cpu_max_ms,overlapped_fps,gpu_shadows_ms,gpu_trees_ms,gpu_impostors_ms,gpu_ground_ms,gpu_sky_resolve_ms,occluded,drawn\n",
     );
     for (name, trees, cells) in results {
         for (c, (label, ..)) in cells.iter().zip(CONFIGS) {
             let opt = |v: Option<f64>, p: usize| v.map_or("—".into(), |v| format!("{v:.p$}"));
             let _ = writeln!(
                 md,
-                "| {name} | {label} | {:.1} | {:.1} | {:.1} | {} | {:.2} | {:.0} | {:.0} | {:.2} / {:.2} | {:.1} | {} | {:.0} | {:.0} | {:.0} | {} | {} | {} |",
+                "| {name} | {label} | {:.1} | {:.1} | {:.1} | {} | {:.2} | {:.0} | {:.0} | {:.2} / {:.2} | {:.1} | {} | {:.0} | {:.0} | {:.0} | {:.0} | {} | {} | {} |",
                 c.sim_ms,
                 c.frame_ms,
                 c.cpu_max_ms,
@@ -155,6 +157,7 @@ fn per_configuration(md: &mut String, results: &[SceneCells]) -> String {
                 c.upload_max_mb,
                 c.state_mb,
                 c.simulated,
+                c.drawn,
                 c.impostors,
                 c.shadow_only,
                 c.occluded,
@@ -164,7 +167,7 @@ fn per_configuration(md: &mut String, results: &[SceneCells]) -> String {
             );
             let _ = writeln!(
                 csv,
-                "{name},{trees},{label},{},{:.3},{:.3},{},{:.0},{:.0},{:.0},{:.3},{:.3},{:.3},{},{:.0},{:.0},{},{},{:.3},{},{},{:.0}",
+                "{name},{trees},{label},{},{:.3},{:.3},{},{:.0},{:.0},{:.0},{:.3},{:.3},{:.3},{},{:.0},{:.0},{},{},{:.3},{},{},{:.0},{:.0}",
                 c.fps().map_or(String::new(), |f| format!("{f:.3}")),
                 c.sim_ms,
                 c.frame_ms,
@@ -186,7 +189,8 @@ fn per_configuration(md: &mut String, results: &[SceneCells]) -> String {
                     Some(p) => p.map(|t| format!("{t:.3}")).join(","),
                     None => ",".repeat(PARTS - 1),
                 },
-                c.occluded
+                c.occluded,
+                c.drawn
             );
         }
     }
