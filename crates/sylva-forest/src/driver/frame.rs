@@ -1,5 +1,8 @@
-//! Building a frame (see the `driver` module's documentation), in five passes:
+//! Building a frame (see the `driver` module's documentation), in five passes, after one
+//! more with occlusion culling on:
 //!
+//! 0. [`Forest::fill_occlusion`]: the trees in view near enough write their occluders into
+//!    the frame's depth buffer, near to far (`crate::occlusion`).
 //! 1. [`Forest::classify`]: per tree, in runs in parallel, whether it is in view (or casts
 //!    into it), its level and cross-fade, the joints its simulation must show and step;
 //!    the draws go to per-run lists by bucket key.
