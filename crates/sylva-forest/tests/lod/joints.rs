@@ -185,6 +185,91 @@ fn a_small_tree_at_full_detail_simulates_a_coarser_prefix_and_holds_its_twigs_wi
     }
 }
 
+#[test]
+fn a_tree_that_comes_into_view_after_ten_seconds_out_of_it_blends_its_crown_in() {
+    // One tree in a strong wind, the camera turned away from it for 10 s (it steps its
+    // trunk alone; its crown rests on it), then turned to it at 80 % of the image height
+    // (every joint simulated again); beside it the same forest with the tree in view all
+    // along. The crown's joints blend in from rest: over the first second in view no frame
+    // changes a twig's bend by more than twice what the tree seen all along shows in the
+    // same second, nor by half of how far its twigs are bent (a snap would be all of it).
+    let mut spec = SceneSpec::builtin("small").expect("small");
+    spec.trees = 1;
+    let (mut returning, mut watched) =
+        (Forest::new(&spec).expect("forest"), Forest::new(&spec).expect("forest"));
+    let (p, si) = {
+        let pl = returning.placement(0).expect("tree");
+        (pl.position, pl.species as usize)
+    };
+    let tall = returning.tree_info(0).expect("tree").height;
+    let mid = [p[0], p[1], p[2] + 0.5 * tall];
+    let d = tall / (2.0 * 30f32.to_radians().tan() * 0.8);
+    let toward = Camera {
+        eye: [mid[0] - d, mid[1], mid[2]],
+        target: mid,
+        fov_deg: 60.0,
+        near: 0.5,
+        far: 1e4,
+    };
+    let away = Camera { target: [mid[0] - 2.0 * d, mid[1], mid[2]], ..toward };
+    let sk = returning.species[si].model.tree.skeleton.clone();
+    let (n, trunk) = (sk.len(), returning.species[si].order.trunk);
+    let joints: Vec<usize> = (0..n).collect();
+    // Each crown joint's tip relative to where its parent's motion alone carries it.
+    let bends = |forest: &Forest| -> Vec<[f32; 3]> {
+        let all = forest.tree_palettes(0, &joints);
+        (trunk..n)
+            .map(|j| {
+                let tip = sk.joints()[j].tip();
+                let parent = sk.joints()[j].parent as usize;
+                let (a, b) =
+                    (sylva_sway::transform(&all[j], tip), sylva_sway::transform(&all[parent], tip));
+                [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+            })
+            .collect()
+    };
+    let farthest = |a: &[[f32; 3]], b: &[[f32; 3]]| {
+        a.iter()
+            .zip(b)
+            .map(|(x, y)| (0..3).map(|k| (x[k] - y[k]).powi(2)).sum::<f32>().sqrt())
+            .fold(0.0f32, f32::max)
+    };
+    let dt = 1.0 / 30.0;
+    let (mut f, mut g) = (FrameData::default(), FrameData::default());
+    for _ in 0..300 {
+        returning.step(dt);
+        returning.frame(&away, 4.0 / 3.0, &mut f);
+        watched.step(dt);
+        watched.frame(&toward, 4.0 / 3.0, &mut g);
+    }
+    assert_eq!((f.stats.drawn, g.stats.drawn), (0, 1), "out of view, and in view");
+    let rest = vec![[0.0; 3]; n - trunk];
+    let mut last = bends(&returning);
+    assert!(farthest(&last, &rest) < 1e-4, "out of view its crown rests on its trunk");
+    let snap = farthest(&bends(&watched), &rest);
+    let mut last_watched = bends(&watched);
+    let (mut entering, mut ordinary) = (0.0f32, 0.0f32);
+    for _ in 0..30 {
+        for (forest, frame) in [(&mut returning, &mut f), (&mut watched, &mut g)] {
+            forest.step(dt);
+            forest.frame(&toward, 4.0 / 3.0, frame);
+        }
+        let (now, now_watched) = (bends(&returning), bends(&watched));
+        entering = entering.max(farthest(&last, &now));
+        ordinary = ordinary.max(farthest(&last_watched, &now_watched));
+        (last, last_watched) = (now, now_watched);
+    }
+    eprintln!(
+        "largest change of a twig's bend in a frame over the first second in view: {entering:.4} m \
+         (the tree seen all along: {ordinary:.4} m; its twigs bent up to {snap:.4} m)"
+    );
+    assert!(
+        entering < 2.0 * ordinary,
+        "{entering} m in a frame coming into view against {ordinary} m"
+    );
+    assert!(entering < 0.5 * snap, "{entering} m in a frame coming into view, bent {snap} m");
+}
+
 /// One aspen on flat ground, lit by a sun in direction `sun` (with or without shadows),
 /// and a camera that `place` puts from the tree's foot and height. Returns the forest,
 /// the camera and its frame.
