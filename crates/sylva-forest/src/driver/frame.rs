@@ -24,10 +24,7 @@ use super::palettes::{Layout, copy_palettes, lay_out};
 use super::{Forest, SpeciesRuntime};
 use crate::camera::{Camera, ShadowBox, ShadowSweep, ViewCone, may_see_trees, may_shade_trees};
 use crate::scene::Placement;
-
-fn sub3(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
+use sylva_core::v3::{dot, sub};
 
 /// What stays fixed over one frame's passes: the view, the shadow's reach, the layout of
 /// bucket keys and the LOD settings.
@@ -329,8 +326,7 @@ impl Forest {
                     if !run.seen[k] || side <= 0.0 {
                         continue;
                     }
-                    let d = sub3(p.position, camera.eye);
-                    let w = d[0] * forward[0] + d[1] * forward[1] + d[2] * forward[2];
+                    let w = dot(sub(p.position, camera.eye), forward);
                     if buffer.worth_writing(side * p.scale, w, cot) {
                         run.occluders.push((first + k) as u32);
                     }
