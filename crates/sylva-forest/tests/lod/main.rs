@@ -261,6 +261,9 @@ fn frames_are_deterministic_for_any_thread_count() {
         pool.install(|| {
             let mut spec = SceneSpec::builtin("small").expect("small");
             spec.trees = trees;
+            // The large forest with occlusion culling on: its occluders go in by depth,
+            // whichever run found them.
+            spec.lod.occlusion = trees > 5;
             let mut forest = Forest::new(&spec).expect("forest");
             let mut cam = forest.default_camera();
             if trees > 5 {
@@ -326,6 +329,7 @@ fn frames_are_deterministic_for_any_thread_count() {
                 s.joints,
                 seen(0..4096),
                 seen(4096..trees),
+                s.occluded,
             ];
             (
                 f.palettes.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
@@ -347,6 +351,7 @@ fn frames_are_deterministic_for_any_thread_count() {
         if trees > 5 {
             assert!(ca[6] > 0 && ca[7] > 0, "trees seen in the first run and after: {ca:?}");
             assert!(ca[1] > 0 && ca[1] < ca[0], "near and far trees: {ca:?}");
+            assert!(ca[8] > 0, "trees hidden by nearer ones: {ca:?}");
         }
     }
 }
