@@ -117,27 +117,8 @@ fn a_small_tree_at_full_detail_simulates_a_coarser_prefix_and_holds_its_twigs_wi
     let joints: Vec<usize> = (0..n).collect();
     let sk = forest.species[si].model.tree.skeleton.clone();
     let parent_of = |j: usize| sk.joints()[j].parent as usize;
-    // Where each twig beyond level 2's prefix has its tip, relative to where its parent's
-    // motion alone would carry it (its own bend).
-    let bends = |forest: &Forest| -> Vec<[f32; 3]> {
-        let all = forest.tree_palettes(0, &joints);
-        (level2..n)
-            .map(|j| {
-                let tip = sk.joints()[j].tip();
-                let (a, b) = (
-                    sylva_sway::transform(&all[j], tip),
-                    sylva_sway::transform(&all[parent_of(j)], tip),
-                );
-                [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-            })
-            .collect()
-    };
-    let farthest = |a: &[[f32; 3]], b: &[[f32; 3]]| {
-        a.iter()
-            .zip(b)
-            .map(|(x, y)| (0..3).map(|k| (x[k] - y[k]).powi(2)).sum::<f32>().sqrt())
-            .fold(0.0f32, f32::max)
-    };
+    // The twigs beyond level 2's prefix.
+    let bends = |forest: &Forest| twig_bends(forest, &sk, level2);
     let dt = 1.0 / 30.0;
     let mut f = FrameData::default();
     let mut last = bends(&forest);
@@ -214,26 +195,8 @@ fn a_tree_that_comes_into_view_after_ten_seconds_out_of_it_blends_its_crown_in()
     let away = Camera { target: [mid[0] - 2.0 * d, mid[1], mid[2]], ..toward };
     let sk = returning.species[si].model.tree.skeleton.clone();
     let (n, trunk) = (sk.len(), returning.species[si].order.trunk);
-    let joints: Vec<usize> = (0..n).collect();
-    // Each crown joint's tip relative to where its parent's motion alone carries it.
-    let bends = |forest: &Forest| -> Vec<[f32; 3]> {
-        let all = forest.tree_palettes(0, &joints);
-        (trunk..n)
-            .map(|j| {
-                let tip = sk.joints()[j].tip();
-                let parent = sk.joints()[j].parent as usize;
-                let (a, b) =
-                    (sylva_sway::transform(&all[j], tip), sylva_sway::transform(&all[parent], tip));
-                [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-            })
-            .collect()
-    };
-    let farthest = |a: &[[f32; 3]], b: &[[f32; 3]]| {
-        a.iter()
-            .zip(b)
-            .map(|(x, y)| (0..3).map(|k| (x[k] - y[k]).powi(2)).sum::<f32>().sqrt())
-            .fold(0.0f32, f32::max)
-    };
+    // The crown's joints, beyond the trunk.
+    let bends = |forest: &Forest| twig_bends(forest, &sk, trunk);
     let dt = 1.0 / 30.0;
     let (mut f, mut g) = (FrameData::default(), FrameData::default());
     for _ in 0..300 {
@@ -268,6 +231,30 @@ fn a_tree_that_comes_into_view_after_ten_seconds_out_of_it_blends_its_crown_in()
         "{entering} m in a frame coming into view against {ordinary} m"
     );
     assert!(entering < 0.5 * snap, "{entering} m in a frame coming into view, bent {snap} m");
+}
+
+/// Tree 0's joints from `first` on: where each one's tip is, relative to where its
+/// parent's motion alone would carry it (its own bend), m.
+fn twig_bends(forest: &Forest, sk: &sylva_tree::skeleton::Skeleton, first: usize) -> Vec<[f32; 3]> {
+    let joints: Vec<usize> = (0..sk.len()).collect();
+    let all = forest.tree_palettes(0, &joints);
+    (first..sk.len())
+        .map(|j| {
+            let tip = sk.joints()[j].tip();
+            let parent = sk.joints()[j].parent as usize;
+            let (a, b) =
+                (sylva_sway::transform(&all[j], tip), sylva_sway::transform(&all[parent], tip));
+            [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+        })
+        .collect()
+}
+
+/// The largest distance between matching points of `a` and `b`, m.
+fn farthest(a: &[[f32; 3]], b: &[[f32; 3]]) -> f32 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (0..3).map(|k| (x[k] - y[k]).powi(2)).sum::<f32>().sqrt())
+        .fold(0.0f32, f32::max)
 }
 
 /// One aspen on flat ground, lit by a sun in direction `sun` (with or without shadows),
