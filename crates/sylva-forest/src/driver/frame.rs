@@ -264,7 +264,10 @@ impl Forest {
                 let (cr, span) = (&self.crowns, first..first + n);
                 let (cx, cy) = (&cr.x[span.clone()], &cr.y[span.clone()]);
                 let (cz, ch) = (&cr.z[span.clone()], &cr.h[span]);
-                may_see_trees(&view.cone, cx, cy, cz, ch, &mut run.seen[..n]);
+                // With occlusion culling on, pass 0 has culled this run already.
+                if !view.lod.occlusion {
+                    may_see_trees(&view.cone, cx, cy, cz, ch, &mut run.seen[..n]);
+                }
                 let occluded = if view.lod.occlusion {
                     self.hide_occluded(occlusion, trees, cz, ch, &mut run.seen[..n])
                 } else {
