@@ -280,11 +280,6 @@ impl Occluder {
         }
         if side.is_finite() { side } else { 0.0 }
     }
-
-    /// Whether the crown has a core that stops the eye.
-    pub fn has_core(&self) -> bool {
-        self.core_half_width > 0.0 || self.core_half_side > 0.0
-    }
 }
 
 /// A coarse depth buffer of occluders for one camera: per pixel the nearest distance
@@ -317,11 +312,6 @@ impl DepthBuffer {
         self.depth.resize((self.columns * self.rows) as usize, f32::INFINITY);
         self.light.clear();
         self.light.resize((self.columns * self.rows) as usize, 1.0);
-    }
-
-    /// Rows of the buffer.
-    pub fn rows(&self) -> u32 {
-        self.rows
     }
 
     /// Pixel position (x right, y down) and clip w of world point `p`.
@@ -388,10 +378,11 @@ impl DepthBuffer {
         self.project([base[0], base[1], base[2] + o.core_z * scale])[2] + o.reach * scale
     }
 
-    /// Write the occluder `o` of a tree standing at `base`, scaled by `scale` (after those
-    /// of nearer [`tree_depth`](Self::tree_depth)). The crown writes its upright rectangle,
-    /// or its flat square where the eye looks down on it from over 40°.
-    pub fn add_tree(&mut self, o: &Occluder, base: [f32; 3], scale: f32) {
+    /// Write the occluder `o` of a tree standing at `base`, scaled by `scale`, at `depth`,
+    /// its [`tree_depth`](Self::tree_depth) (after those of nearer trees). The crown writes
+    /// its upright rectangle, or its flat square where the eye looks down on it from over
+    /// 40°.
+    pub fn add_tree(&mut self, o: &Occluder, base: [f32; 3], scale: f32, depth: f32) {
         let at = |dz: f32| [base[0], base[1], base[2] + dz * scale];
         let to_eye = sub(self.eye, base);
         let side = norm(cross([0.0, 0.0, 1.0], to_eye));
@@ -409,7 +400,6 @@ impl DepthBuffer {
         };
         // Trunk and crown at the crown's far side: one depth keeps the tree's rectangles
         // in the order the trees go in.
-        let depth = self.tree_depth(o, base, scale);
         if o.trunk_half_width > 0.0 && o.trunk_top > 0.0 {
             let c = at(0.5 * o.trunk_top);
             let quad = upright(c, o.trunk_half_width * scale, base[2], at(o.trunk_top)[2]);

@@ -347,10 +347,10 @@ impl Forest {
             }));
         }
         order.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        for &(_, i) in order.iter() {
+        for &(depth, i) in order.iter() {
             let p = &self.trees[i as usize].0;
             let o = &self.species[p.species as usize].occluder;
-            out.occlusion.add_tree(o, p.position, p.scale);
+            out.occlusion.add_tree(o, p.position, p.scale, depth);
         }
     }
 
