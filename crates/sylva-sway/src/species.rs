@@ -74,6 +74,12 @@ pub struct SwaySpecies {
     pub(crate) rank: Vec<u32>,
     /// The skeleton cut into whole subtrees, for the sweeps along it on several threads.
     pub(crate) cut: Cut,
+    /// Per joint, the factor on an instance's wind at the joint's centre of pressure: in the
+    /// open (an instance's shelter 0) and deep inside a canopy (shelter 1); an instance
+    /// between the two takes the mix. Empty: 1 at every joint, the wind the same at every
+    /// height ([`SwaySpecies::set_wind_heights`]).
+    pub(crate) wind_open: Vec<f32>,
+    pub(crate) wind_inside: Vec<f32>,
 }
 
 /// A skeleton cut into a small top, closed under taking parents, and whole subtrees below it
@@ -188,6 +194,8 @@ impl SwaySpecies {
             rank: vec![0; n],
             cut: Cut::default(),
             drag_scale: crown_drag_scale(skeleton, &params),
+            wind_open: Vec::new(),
+            wind_inside: Vec::new(),
         };
         let scale = sp.drag_scale;
         let cbar = (params.youngs_modulus / params.wood_density).sqrt();
@@ -314,6 +322,64 @@ impl SwaySpecies {
     /// ([`SwayParams::crown_drag`]): 1 where the summed drag is within it.
     pub fn drag_scale(&self) -> f32 {
         self.drag_scale
+    }
+
+    /// Each joint's centre of pressure at rest (its segment's middle), tree space, m: the
+    /// points whose heights [`SwaySpecies::set_wind_heights`] takes factors for.
+    pub fn pressure_centres(&self) -> Vec<[f32; 3]> {
+        self.origin
+            .iter()
+            .zip(&self.arm)
+            .map(|(o, a)| [o[0] + a[0], o[1] + a[1], o[2] + a[2]])
+            .collect()
+    }
+
+    /// Let the wind differ with height: at joint `i` an instance feels its wind times
+    /// `open[i]` where its shelter is 0 (a forest's windward edge, open ground upwind),
+    /// `inside[i]` where it is 1 (deep in a canopy), and the linear mix between
+    /// ([`crate::SwayBatch::set_shelter`]). A mean wind profile divided by the mean speed where
+    /// the instance's wind is sampled gives the factors: the mean wind at every joint is then
+    /// the profile's at its height. Two empty slices: the same wind at every joint (the
+    /// default). Factors must be finite and ≥ 0, one per joint.
+    pub fn set_wind_heights(&mut self, open: &[f32], inside: &[f32]) -> Result<(), SwayParamError> {
+        let n = self.len();
+        if open.is_empty() && inside.is_empty() {
+            self.wind_open.clear();
+            self.wind_inside.clear();
+            return Ok(());
+        }
+        for (field, f) in [("wind_open", open), ("wind_inside", inside)] {
+            if f.len() != n {
+                let expected = "one factor per joint";
+                return Err(SwayParamError { field, value: f.len() as f32, expected });
+            }
+            if let Some(&value) = f.iter().find(|x| !(x.is_finite() && **x >= 0.0)) {
+                return Err(SwayParamError { field, value, expected: "finite, >= 0" });
+            }
+        }
+        self.wind_open = open.to_vec();
+        self.wind_inside = inside.to_vec();
+        Ok(())
+    }
+
+    /// Whether the wind differs with height ([`SwaySpecies::set_wind_heights`]).
+    pub fn has_wind_heights(&self) -> bool {
+        !self.wind_open.is_empty()
+    }
+
+    /// Per lane: the factor on the wind at joint `i` for lanes of shelter `shelter`
+    /// (1 everywhere without height factors: the wind then passes through unchanged).
+    #[inline(always)]
+    pub(crate) fn wind_factor<const W: usize>(
+        &self,
+        i: usize,
+        shelter: &[f32; crate::batch::LANES],
+    ) -> [f32; W] {
+        if self.wind_open.is_empty() {
+            return [1.0; W];
+        }
+        let (open, gain) = (self.wind_open[i], self.wind_inside[i] - self.wind_open[i]);
+        std::array::from_fn(|l| open + shelter[l] * gain)
     }
 
     /// The tree's drag area C_d·A at rest in a steady wind of `speed` m/s, m²: every

@@ -116,16 +116,18 @@ simd_kernel! {
         let (on, bud) = (st.on[0] as usize, bud[0]);
         // (1a) Each joint's own drag and its moment about the joint, kept in the joint's
         // palette slot (free until pass 2 writes it).
-        in_runs(Part::of(st, n), &|part| drags::<W>(sp, aero, inv_ur, u, part));
+        let shelter = st.shelter;
+        in_runs(Part::of(st, n), &|part| drags::<W>(sp, aero, inv_ur, u, &shelter, part));
         // (1b) Tips inwards: a joint's loads are its subtree's (added by its children, all
         // after it), then its own, then the lumped drag of the joints held beyond it; they
         // pass to its parent.
         let q = held_wind::<W>(u, inv_ur);
         if n >= 2 * RUN {
-            loads_in_bins::<W>(sp, n, st.held, &q, st.lanes, st.loads);
+            loads_in_bins::<W>(sp, n, st.held, &q, &st.shelter, st.lanes, st.loads);
         } else {
             for i in (0..n).rev() {
-                gather::<W>(&mut st.loads[i], &st.lanes[i], st.held, i, &q);
+                let f = sp.wind_factor::<W>(i, &st.shelter);
+                gather::<W>(&mut st.loads[i], &st.lanes[i], st.held, i, &q, &f);
                 pass_to_parent::<W>(sp, st.loads, i);
             }
         }
@@ -159,7 +161,8 @@ simd_kernel! {
 }
 
 /// A joint's loads `li` take its own drag (the first six rows of its palette slot `own`)
-/// and the lumped drag of the joints `held` beyond joint `i`, in the wind `q`.
+/// and the lumped drag of the joints `held` beyond joint `i`, in the wind `q` (times the
+/// joint's height factor `f`).
 #[inline(always)]
 fn gather<const W: usize>(
     li: &mut [[f32; W]; 6],
@@ -167,12 +170,13 @@ fn gather<const W: usize>(
     held: Option<&[Lump]>,
     i: usize,
     q: &[[[f32; W]; 3]; 2],
+    f: &[f32; W],
 ) {
     for c in 0..6 {
         li[c][0] += own[c][0];
     }
     if let Some(held) = held {
-        add_held::<W>(li, &held[i], q);
+        add_held::<W>(li, &held[i], q, f);
     }
 }
 
@@ -240,6 +244,7 @@ fn loads_in_bins<const W: usize>(
     n: usize,
     held: Option<&[Lump]>,
     q: &[[[f32; W]; 3]; 2],
+    shelter: &[f32; LANES],
     lanes: &[[[f32; W]; 12]],
     loads: &mut [[[f32; W]; 6]],
 ) {
@@ -248,14 +253,15 @@ fn loads_in_bins<const W: usize>(
         let rows = Rows::new(loads);
         cut.bins.par_iter().for_each(|bin| {
             let bin = &bin[..bin.partition_point(|&j| (j as usize) < n)];
-            bin_loads::<W>(sp, held, q, lanes, bin, &rows);
+            bin_loads::<W>(sp, held, q, shelter, lanes, bin, &rows);
         });
     }
     let seam = &cut.seam[..cut.seam.partition_point(|&j| (j as usize) < n)];
     for &i in seam.iter().rev() {
         let i = i as usize;
         if cut.in_top[i] {
-            gather::<W>(&mut loads[i], &lanes[i], held, i, q);
+            let f = sp.wind_factor::<W>(i, shelter);
+            gather::<W>(&mut loads[i], &lanes[i], held, i, q, &f);
         }
         pass_to_parent::<W>(sp, loads, i);
     }
@@ -267,6 +273,7 @@ simd_kernel! {
         sp: &SwaySpecies,
         held: Option<&[Lump]>,
         q: &[[[f32; W]; 3]; 2],
+        shelter: &[f32; LANES],
         lanes: &[[[f32; W]; 12]],
         bin: &[u32],
         rows: &Rows<'_, [[f32; W]; 6]>,
@@ -276,7 +283,8 @@ simd_kernel! {
             // SAFETY: joint `i` is in this bin alone, and so is its parent unless the parent
             // is in the top (which this pass does not touch); the parent precedes `i`.
             let li = unsafe { rows.row_mut(i) };
-            gather::<W>(li, &lanes[i], held, i, q);
+            let f = sp.wind_factor::<W>(i, shelter);
+            gather::<W>(li, &lanes[i], held, i, q, &f);
             let p = sp.parent[i];
             if p != sylva_tree::NO_PARENT && !sp.cut.in_top[p as usize] {
                 // SAFETY: as above: the parent is in this bin, and is not joint `i`.
@@ -310,12 +318,14 @@ simd_kernel! {
         aero: &[f32],
         inv_ur: f32,
         u: &[Lanes; 3],
+        shelter: &[f32; LANES],
         part: Part<'_, W>,
     ) {
         for (j, lanes) in part.lanes.iter_mut().enumerate() {
             let own = (&mut lanes[..6]).try_into().expect("six rows");
             let i = part.first + j;
-            own_drag::<W, false>(sp, aero, inv_ur, u, i, &part.rate[j], &part.weight[j], own);
+            let f = sp.wind_factor::<W>(i, shelter);
+            own_drag::<W, false>(sp, aero, inv_ur, u, &f, i, &part.rate[j], &part.weight[j], own);
         }
     }
 }

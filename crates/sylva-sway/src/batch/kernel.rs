@@ -49,6 +49,7 @@ impl SwayBatch {
         let (tr, aero, budget, ni) =
             (&self.transitions, &self.aero_dt, &self.lane_budget, self.instances);
         let (keep, lumped, plans) = (&self.fading_to, &self.lumped, &self.plans);
+        let lane_shelter = &self.lane_shelter;
         let held = |p: usize| lumped.iter().find(|(q, _)| *q == p).map(|(_, v)| v.as_slice());
         let n = sp.len();
         let lanes_of =
@@ -77,8 +78,10 @@ impl SwayBatch {
                 let Block { theta, rate, weight, pal, alone, rows, .. } = block;
                 let mut u = [ZERO; 3];
                 let mut bud = [0u32; LANES];
+                let mut shelter = [1.0f32; LANES];
                 let used = W.min(ni - g * LANES);
                 for l in 0..used {
+                    shelter[l] = lane_shelter[g * LANES + l];
                     let w = wind.get(g * LANES + l).copied().unwrap_or([0.0; 3]);
                     for c in 0..3 {
                         u[c][l] = w[c];
@@ -119,6 +122,7 @@ impl SwayBatch {
                             on: [on[l]; LANES],
                             held: held(r),
                             ignored: [false; LANES],
+                            shelter: [shelter[l]; LANES],
                         };
                         let mut u1 = [ZERO; 3];
                         for c in 0..3 {
@@ -148,6 +152,7 @@ impl SwayBatch {
                             on,
                             held: held(head),
                             ignored: std::array::from_fn(|l| l >= used || solo >> l & 1 == 1),
+                            shelter,
                         };
                         if W == 1 {
                             step_one::<W>(sp, tr, aero, blend, &bud, &u, &mut st);
@@ -281,6 +286,9 @@ pub(super) struct Group<'a, const W: usize> {
     /// on its row, or one past the batch's instances), so that it takes no part in the one
     /// choice made for the whole group (the rotation formula, see `palette_of`).
     pub(super) ignored: [bool; LANES],
+    /// Per lane: its shelter, 0 in the open … 1 inside a canopy
+    /// ([`SwaySpecies::set_wind_heights`]).
+    pub(super) shelter: [f32; LANES],
 }
 
 simd_kernel! {
@@ -312,7 +320,8 @@ simd_kernel! {
         if split {
             for i in 0..n {
                 let own = (&mut st.lanes[i][..6]).try_into().expect("six rows");
-                own_drag::<W, false>(sp, aero, inv_ur, u, i, &st.rate[i], &st.weight[i], own);
+                let f = sp.wind_factor::<W>(i, &st.shelter);
+                own_drag::<W, false>(sp, aero, inv_ur, u, &f, i, &st.rate[i], &st.weight[i], own);
             }
         }
         // (1) Loads, tips inwards: loads[i] = (force on the subtree, moment about joint i):
@@ -320,6 +329,7 @@ simd_kernel! {
         // beyond it. They start at zero: pass (2) clears each joint's loads once it has used
         // them.
         for i in (0..n).rev() {
+            let f = sp.wind_factor::<W>(i, &st.shelter);
             let li = &mut st.loads[i];
             if split {
                 for c in 0..6 {
@@ -328,10 +338,10 @@ simd_kernel! {
                     }
                 }
             } else {
-                own_drag::<W, true>(sp, aero, inv_ur, u, i, &st.rate[i], &st.weight[i], li);
+                own_drag::<W, true>(sp, aero, inv_ur, u, &f, i, &st.rate[i], &st.weight[i], li);
             }
             if let Some(held) = st.held {
-                add_held::<W>(li, &held[i], &q);
+                add_held::<W>(li, &held[i], &q, &f);
             }
             pass_to_parent::<W>(sp, st.loads, i);
         }
@@ -455,15 +465,23 @@ pub(super) fn held_wind<const W: usize>(u: &[Lanes; 3], inv_ur: f32) -> [[[f32; 
 }
 
 /// Add the lumped drag of the joints held beyond a joint (`lump`, in the wind `q` of
-/// [`held_wind`]) to its loads `li`.
+/// [`held_wind`]) to its loads `li`; `f`, the joint's height factor on the wind, scales the
+/// drag by f² (the held joints feel the wind at the joint's height).
 #[inline(always)]
 pub(super) fn add_held<const W: usize>(
     li: &mut [[f32; W]; 6],
     lump: &Lump,
     q: &[[[f32; W]; 3]; 2],
+    f: &[f32; W],
 ) {
     for (part, q) in lump.iter().zip(q) {
         let [d, cx, cy, cz] = *part;
+        let mut q = *q;
+        for c in 0..3 {
+            for l in 0..W {
+                q[c][l] *= f[l] * f[l];
+            }
+        }
         for l in 0..W {
             li[0][l] += d * q[0][l];
             li[1][l] += d * q[1][l];
@@ -518,7 +536,8 @@ pub(super) fn pass_on<const W: usize>(
 }
 
 /// A joint's own drag, per lane: (force, moment about the joint) of eq.-8 drag on its
-/// segment and leaves, in the wind relative to the segment's motion — added to `out`
+/// segment and leaves, in the wind (the lane's wind `u` times the joint's height factor `f`,
+/// [`SwaySpecies::set_wind_heights`]) relative to the segment's motion — added to `out`
 /// (`ADD`) or written to it.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
@@ -527,11 +546,19 @@ pub(super) fn own_drag<const W: usize, const ADD: bool>(
     aero: &[f32],
     inv_ur: f32,
     u: &[Lanes; 3],
+    f: &[f32; W],
     i: usize,
     ra: &[[f32; W]; 2],
     w: &[f32; W],
     out: &mut [[f32; W]; 6],
 ) {
+    let mut uf = [[0.0f32; W]; 3];
+    for c in 0..3 {
+        for l in 0..W {
+            uf[c][l] = u[c][l] * f[l];
+        }
+    }
+    let u = &uf;
     let [ax, ay] = sp.axes[i];
     let arm = sp.arm[i];
     let (drag, leaf) = (sp.drag[i], sp.leaf_drag[i]);

@@ -66,6 +66,7 @@
 //! far trunks with one near crown holds the trunks for every lane and the crown once. Once
 //! prefixes have stayed put for [`TRIM_STEPS`] steps, a step allocates nothing.
 
+use crate::SwayParamError;
 use crate::species::{SwaySpecies, Transition};
 
 #[cfg(not(feature = "glam"))]
@@ -177,6 +178,8 @@ pub struct SwayBatch {
     /// Per instance: joints beyond this are at rest in its lane (blend weight 0), so a step
     /// may leave them out for this lane.
     lane_moving: Vec<u32>,
+    /// Per instance: its shelter from the wind, 0 … 1 ([`SwayBatch::set_shelter`]).
+    lane_shelter: Vec<f32>,
     /// Per instance: the joints the last step computed for it (its palettes beyond are not
     /// current; it shows them at their anchors).
     lane_computed: Vec<u32>,
@@ -217,6 +220,7 @@ impl SwayBatch {
             lane_request: vec![n as u32; instances],
             lane_moving: vec![n as u32; instances],
             lane_computed: vec![n as u32; instances],
+            lane_shelter: vec![1.0; instances],
             alone_limit: usize::MAX,
             plans: Vec::new(),
             lumped: Vec::new(),
@@ -463,6 +467,22 @@ impl SwayBatch {
         self.lane_moving.swap(a, b);
         self.lane_request.swap(a, b);
         self.lane_budget.swap(a, b);
+        self.lane_shelter.swap(a, b);
+    }
+
+    /// Let the wind differ with height, per joint ([`SwaySpecies::set_wind_heights`]).
+    pub fn set_wind_heights(&mut self, open: &[f32], inside: &[f32]) -> Result<(), SwayParamError> {
+        self.species.set_wind_heights(open, inside)
+    }
+
+    /// Instance `i`'s shelter: 0 where its wind is the open ground's (a forest's windward
+    /// edge), 1 inside a canopy (the default), between for the mix of the two height
+    /// factors ([`SwaySpecies::set_wind_heights`]; without them it changes nothing).
+    /// Clamped to 0 … 1; not finite, or `i` out of range: ignored.
+    pub fn set_shelter(&mut self, i: usize, shelter: f32) {
+        if let (Some(s), true) = (self.lane_shelter.get_mut(i), shelter.is_finite()) {
+            *s = shelter.clamp(0.0, 1.0);
+        }
     }
 
     /// Joints simulated in group `group`.
