@@ -20,7 +20,7 @@
 //! Finnigan & Brunet 1996) at the canopy top h.
 
 use anyhow::Result;
-use sylva_forest::{Forest, SceneSpec, wind_field};
+use sylva_forest::{Forest, SceneSpec, wind_field_over};
 
 /// Simulation and record step, s.
 const DT: f32 = 1.0 / 30.0;
@@ -39,7 +39,7 @@ fn main() -> Result<()> {
          species = [{ name = \"quaking_aspen\" }]\n[lod]\nwind = false\n",
     )?;
     let mut forest = Forest::new(&spec)?;
-    let params = wind_field(&spec, forest.radius)?.field.params;
+    let params = wind_field_over(&spec, forest.radius, forest.stand())?.field.params;
     let u_c = params.convection_speed.unwrap_or(f64::NAN);
     // The canopy top the profile stands for, as the convection speed takes it
     // (`canopy_convection`: the canopy profile's h, or 1.5 d under a log law).

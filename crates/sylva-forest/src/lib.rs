@@ -25,6 +25,7 @@
 #![forbid(unsafe_code)]
 
 pub mod camera;
+pub mod canopy;
 pub mod clip;
 pub mod driver;
 mod groups;
@@ -37,6 +38,7 @@ pub use camera::{Camera, Mat4, ShadowBox, ViewCone};
 pub use driver::{
     Bucket, Forest, ForestError, FrameData, FrameStats, Instance, LodSettings, MAX_NEAR_POINTS,
     NEAR_REACH, REGROUP_FADE, REGROUP_TRAVEL, SceneWind, SpeciesRuntime, TreeInfo, wind_field,
+    wind_field_over,
 };
 pub use scene::{
     BUILTIN_PATHS, CameraKey, FLY_IN, LOW_FLIGHT, Lighting, LodSpec, Placement, SCENES, SceneError,

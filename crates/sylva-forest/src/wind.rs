@@ -4,6 +4,7 @@
 use sylva_core::rng::mix64;
 use sylva_wind::{FieldView, Grid, NearField, SynthParams, WindField, WindParams};
 
+use crate::canopy::Stand;
 use crate::driver::ForestError;
 use crate::scene::{SceneSpec, WindSource};
 
@@ -83,7 +84,18 @@ pub struct SceneWind {
 /// tens of metres apart (in scene D, about three quarters of the model's variance against
 /// under half; in the middle of a 60 m cell the mix keeps a fifth of it).
 pub fn wind_field(spec: &SceneSpec, radius: f32) -> Result<SceneWind, ForestError> {
-    let field = coarse_wind_field(spec, radius)?;
+    wind_field_over(spec, radius, None)
+}
+
+/// [`wind_field`] over a forest whose canopy is `stand`: a preset's profile becomes the
+/// stand's ([`Stand::profile`]) unless the scene sets `wind_profile` (what
+/// [`crate::Forest::new`] synthesises with the canopy wind on; [`crate::Forest::stand`]).
+pub fn wind_field_over(
+    spec: &SceneSpec,
+    radius: f32,
+    stand: Option<Stand>,
+) -> Result<SceneWind, ForestError> {
+    let field = coarse_wind_field(spec, radius, stand)?;
     let spacing = spec.spacing as f64;
     let xs = &field.grid.xs;
     let coarse = if xs.len() > 1 { xs[1] - xs[0] } else { f64::INFINITY };
@@ -114,7 +126,11 @@ pub fn wind_field(spec: &SceneSpec, radius: f32) -> Result<SceneWind, ForestErro
 const NEAR_SEED: u64 = 0x6e65_6172;
 
 /// The field over the whole forest (see [`wind_field`]).
-fn coarse_wind_field(spec: &SceneSpec, radius: f32) -> Result<WindField, ForestError> {
+fn coarse_wind_field(
+    spec: &SceneSpec,
+    radius: f32,
+    stand: Option<Stand>,
+) -> Result<WindField, ForestError> {
     let source = spec.wind_source().map_err(|e| ForestError::Wind(e.to_string()))?;
     let preset = match source {
         WindSource::Preset(p) => p,
@@ -154,6 +170,8 @@ fn coarse_wind_field(spec: &SceneSpec, radius: f32) -> Result<WindField, ForestE
     }
     if let Some(p) = spec.wind_profile {
         params.profile = p;
+    } else if let Some(stand) = stand {
+        params.profile = stand.profile();
     }
     params.convection_speed = spec.wind_convection_speed.or_else(|| canopy_convection(&params));
     let half = (radius as f64 + 30.0) * std::f64::consts::SQRT_2;

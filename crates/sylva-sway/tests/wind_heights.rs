@@ -16,8 +16,7 @@ fn angles(b: &SwayBatch, i: usize) -> Vec<[f32; 2]> {
 }
 
 #[test]
-fn an_instance_in_the_open_feels_its_wind_times_the_open_factor_and_inside_times_the_inside_one()
-{
+fn an_instance_in_the_open_feels_its_wind_times_the_open_factor_and_inside_times_the_inside_one() {
     // Open factor 2 at every joint, inside 1: an instance of shelter 0 moves exactly as one
     // without factors in twice the wind, and one of shelter 1 as one in the wind itself.
     // A batch of 16 (one group of lanes) and a batch of one (the single-lane kernel).

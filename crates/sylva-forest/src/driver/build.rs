@@ -16,7 +16,7 @@ use crate::lanes;
 use crate::scene::{
     CameraKey, Placement, SceneSpec, Terrain, camera_on_path, default_camera, layout,
 };
-use crate::wind::{SceneWind, wind_field};
+use crate::wind::{SceneWind, wind_field_over};
 
 /// The trees' feet and heights as separate arrays (what culling reads, in the layout that
 /// lets [`may_see_trees`] test many trees at a time).
@@ -126,11 +126,13 @@ impl Forest {
             )?);
             lane_base += n_groups.div_ceil(LANES);
         }
-        let SceneWind { field, near } = wind_field(spec, radius)?;
+        let canopy_wind = super::shelter::canopy_of(spec, &trees, &species);
+        let stand = canopy_wind.as_ref().map(|c| c.0);
+        let SceneWind { field, near } = wind_field_over(spec, radius, stand)?;
         let wind = OwnedPyramid::new(field);
         let n_trees = trees.len();
         let crowns = Crowns::new(&trees, |s| species[s as usize].model.tree.stats.height);
-        Ok(Forest {
+        let mut forest = Forest {
             spec: spec.clone(),
             terrain,
             species,
@@ -166,7 +168,10 @@ impl Forest {
             eye: None,
             grouped: (eye, 0.0),
             regroup_fade: REGROUP_FADE,
-        })
+            canopy_wind,
+        };
+        forest.apply_height_factors();
+        Ok(forest)
     }
 }
 

@@ -72,7 +72,8 @@ use thiserror::Error;
 use crate::lanes;
 use crate::scene::{CameraKey, Placement, SceneSpec, Terrain};
 pub use crate::wind::{
-    MAX_NEAR_POINTS, MAX_WIND_POINTS, NEAR_BAND, NEAR_REACH, SceneWind, wind_field, wind_points,
+    MAX_NEAR_POINTS, MAX_WIND_POINTS, NEAR_BAND, NEAR_REACH, SceneWind, wind_field,
+    wind_field_over, wind_points,
 };
 
 mod build;
@@ -82,6 +83,7 @@ mod lod;
 mod palettes;
 mod query;
 mod regroup;
+mod shelter;
 mod step;
 #[cfg(test)]
 mod tests;
@@ -276,6 +278,8 @@ pub struct Forest {
     grouped: ([f32; 3], f64),
     /// Seconds a tree that changed group cross-fades (0: it switches at once).
     regroup_fade: f32,
+    /// The canopy wind: the stand and each point's shelter (`None` with it off).
+    canopy_wind: Option<(crate::canopy::Stand, crate::canopy::Shelter)>,
 }
 
 /// The keys of the camera path `spec.path` of a forest on `terrain` whose trees stand

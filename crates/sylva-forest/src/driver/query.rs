@@ -173,6 +173,7 @@ impl Forest {
     pub fn set_wind_field(&mut self, wind: SceneWind) {
         self.wind = OwnedPyramid::new(wind.field);
         self.near = wind.near;
+        self.apply_height_factors();
     }
 
     /// The wind at world point `p` (m) now, as the trees feel it (live controls applied).

@@ -27,6 +27,8 @@ struct StepInputs<'a> {
     drawn: &'a [u32],
     animation: bool,
     coarse_levels: bool,
+    /// Each point's shelter (the canopy wind; `None` with it off).
+    shelter: Option<&'a crate::canopy::Shelter>,
 }
 
 impl Forest {
@@ -51,6 +53,7 @@ impl Forest {
             drawn: &self.shown,
             animation: self.lod.animation,
             coarse_levels: self.spec.lod.wind,
+            shelter: self.canopy_wind.as_ref().map(|c| &c.1),
         };
         // Species in parallel; each samples the shared, read-only field for its groups.
         let work = |s: &mut SpeciesRuntime| step_species(s, &inputs);
@@ -185,6 +188,9 @@ fn sample_wind(s: &mut SpeciesRuntime, k: &StepInputs<'_>) {
             s.near_wind += is_near as usize;
             w
         };
+        if let Some(shelter) = k.shelter {
+            s.batch.set_shelter(lane, shelter.at(g.sample[0], g.sample[1]));
+        }
         let w = steer(w, k.gain, k.turn);
         let (sn, cs) = g.yaw.sin_cos();
         s.winds[lane] = [cs * w[0] + sn * w[1], -sn * w[0] + cs * w[1], w[2]];

@@ -1,0 +1,101 @@
+//! The canopy wind on a forest's simulations: the stand its trees make, each tree's
+//! shelter by its fetch from the windward edge, and each species' joints' height factors
+//! (see [`crate::canopy`]).
+
+use sylva_tree::WIND_SAMPLE_HEIGHT;
+
+use super::{Forest, SpeciesRuntime};
+use crate::canopy::{Shelter, Stand, field_mean, height_factors, open_speed};
+use crate::scene::{Placement, SceneSpec, WindSource};
+
+/// The canopy wind of a scene's trees, where the scene has it on (`canopy_wind`, default on
+/// with a preset or a wind file; a steady wind is the same everywhere): the stand (mean
+/// height, leaf area over the ground its trees cover) and the shelter on a grid of cells
+/// two spacings wide, gaps up to a canopy height crossed.
+pub(super) fn canopy_of(
+    spec: &SceneSpec,
+    trees: &[(Placement, u32)],
+    species: &[SpeciesRuntime],
+) -> Option<(Stand, Shelter)> {
+    let on = spec.canopy_wind.unwrap_or(true);
+    let steady = matches!(spec.wind_source(), Ok(WindSource::Steady(_)));
+    if !on || steady || trees.is_empty() {
+        return None;
+    }
+    let stats = |p: &Placement| &species[p.species as usize].model.tree.stats;
+    let n = trees.len() as f64;
+    let height = trees.iter().map(|(p, _)| (stats(p).height * p.scale) as f64).sum::<f64>() / n;
+    let leaves: f64 =
+        trees.iter().map(|(p, _)| (stats(p).leaf_area * p.scale * p.scale) as f64).sum();
+    let feet: Vec<[f32; 2]> = trees.iter().map(|(p, _)| [p.position[0], p.position[1]]).collect();
+    let cell = 2.0 * spec.spacing as f64;
+    // The ground first (the shelter's length needs the leaf area index).
+    let ground = Shelter::new(&feet, spec.wind_direction_deg as f64, cell, 1.0, height).area();
+    let stand = Stand { height, lai: leaves / ground.max(1.0) };
+    let shelter =
+        Shelter::new(&feet, spec.wind_direction_deg as f64, cell, stand.adjustment(), height);
+    Some((stand, shelter))
+}
+
+impl Forest {
+    /// The stand whose canopy wind the forest simulates (`None` with the canopy wind off).
+    pub fn stand(&self) -> Option<Stand> {
+        self.canopy_wind.as_ref().map(|c| c.0)
+    }
+
+    /// Tree `t`'s shelter from the wind: 0 at the windward edge … 1 deep inside the forest
+    /// (`None` with the canopy wind off or no such tree).
+    pub fn shelter_of(&self, t: usize) -> Option<f32> {
+        let (_, shelter) = self.canopy_wind.as_ref()?;
+        let p = self.trees.get(t)?.0.position;
+        Some(shelter.at(p[0] as f64, p[1] as f64))
+    }
+
+    /// Tree `t`'s fetch: how far the wind has blown through the forest to reach it, m
+    /// (`None` with the canopy wind off or no such tree).
+    pub fn fetch_of(&self, t: usize) -> Option<f64> {
+        let (_, shelter) = self.canopy_wind.as_ref()?;
+        let p = self.trees.get(t)?.0.position;
+        Some(shelter.fetch(p[0] as f64, p[1] as f64))
+    }
+
+    /// The wind tree `t` feels `z` m above its foot at time `time` s (world axes, m/s, live
+    /// controls applied): its instance group's sample of the field, times the canopy wind's
+    /// factor for that height and its group's shelter, as its simulation takes it (the same
+    /// at every height with the canopy wind off). `None`: no such tree.
+    pub fn tree_wind(&self, t: usize, z: f64, time: f64) -> Option<[f32; 3]> {
+        let &(p, g) = self.trees.get(t)?;
+        let s = self.species.get(p.species as usize)?;
+        let sample = s.groups.get(g as usize)?.sample;
+        let w = self.wind_at(sample, time);
+        let Some((stand, shelter)) = &self.canopy_wind else { return Some(w) };
+        let field = self.wind.field();
+        let (params, zs) = (&field.params, &field.grid.zs);
+        let at_sample =
+            field_mean(params, zs, WIND_SAMPLE_HEIGHT * s.model.tree.stats.height as f64);
+        let x = shelter.at(sample[0], sample[1]) as f64;
+        let here = (1.0 - x) * open_speed(params, stand.height, z) + x * params.mean_speed(z);
+        let f = if at_sample > 1e-6 { (here / at_sample) as f32 } else { 1.0 };
+        Some(w.map(|c| c * f))
+    }
+
+    /// Give every species' simulation the height factors of the current wind field: the
+    /// mean wind at each joint the profile's at its height, in the open and inside.
+    pub(super) fn apply_height_factors(&mut self) {
+        let field = self.wind.field();
+        let (params, zs) = (&field.params, &field.grid.zs);
+        let canopy = &self.canopy_wind;
+        for s in &mut self.species {
+            let factors = canopy.as_ref().and_then(|(stand, _)| {
+                let height = s.model.tree.stats.height as f64;
+                let centres: Vec<f32> =
+                    s.batch.species().pressure_centres().iter().map(|c| c[2]).collect();
+                let sample = WIND_SAMPLE_HEIGHT * height;
+                height_factors(params, zs, sample, stand.height, &centres)
+            });
+            let (open, inside) = factors.unwrap_or_default();
+            // Finite and non-negative by construction: a profile's speeds are.
+            let _ = s.batch.set_wind_heights(&open, &inside);
+        }
+    }
+}
