@@ -8,7 +8,7 @@
 //! (scene name or file; the point defaults to the forest's centre.)
 
 use anyhow::{Context, Result, bail};
-use sylva_forest::{Forest, SceneSpec, wind_field};
+use sylva_forest::{Forest, SceneSpec, wind_field_over};
 use sylva_wind::{Component, spectrum};
 
 /// Trees within this distance of the point are measured, m.
@@ -26,7 +26,7 @@ fn main() -> Result<()> {
     };
     let spec = SceneSpec::load(name)?;
     let forest = Forest::new(&spec)?;
-    let wind = wind_field(&spec, forest.radius)?;
+    let wind = wind_field_over(&spec, forest.radius, forest.stand())?;
     let Some(near) = wind.near.as_ref() else {
         println!("scene {name}: the field resolves the trees; no near tile");
         return Ok(());

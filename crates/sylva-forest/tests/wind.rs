@@ -1,7 +1,7 @@
 //! The forest's wind: a field over the whole forest, and where that field is coarser than
 //! the trees, a fine tile read near the camera (the wind-field LOD's finest level).
 
-use sylva_forest::{Forest, FrameData, NEAR_REACH, SceneSpec, wind_field};
+use sylva_forest::{Forest, FrameData, NEAR_REACH, SceneSpec, wind_field, wind_field_over};
 
 #[test]
 fn forests_coarser_than_their_trees_get_a_near_tile_at_the_tree_spacing() {
@@ -40,7 +40,7 @@ fn trees_near_the_camera_feel_the_near_tile_and_far_ones_the_field() {
     }
     forest.frame(&camera, 4.0 / 3.0, &mut frame);
     // The same scene's wind made again: same seed, same bits.
-    let wind = wind_field(&forest.spec, forest.radius).expect("wind");
+    let wind = wind_field_over(&forest.spec, forest.radius, forest.stand()).expect("wind");
     let near = wind.near.as_ref().expect("scene A's grid is 14 m apart, its trees 7 m");
     let t = forest.time();
     let eye = camera.eye.map(f64::from);

@@ -511,9 +511,9 @@ impl Viewer {
 
     /// Synthesise the wind of the settings for the current forest in the background.
     fn resynthesise(&mut self) {
-        let radius = self.forest.radius;
+        let (radius, stand) = (self.forest.radius, self.forest.stand());
         let field = move |spec: SceneSpec| {
-            sylva_forest::wind_field(&spec, radius).map_err(|e| e.to_string())
+            sylva_forest::wind_field_over(&spec, radius, stand).map_err(|e| e.to_string())
         };
         if let Some(rx) = self.spawn(field) {
             self.job = Some(Job::Wind(rx, Instant::now()));
