@@ -229,7 +229,9 @@ pub const U_STAR_MAX: f64 = 8.0;
 /// The mean profile's parameters (applied, and re-synthesised, when a drag ends).
 fn profile(ui: &mut Ui, v: &Viewer, out: &mut Vec<Action>) {
     use sylva_wind::Profile;
-    let preset = sylva_wind::Preset::from_name(&v.settings.wind).map(|p| p.params().profile);
+    // A preset's profile over a forest with the canopy wind is its stand's.
+    let preset = sylva_wind::Preset::from_name(&v.settings.wind)
+        .map(|p| v.forest.stand().map_or(p.params().profile, |s| s.profile()));
     let Some(mut p) = v.settings.profile.or(preset) else { return };
     let mut done = false;
     let mut slider =

@@ -66,15 +66,16 @@ fn a_wind_change_reaches_the_simulation() {
     let ratio = 0.5 / sylva_wind::Preset::Storm.u_star();
     let got = (calmer / storm) as f64;
     assert!((got / ratio - 1.0).abs() < 0.03, "U* 0.5: {calmer} m/s vs the storm's {storm}");
-    // The mean profile: a smoother canopy (z0 1.5 → 0.3 m) speeds the wind up as the log
-    // law says, between the field's two heights as the forest interpolates them.
+    // The mean profile: a smooth log law (z0 0.3 m) in place of the stand's canopy profile
+    // speeds the wind up as the two laws say, between the field's two heights as the forest
+    // interpolates them.
     let z = v.probe()[2];
     let at = |p: sylva_wind::Profile| {
         let params = sylva_wind::WindParams { u_star: 0.5, profile: p, ..Default::default() };
         let w = ((z - 8.0) / 14.0).clamp(0.0, 1.0);
         (1.0 - w) * params.mean_speed(8.0) + w * params.mean_speed(22.0)
     };
-    let rough = sylva_wind::Profile::Log { z0: 1.5, d: 10.0 };
+    let rough = v.forest.stand().expect("the canopy wind is on by default").profile();
     let smooth = sylva_wind::Profile::Log { z0: 0.3, d: 10.0 };
     assert_eq!(v.forest.spec.wind_profile, None);
     v.apply(Action::Profile(smooth));
