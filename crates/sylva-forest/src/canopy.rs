@@ -10,11 +10,12 @@
 //! forest, the log law over open flat ground, z0 = 0.03 m (the Davenport roughness class
 //! "open", WMO Guide to Meteorological Instruments, 2008, Annex 5.B), meeting the forest's
 //! at twice the canopy height, the top of its roughness sublayer (Raupach, Finnigan & Brunet
-//! 1996 put it at 2–3 h). Across the edge the flow adjusts over a few canopy-drag lengths
-//! L_c = 1/(c_d · leaf area density) = h/(c_d · LAI): Belcher, Jerram & Hunt 2003 ("Adjustment
-//! of a turbulent boundary layer to a canopy of roughness elements", J. Fluid Mech. 488)
-//! find the flow in the canopy decelerating over a distance of order 3 L_c. A tree's shelter
-//! here is 1 − e^(−x/L_c) at fetch x, within 5 % of the interior's at 3 L_c.
+//! 1996 put it at 2–3 h). How much of it a tree at fetch x feels follows ForestGALES' edge
+//! factor ([`EdgeFactor`]; Hale et al. 2015, fitted to the wind-tunnel bending moments of
+//! Gardiner et al. 1997): its crown feels the mix of the open and the canopy wind whose
+//! square, against the canopy wind's, is that factor. An isolated tree in the open wind
+//! would bear several times the interior's load; measured edge trees bear 1.2–1.5 times it,
+//! the flow having slowed before it reaches them.
 
 use sylva_wind::{Profile, WindParams, canopy_attenuation};
 
@@ -49,12 +50,6 @@ impl Stand {
             z0: 0.1 * h,
             d: 2.0 * h / 3.0,
         }
-    }
-
-    /// The canopy-drag length L_c = h / (c_d · LAI), m: the e-folding distance of a tree's
-    /// shelter from the windward edge inwards.
-    pub fn adjustment(&self) -> f64 {
-        self.height / (FOLIAGE_DRAG * self.lai.max(0.1))
     }
 }
 
@@ -105,8 +100,42 @@ pub fn height_factors(
     Some((open, inside))
 }
 
-/// Each point's shelter from the wind by the trees upwind of it: 0 at a forest's windward
-/// edge, 1 − e^(−x/L) at fetch x (the distance upwind through the forest to its edge).
+/// ForestGALES' edge factor: a tree's maximum bending moment at fetch x from a windward edge
+/// with open ground upwind, against the interior's (Hale et al. 2015, "ForestGALES 2.5",
+/// fitted to Gardiner et al. 1997's wind-tunnel measurements; the form of the `fgr`
+/// package's `edge_gap_factor` for a gap of over ten heights): with s = spacing / h (held
+/// within 0.075 … 0.45), A = 2.7193 s − 0.061, B = 0.9701 − 1.273 s, c = 1.1127 s + 0.0311,
+/// the factor is (A + B c^(x/h)) / A (1.2–1.5 at the edge, within 5 % of 1 by 3 h).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EdgeFactor {
+    a: f64,
+    b: f64,
+    c: f64,
+    h: f64,
+}
+
+impl EdgeFactor {
+    /// For a stand of mean spacing `spacing` m and canopy height `h` m.
+    pub fn new(spacing: f64, h: f64) -> EdgeFactor {
+        let h = h.max(0.1);
+        let s = (spacing / h).clamp(0.075, 0.45);
+        EdgeFactor { a: 2.7193 * s - 0.061, b: 0.9701 - 1.273 * s, c: 1.1127 * s + 0.0311, h }
+    }
+
+    /// The factor at fetch `x` m.
+    pub fn at(&self, x: f64) -> f64 {
+        (self.a + self.b * self.c.powf(x.max(0.0) / self.h)) / self.a
+    }
+}
+
+/// Fetches beyond this many canopy heights count as the interior's.
+pub const INTERIOR_HEIGHTS: f64 = 10.0;
+
+/// Each point's shelter from the wind by the trees upwind of it, from its fetch x (the
+/// distance along the wind from the forest's upwind-most tree, straight upwind of the
+/// point, to the point): 1 deep inside; nearer the edge, the mix of the open ground's wind
+/// (shelter 0) and the canopy's (1) whose square, at the crown's height, is the
+/// [`EdgeFactor`] times the canopy's.
 /// The forest is the cells of a grid that hold a tree; a gap of empty cells shorter than a
 /// canopy height is crossed (a clearing narrower than that does not let the open wind in).
 #[derive(Debug, Clone)]
@@ -115,19 +144,33 @@ pub struct Shelter {
     cell: f64,
     nx: usize,
     ny: usize,
-    /// Per cell: the fetch, m (0 for empty cells).
-    fetch: Vec<f32>,
+    /// The wind's direction (cos, sin).
+    along: [f64; 2],
+    /// Per cell: where the forest upwind of it begins, as a distance along the wind.
+    edge: Vec<f64>,
     /// Per cell: whether a tree stands in it.
     occupied: Vec<bool>,
-    length: f64,
+    factor: EdgeFactor,
+    /// The open ground's mean wind over the canopy's at the crown's height.
+    ratio: f64,
+    /// Longest fetch followed, m.
+    most: f64,
 }
 
 impl Shelter {
     /// The shelter of a forest of trees at `feet` (x, y, m), in a wind blowing towards
-    /// `direction_deg` (counter-clockwise from +x), on cells of `cell` m, with the e-folding
-    /// length `length` m and gaps up to `gap` m crossed. Fetches are followed up to six
-    /// lengths (shelter 0.998), farther counts as that.
-    pub fn new(feet: &[[f32; 2]], direction_deg: f64, cell: f64, length: f64, gap: f64) -> Shelter {
+    /// `direction_deg` (counter-clockwise from +x), on cells of `cell` m, with the edge
+    /// factor `factor`, gaps up to `gap` m crossed, and the open wind `ratio` times the
+    /// canopy's at the crown ([`Shelter::set_ratio`]). Fetches are followed up to
+    /// [`INTERIOR_HEIGHTS`] canopy heights.
+    pub fn new(
+        feet: &[[f32; 2]],
+        direction_deg: f64,
+        cell: f64,
+        factor: EdgeFactor,
+        gap: f64,
+        ratio: f64,
+    ) -> Shelter {
         let cell = cell.max(0.5);
         let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
         for p in feet {
@@ -139,25 +182,31 @@ impl Shelter {
         if feet.is_empty() {
             (lo, hi) = ([0.0; 2], [0.0; 2]);
         }
-        let origin = [lo[0] - cell, lo[1] - cell];
         let count = |k: usize| ((hi[k] - lo[k]) / cell).floor() as usize + 3;
         let (nx, ny) = (count(0), count(1));
+        let (sn, cs) = direction_deg.to_radians().sin_cos();
         let mut s = Shelter {
-            origin,
+            origin: [lo[0] - cell, lo[1] - cell],
             cell,
             nx,
             ny,
-            fetch: vec![0.0; nx * ny],
+            along: [cs, sn],
+            edge: vec![f64::NEG_INFINITY; nx * ny],
             occupied: vec![false; nx * ny],
-            length: length.max(1e-3),
+            factor,
+            ratio,
+            most: INTERIOR_HEIGHTS * factor.h,
         };
+        // Per cell, its upwind-most tree's distance along the wind.
+        let mut first = vec![f64::INFINITY; nx * ny];
         for p in feet {
-            if let Some(c) = s.cell_of(p[0] as f64, p[1] as f64) {
+            let (x, y) = (p[0] as f64, p[1] as f64);
+            if let Some(c) = s.cell_of(x, y) {
                 s.occupied[c] = true;
+                first[c] = first[c].min(s.downwind(x, y));
             }
         }
-        let (sn, cs) = direction_deg.to_radians().sin_cos();
-        let (step, most) = (0.5 * cell, 6.0 * s.length);
+        let step = 0.5 * cell;
         for iy in 0..ny {
             for ix in 0..nx {
                 let c = iy * nx + ix;
@@ -166,31 +215,39 @@ impl Shelter {
                 }
                 let x = s.origin[0] + (ix as f64 + 0.5) * cell;
                 let y = s.origin[1] + (iy as f64 + 0.5) * cell;
-                // Walk upwind until the forest ends: a run of empty cells longer than `gap`,
-                // or the grid's edge.
-                let (mut d, mut edge, mut empty_from) = (0.0, most, None);
-                while d < most {
+                // Walk upwind until the forest ends (a run of empty cells longer than `gap`,
+                // or the grid's edge); the edge is the last occupied cell's upwind-most tree.
+                let (mut d, mut last, mut empty_from) = (0.0, c, None);
+                let mut open = false;
+                while d < s.most + cell {
                     d += step;
-                    let inside = s.cell_of(x - cs * d, y - sn * d).map(|c| s.occupied[c]);
-                    match inside {
-                        Some(true) => empty_from = None,
-                        Some(false) => {
+                    match s.cell_of(x - cs * d, y - sn * d).map(|k| (k, s.occupied[k])) {
+                        Some((k, true)) => {
+                            empty_from = None;
+                            last = k;
+                        }
+                        Some((_, false)) => {
                             let from = *empty_from.get_or_insert(d);
                             if d - from > gap {
-                                edge = from;
+                                open = true;
                                 break;
                             }
                         }
                         None => {
-                            edge = empty_from.unwrap_or(d);
+                            open = true;
                             break;
                         }
                     }
                 }
-                s.fetch[c] = edge.min(most) as f32;
+                s.edge[c] = if open { first[last] } else { f64::NEG_INFINITY };
             }
         }
         s
+    }
+
+    /// Distance of (x, y) along the wind.
+    fn downwind(&self, x: f64, y: f64) -> f64 {
+        x * self.along[0] + y * self.along[1]
     }
 
     fn cell_of(&self, x: f64, y: f64) -> Option<usize> {
@@ -204,14 +261,36 @@ impl Shelter {
     }
 
     /// The fetch at (x, y), m: how far the wind has blown through the forest to get there
-    /// (0 outside it).
+    /// (0 outside it and at the windward edge's first trees; at most [`INTERIOR_HEIGHTS`]
+    /// canopy heights).
     pub fn fetch(&self, x: f64, y: f64) -> f64 {
-        self.cell_of(x, y).map_or(0.0, |c| self.fetch[c] as f64)
+        match self.cell_of(x, y) {
+            Some(c) if self.occupied[c] => {
+                (self.downwind(x, y) - self.edge[c]).clamp(0.0, self.most)
+            }
+            _ => 0.0,
+        }
     }
 
-    /// The shelter at (x, y): 1 − e^(−fetch / length).
+    /// The shelter at (x, y): the mix whose wind at the crown, squared, is the edge factor at
+    /// its fetch times the canopy's; 1 where the open wind is no faster than the canopy's.
     pub fn at(&self, x: f64, y: f64) -> f32 {
-        1.0 - (-self.fetch(x, y) / self.length).exp() as f32
+        if self.ratio <= 1.0 + 1e-9 {
+            return 1.0;
+        }
+        let r = self.factor.at(self.fetch(x, y)).sqrt();
+        ((self.ratio - r) / (self.ratio - 1.0)).clamp(0.0, 1.0) as f32
+    }
+
+    /// The open ground's mean wind over the canopy's at the crown's height, for the field's
+    /// profile.
+    pub fn set_ratio(&mut self, ratio: f64) {
+        self.ratio = if ratio.is_finite() { ratio } else { 1.0 };
+    }
+
+    /// The edge factor in use.
+    pub fn edge_factor(&self) -> EdgeFactor {
+        self.factor
     }
 
     /// The ground the forest covers: its cells' area, m².
@@ -231,17 +310,26 @@ mod tests {
     #[test]
     fn fetch_grows_from_the_windward_edge_across_the_forest() {
         // 40 × 40 trees 5 m apart, wind along +x: the fetch is the distance from x = 0.
-        let s = Shelter::new(&square(40, 5.0), 0.0, 10.0, 1000.0, 15.0);
+        let far = EdgeFactor::new(5.0, 100.0);
+        let s = Shelter::new(&square(40, 5.0), 0.0, 10.0, far, 15.0, 3.0);
         for x in [0.0, 50.0, 100.0, 150.0, 190.0] {
             let f = s.fetch(x, 100.0);
-            assert!((f - x).abs() <= 12.0, "fetch {f} m at x = {x} m");
+            assert!((f - x).abs() < 1e-9, "fetch {f} m at x = {x} m");
         }
         // Wind along −x: the edge is the other side.
-        let s = Shelter::new(&square(40, 5.0), 180.0, 10.0, 1000.0, 15.0);
-        assert!(s.fetch(190.0, 100.0) < 12.0 && s.fetch(0.0, 100.0) > 180.0);
-        // The shelter rises from 0 at the edge towards 1 inside.
-        let s = Shelter::new(&square(40, 5.0), 0.0, 10.0, 30.0, 15.0);
-        assert!(s.at(1.0, 100.0) < 0.3 && s.at(150.0, 100.0) > 0.99, "{}", s.at(1.0, 100.0));
+        let s = Shelter::new(&square(40, 5.0), 180.0, 10.0, far, 15.0, 3.0);
+        assert!(s.fetch(195.0, 100.0) < 1e-9 && (s.fetch(0.0, 100.0) - 195.0).abs() < 1e-9);
+        // The shelter rises towards 1 inside: a 15 m stand, the open wind 3 times the
+        // canopy's at the crown; at the edge the crown's wind squared is the edge factor
+        // times the interior's.
+        let f = EdgeFactor::new(5.0, 15.0);
+        let s = Shelter::new(&square(40, 5.0), 0.0, 10.0, f, 15.0, 3.0);
+        let mix = |x: f64| {
+            let sh = s.at(x, 100.0) as f64;
+            ((1.0 - sh) * 3.0 + sh).powi(2)
+        };
+        assert!((mix(0.0) - f.at(0.0)).abs() < 1e-5 && f.at(0.0) > 1.2, "{}", f.at(0.0));
+        assert!(s.at(0.0, 100.0) < s.at(15.0, 100.0) && s.at(150.0, 100.0) > 0.9999);
     }
 
     #[test]
@@ -250,12 +338,12 @@ mod tests {
         for (gap, crossed) in [(10.0f32, true), (60.0, false)] {
             let mut feet = square(20, 5.0);
             feet.extend(square(20, 5.0).iter().map(|p| [p[0] + 95.0 + gap, p[1]]));
-            let s = Shelter::new(&feet, 0.0, 5.0, 1000.0, 15.0);
+            let s = Shelter::new(&feet, 0.0, 5.0, EdgeFactor::new(5.0, 100.0), 15.0, 3.0);
             let f = s.fetch(100.0 + gap as f64 + 10.0, 50.0);
             if crossed {
-                assert!(f > 100.0, "gap {gap} m: fetch {f}");
+                assert!((f - 110.0 - gap as f64).abs() < 1e-9, "gap {gap} m: fetch {f}");
             } else {
-                assert!(f < 25.0, "gap {gap} m: fetch {f}");
+                assert!((f - 15.0).abs() < 1e-9, "gap {gap} m: fetch {f}");
             }
         }
     }
@@ -270,8 +358,11 @@ mod tests {
         for z in [2.0, 5.0, 10.0, 15.0, 20.0] {
             assert!(open_speed(&p, 15.0, z) > p.mean_speed(z), "z {z}");
         }
-        // A denser stand shelters sooner.
-        assert!(Stand { lai: 6.0, ..stand }.adjustment() < stand.adjustment());
+        // ForestGALES' factor: larger at the edge of a denser stand (its interior is the
+        // more sheltered), 1 deep inside.
+        let (dense, sparse) = (EdgeFactor::new(3.0, 15.0), EdgeFactor::new(6.0, 15.0));
+        assert!(dense.at(0.0) > sparse.at(0.0) && sparse.at(0.0) > 1.3, "{}", sparse.at(0.0));
+        assert!((sparse.at(10.0 * 15.0) - 1.0).abs() < 1e-3);
     }
 
     #[test]

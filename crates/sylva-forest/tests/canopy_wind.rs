@@ -1,8 +1,8 @@
 //! The canopy wind of a forest: the mean wind each tree feels follows the stand's canopy
-//! profile inside the forest and the open ground's at its windward edge; edge trees bear
-//! more of the wind than interior ones.
+//! profile inside the forest, and at its windward edge a mix with the open ground's whose
+//! load is ForestGALES' edge factor; edge trees sway further than interior ones.
 
-use sylva_forest::canopy::{Stand, open_speed};
+use sylva_forest::canopy::{EdgeFactor, Stand, open_speed};
 use sylva_forest::{Forest, SceneSpec};
 
 fn stand_scene(canopy: bool, trees: usize) -> SceneSpec {
@@ -28,59 +28,66 @@ fn edge_and_interior(forest: &Forest) -> (usize, usize) {
 }
 
 #[test]
-fn the_mean_wind_a_tree_feels_is_the_canopy_profile_inside_and_the_open_one_at_the_edge() {
+fn the_mean_wind_a_tree_feels_is_the_canopy_profile_inside_and_the_edge_factor_at_the_edge() {
     let forest = Forest::new(&stand_scene(true, 900)).expect("forest");
     let stand: Stand = forest.stand().expect("canopy wind on by default");
     let params = sylva_wind::WindParams { profile: stand.profile(), ..Default::default() };
     let (edge, interior) = edge_and_interior(&forest);
     let (se, si) = (forest.shelter_of(edge).unwrap(), forest.shelter_of(interior).unwrap());
-    assert!(se < 0.25 && si > 0.95, "shelter at the edge {se}, inside {si}");
+    assert_eq!(forest.fetch_of(edge), Some(0.0));
+    assert!(se < 0.95 && si > 0.999, "shelter at the edge {se}, inside {si}");
     // The field's gusts average out over its loop (512 frames of 0.1 s): the mean of what
     // a tree feels there is its mean wind.
-    let mean_along = |t: usize, z: f64| {
+    let mean_of = |t: usize, z: f64, f: &dyn Fn([f32; 3]) -> f64| {
         let s: f64 =
-            (0..512).map(|k| forest.tree_wind(t, z, 0.1 * k as f64).expect("tree")[0] as f64).sum();
+            (0..512).map(|k| f(forest.tree_wind(t, z, 0.1 * k as f64).expect("tree"))).sum();
         s / 512.0
     };
+    let along = |w: [f32; 3]| w[0] as f64;
     let h = stand.height;
+    let mix = |s: f32, z: f64| {
+        (1.0 - s as f64) * open_speed(&params, h, z) + s as f64 * params.mean_speed(z)
+    };
     for f in [0.25, 0.5, 1.0, 2.0] {
         let z = f * h;
-        // U* is the preset's: compare as ratios to the canopy top's speed.
-        let inside = mean_along(interior, z);
-        let want = (1.0 - si as f64) * open_speed(&params, h, z) + si as f64 * params.mean_speed(z);
-        let top = mean_along(interior, h);
-        let want_top =
-            (1.0 - si as f64) * open_speed(&params, h, h) + si as f64 * params.mean_speed(h);
-        let (got, model) = (inside / top, want / want_top);
-        assert!((got - model).abs() < 0.03 * model, "inside at {f} h: {got} against {model}");
-        // Deep inside, the canopy's own profile to 3 %.
+        // U* is the preset's: compare as ratios to the canopy top's speed. Deep inside, the
+        // canopy's own profile.
+        let got = mean_of(interior, z, &along) / mean_of(interior, h, &along);
         let canopy = params.mean_speed(z) / params.mean_speed(h);
-        assert!((got - canopy).abs() < 0.03 * canopy.max(0.3), "{f} h: {got} against {canopy}");
-        let at_edge = mean_along(edge, z) / mean_along(edge, 2.0 * h);
-        let want = ((1.0 - se as f64) * open_speed(&params, h, z)
-            + se as f64 * params.mean_speed(z))
-            / params.mean_speed(2.0 * h);
-        assert!((at_edge - want).abs() < 0.03 * want, "edge at {f} h: {at_edge} against {want}");
+        assert!((got - canopy).abs() < 0.03 * canopy, "inside at {f} h: {got} against {canopy}");
+        // At the edge, the mix of the open ground's and the canopy's at its shelter.
+        let got = mean_of(edge, z, &along) / mean_of(edge, 2.0 * h, &along);
+        let want = mix(se, z) / mix(se, 2.0 * h);
+        assert!((got - want).abs() < 0.03 * want, "edge at {f} h: {got} against {want}");
     }
+    // The load of the mean wind on the edge tree's crown (0.7 h), against the interior's:
+    // ForestGALES' edge factor for the stand's spacing. (The gusts' load differs between
+    // two points of one realisation by their local variance: not compared.)
+    let load = (mean_of(edge, 0.7 * h, &along) / mean_of(interior, 0.7 * h, &along)).powi(2);
+    let spacing = (std::f64::consts::PI * (forest.radius as f64).powi(2) / 900.0).sqrt();
+    let gales = EdgeFactor::new(spacing, h).at(0.0);
+    assert!(gales > 1.2 && (load / gales - 1.0).abs() < 0.05, "load ×{load}, ForestGALES ×{gales}");
 }
 
 #[test]
 fn an_edge_tree_sways_further_downwind_than_an_interior_one_of_the_same_size() {
-    // The mean trunk-top displacement over 12 s after 4 s, of the edge's least sheltered
-    // tenth against the interior's most sheltered tenth: with the canopy wind the edge bears
-    // more than twice the interior's, and over twice the ratio without it (one wind at
-    // every height and place: what differs is the gusts where each tenth stands).
+    // The mean trunk-top displacement over 20 s after 4 s, of the edge's least sheltered
+    // tenth against the interior's most sheltered tenth, with the canopy wind and without
+    // it in the same field (the stand's profile set as the scene's: the same gusts where
+    // each tenth stands): the canopy wind raises the edge's share by over a tenth.
+    let probe = Forest::new(&stand_scene(true, 300)).expect("forest");
+    let mut order: Vec<usize> = (0..probe.trees()).collect();
+    order.sort_by(|a, b| probe.fetch_of(*a).unwrap().total_cmp(&probe.fetch_of(*b).unwrap()));
+    let profile = probe.stand().expect("stand").profile();
     let mut ratios = Vec::new();
     for canopy in [true, false] {
-        let mut forest = Forest::new(&stand_scene(canopy, 300)).expect("forest");
-        let mut order: Vec<usize> = (0..forest.trees()).collect();
-        let probe = Forest::new(&stand_scene(true, 300)).expect("forest");
-        order.sort_by(|a, b| probe.fetch_of(*a).unwrap().total_cmp(&probe.fetch_of(*b).unwrap()));
+        let spec = SceneSpec { wind_profile: Some(profile), ..stand_scene(canopy, 300) };
+        let mut forest = Forest::new(&spec).expect("forest");
         let tenth = order.len() / 10;
         let (edge, inner) = (&order[..tenth], &order[order.len() - tenth..]);
         let dt = 1.0 / 30.0;
         let (mut e, mut i) = (0.0f64, 0.0f64);
-        for k in 0..480 {
+        for k in 0..720 {
             forest.step(dt);
             if k >= 120 {
                 let d = |t: &usize| forest.trunk_top_displacement(*t).unwrap() as f64;
@@ -91,10 +98,7 @@ fn an_edge_tree_sways_further_downwind_than_an_interior_one_of_the_same_size() {
         ratios.push(e / i);
     }
     let (on, off) = (ratios[0], ratios[1]);
-    assert!(
-        on > 2.0 && on > 2.0 * off,
-        "edge against interior {on}, without the canopy wind {off}"
-    );
+    assert!(on > 1.1 * off, "edge against interior {on}, without the canopy wind {off}");
 }
 
 #[test]

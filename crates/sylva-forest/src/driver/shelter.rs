@@ -5,13 +5,14 @@
 use sylva_tree::WIND_SAMPLE_HEIGHT;
 
 use super::{Forest, SpeciesRuntime};
-use crate::canopy::{Shelter, Stand, field_mean, height_factors, open_speed};
+use crate::canopy::{EdgeFactor, Shelter, Stand, field_mean, height_factors, open_speed};
 use crate::scene::{Placement, SceneSpec, WindSource};
 
 /// The canopy wind of a scene's trees, where the scene has it on (`canopy_wind`, default on
 /// with a preset or a wind file; a steady wind is the same everywhere): the stand (mean
 /// height, leaf area over the ground its trees cover) and the shelter on a grid of cells
-/// two spacings wide, gaps up to a canopy height crossed.
+/// two spacings wide, gaps up to a canopy height crossed, with ForestGALES' edge factor for
+/// the stand's mean spacing.
 pub(super) fn canopy_of(
     spec: &SceneSpec,
     trees: &[(Placement, u32)],
@@ -28,12 +29,14 @@ pub(super) fn canopy_of(
     let leaves: f64 =
         trees.iter().map(|(p, _)| (stats(p).leaf_area * p.scale * p.scale) as f64).sum();
     let feet: Vec<[f32; 2]> = trees.iter().map(|(p, _)| [p.position[0], p.position[1]]).collect();
-    let cell = 2.0 * spec.spacing as f64;
-    // The ground first (the shelter's length needs the leaf area index).
-    let ground = Shelter::new(&feet, spec.wind_direction_deg as f64, cell, 1.0, height).area();
-    let stand = Stand { height, lai: leaves / ground.max(1.0) };
-    let shelter =
-        Shelter::new(&feet, spec.wind_direction_deg as f64, cell, stand.adjustment(), height);
+    let (cell, direction) = (2.0 * spec.spacing as f64, spec.wind_direction_deg as f64);
+    let mut shelter =
+        Shelter::new(&feet, direction, cell, EdgeFactor::new(1.0, height), height, 1.0);
+    let ground = shelter.area().max(1.0);
+    let stand = Stand { height, lai: leaves / ground };
+    // The factor for the stand's mean spacing; the open-to-canopy ratio comes with the field.
+    let edge = EdgeFactor::new((ground / n).sqrt(), height);
+    shelter = Shelter::new(&feet, direction, cell, edge, height, 1.0);
     Some((stand, shelter))
 }
 
@@ -84,6 +87,10 @@ impl Forest {
     pub(super) fn apply_height_factors(&mut self) {
         let field = self.wind.field();
         let (params, zs) = (&field.params, &field.grid.zs);
+        if let Some((stand, shelter)) = &mut self.canopy_wind {
+            let crown = WIND_SAMPLE_HEIGHT * stand.height;
+            shelter.set_ratio(open_speed(params, stand.height, crown) / params.mean_speed(crown));
+        }
         let canopy = &self.canopy_wind;
         for s in &mut self.species {
             let factors = canopy.as_ref().and_then(|(stand, _)| {
