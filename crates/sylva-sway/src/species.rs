@@ -367,19 +367,19 @@ impl SwaySpecies {
         !self.wind_open.is_empty()
     }
 
-    /// Per lane: the factor on the wind at joint `i` for lanes of shelter `shelter`
-    /// (1 everywhere without height factors: the wind then passes through unchanged).
+    /// Per lane: the factor on the wind at joint `i` for lanes of shelter `shelter`; `None`
+    /// without height factors (the wind then passes through as it is).
     #[inline(always)]
     pub(crate) fn wind_factor<const W: usize>(
         &self,
         i: usize,
         shelter: &[f32; crate::batch::LANES],
-    ) -> [f32; W] {
+    ) -> Option<[f32; W]> {
         if self.wind_open.is_empty() {
-            return [1.0; W];
+            return None;
         }
         let (open, gain) = (self.wind_open[i], self.wind_inside[i] - self.wind_open[i]);
-        std::array::from_fn(|l| open + shelter[l] * gain)
+        Some(std::array::from_fn(|l| open + shelter[l] * gain))
     }
 
     /// The tree's drag area C_d·A at rest in a steady wind of `speed` m/s, m²: every

@@ -127,7 +127,7 @@ simd_kernel! {
         } else {
             for i in (0..n).rev() {
                 let f = sp.wind_factor::<W>(i, &st.shelter);
-                gather::<W>(&mut st.loads[i], &st.lanes[i], st.held, i, &q, &f);
+                gather::<W>(&mut st.loads[i], &st.lanes[i], st.held, i, &q, f.as_ref());
                 pass_to_parent::<W>(sp, st.loads, i);
             }
         }
@@ -170,7 +170,7 @@ fn gather<const W: usize>(
     held: Option<&[Lump]>,
     i: usize,
     q: &[[[f32; W]; 3]; 2],
-    f: &[f32; W],
+    f: Option<&[f32; W]>,
 ) {
     for c in 0..6 {
         li[c][0] += own[c][0];
@@ -261,7 +261,7 @@ fn loads_in_bins<const W: usize>(
         let i = i as usize;
         if cut.in_top[i] {
             let f = sp.wind_factor::<W>(i, shelter);
-            gather::<W>(&mut loads[i], &lanes[i], held, i, q, &f);
+            gather::<W>(&mut loads[i], &lanes[i], held, i, q, f.as_ref());
         }
         pass_to_parent::<W>(sp, loads, i);
     }
@@ -284,7 +284,7 @@ simd_kernel! {
             // is in the top (which this pass does not touch); the parent precedes `i`.
             let li = unsafe { rows.row_mut(i) };
             let f = sp.wind_factor::<W>(i, shelter);
-            gather::<W>(li, &lanes[i], held, i, q, &f);
+            gather::<W>(li, &lanes[i], held, i, q, f.as_ref());
             let p = sp.parent[i];
             if p != sylva_tree::NO_PARENT && !sp.cut.in_top[p as usize] {
                 // SAFETY: as above: the parent is in this bin, and is not joint `i`.
@@ -325,7 +325,7 @@ simd_kernel! {
             let own = (&mut lanes[..6]).try_into().expect("six rows");
             let i = part.first + j;
             let f = sp.wind_factor::<W>(i, shelter);
-            own_drag::<W, false>(sp, aero, inv_ur, u, &f, i, &part.rate[j], &part.weight[j], own);
+            own_drag::<W, false>(sp, aero, inv_ur, u, f.as_ref(), i, &part.rate[j], &part.weight[j], own);
         }
     }
 }

@@ -321,7 +321,7 @@ simd_kernel! {
             for i in 0..n {
                 let own = (&mut st.lanes[i][..6]).try_into().expect("six rows");
                 let f = sp.wind_factor::<W>(i, &st.shelter);
-                own_drag::<W, false>(sp, aero, inv_ur, u, &f, i, &st.rate[i], &st.weight[i], own);
+                own_drag::<W, false>(sp, aero, inv_ur, u, f.as_ref(), i, &st.rate[i], &st.weight[i], own);
             }
         }
         // (1) Loads, tips inwards: loads[i] = (force on the subtree, moment about joint i):
@@ -338,10 +338,10 @@ simd_kernel! {
                     }
                 }
             } else {
-                own_drag::<W, true>(sp, aero, inv_ur, u, &f, i, &st.rate[i], &st.weight[i], li);
+                own_drag::<W, true>(sp, aero, inv_ur, u, f.as_ref(), i, &st.rate[i], &st.weight[i], li);
             }
             if let Some(held) = st.held {
-                add_held::<W>(li, &held[i], &q, &f);
+                add_held::<W>(li, &held[i], &q, f.as_ref());
             }
             pass_to_parent::<W>(sp, st.loads, i);
         }
@@ -464,6 +464,18 @@ pub(super) fn held_wind<const W: usize>(u: &[Lanes; 3], inv_ur: f32) -> [[[f32; 
     q
 }
 
+/// The lanes' wind `u` times the factors `f` (lanes from `W` on: zero).
+#[inline(always)]
+fn scale_wind<const W: usize>(u: &[Lanes; 3], f: &[f32; W]) -> [Lanes; 3] {
+    let mut out = [ZERO; 3];
+    for c in 0..3 {
+        for l in 0..W {
+            out[c][l] = u[c][l] * f[l];
+        }
+    }
+    out
+}
+
 /// Add the lumped drag of the joints held beyond a joint (`lump`, in the wind `q` of
 /// [`held_wind`]) to its loads `li`; `f`, the joint's height factor on the wind, scales the
 /// drag by f² (the held joints feel the wind at the joint's height).
@@ -472,14 +484,16 @@ pub(super) fn add_held<const W: usize>(
     li: &mut [[f32; W]; 6],
     lump: &Lump,
     q: &[[[f32; W]; 3]; 2],
-    f: &[f32; W],
+    f: Option<&[f32; W]>,
 ) {
     for (part, q) in lump.iter().zip(q) {
         let [d, cx, cy, cz] = *part;
         let mut q = *q;
-        for c in 0..3 {
-            for l in 0..W {
-                q[c][l] *= f[l] * f[l];
+        if let Some(f) = f {
+            for c in 0..3 {
+                for l in 0..W {
+                    q[c][l] *= f[l] * f[l];
+                }
             }
         }
         for l in 0..W {
@@ -546,19 +560,20 @@ pub(super) fn own_drag<const W: usize, const ADD: bool>(
     aero: &[f32],
     inv_ur: f32,
     u: &[Lanes; 3],
-    f: &[f32; W],
+    f: Option<&[f32; W]>,
     i: usize,
     ra: &[[f32; W]; 2],
     w: &[f32; W],
     out: &mut [[f32; W]; 6],
 ) {
-    let mut uf = [[0.0f32; W]; 3];
-    for c in 0..3 {
-        for l in 0..W {
-            uf[c][l] = u[c][l] * f[l];
+    let scaled;
+    let u = match f {
+        None => u,
+        Some(f) => {
+            scaled = scale_wind::<W>(u, f);
+            &scaled
         }
-    }
-    let u = &uf;
+    };
     let [ax, ay] = sp.axes[i];
     let arm = sp.arm[i];
     let (drag, leaf) = (sp.drag[i], sp.leaf_drag[i]);
