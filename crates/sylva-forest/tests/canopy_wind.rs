@@ -33,7 +33,8 @@ fn the_mean_wind_a_tree_feels_is_the_canopy_profile_inside_and_the_edge_factor_a
     let stand: Stand = forest.stand().expect("canopy wind on by default");
     let params = sylva_wind::WindParams { profile: stand.profile(), ..Default::default() };
     let (edge, interior) = edge_and_interior(&forest);
-    let (se, si) = (forest.shelter_of(edge).unwrap(), forest.shelter_of(interior).unwrap());
+    let shelter = |t: usize| forest.shelter_of(t).expect("canopy wind on");
+    let (se, si) = (shelter(edge), shelter(interior));
     assert_eq!(forest.fetch_of(edge), Some(0.0));
     assert!(se < 0.95 && si > 0.999, "shelter at the edge {se}, inside {si}");
     // The field's gusts average out over its loop (512 frames of 0.1 s): the mean of what
@@ -77,7 +78,8 @@ fn an_edge_tree_sways_further_downwind_than_an_interior_one_of_the_same_size() {
     // each tenth stands): the canopy wind raises the edge's share by over a tenth.
     let probe = Forest::new(&stand_scene(true, 300)).expect("forest");
     let mut order: Vec<usize> = (0..probe.trees()).collect();
-    order.sort_by(|a, b| probe.fetch_of(*a).unwrap().total_cmp(&probe.fetch_of(*b).unwrap()));
+    let fetch = |t: &usize| probe.fetch_of(*t).expect("canopy wind on");
+    order.sort_by(|a, b| fetch(a).total_cmp(&fetch(b)));
     let profile = probe.stand().expect("stand").profile();
     let mut ratios = Vec::new();
     for canopy in [true, false] {
@@ -90,7 +92,7 @@ fn an_edge_tree_sways_further_downwind_than_an_interior_one_of_the_same_size() {
         for k in 0..720 {
             forest.step(dt);
             if k >= 120 {
-                let d = |t: &usize| forest.trunk_top_displacement(*t).unwrap() as f64;
+                let d = |t: &usize| forest.trunk_top_displacement(*t).expect("tree") as f64;
                 e += edge.iter().map(d).sum::<f64>() / tenth as f64;
                 i += inner.iter().map(d).sum::<f64>() / tenth as f64;
             }
