@@ -1,8 +1,9 @@
 //! The wind in a forest and at its edge: the canopy profile a scene's trees make ([`Stand`]:
-//! their mean height and the stand's leaf area index), the wind at each joint's own height
-//! ([`height_factors`]), and the shelter a tree has from the trees upwind of it
-//! ([`Shelter`]): at the windward edge the wind is the open ground's, and the canopy's
-//! profile takes over with the distance into the forest.
+//! their mean height and the stand's leaf area index), the mean wind and the gusts at each
+//! joint's own height ([`height_factors`], [`gust_factors`]), and the shelter a tree has
+//! from the trees upwind of it ([`Shelter`], [`EdgeFactor`]): near the windward edge the
+//! wind is mixed with the open ground's, the canopy's taking over with the distance into
+//! the forest.
 //!
 //! Sources. Inside the canopy the mean speed falls exponentially (Cionco 1965), with the
 //! attenuation from the leaf area (`sylva_wind::canopy_attenuation`, Harman & Finnigan
@@ -98,6 +99,50 @@ pub fn height_factors(
     let open = heights.iter().map(|&z| factor(open_speed(params, h, z as f64))).collect();
     let inside = heights.iter().map(|&z| factor(params.mean_speed(z as f64))).collect();
     Some((open, inside))
+}
+
+/// σ_u / U* at the canopy top: the mean over the canopies Raupach, Finnigan & Brunet 1996
+/// gather (σ_w / U* is 1.1 there; their ratio to U* against the surface layer's 2.5 and 1.25,
+/// 0.72 and 0.88, is taken as the u component's, 0.72, for every component).
+pub const CANOPY_TOP_SIGMA_U: f64 = 1.8;
+
+/// The gusts' size at height `z` against the field's (whose σ_u is 2.5 U* at every height,
+/// `sylva_wind::spectrum::SIGMA_PER_U_STAR`): inside a canopy of height `h`,
+/// [`CANOPY_TOP_SIGMA_U`] / 2.5 at the top, below it falling with the canopy's mean speed
+/// `mean(z) / mean(h)` (the constant turbulence intensity of the first-order closure that
+/// gives the exponential profile, Inoue 1963), above it rising linearly to the field's own
+/// at 2h (the roughness sublayer's top).
+pub fn canopy_gust(z: f64, h: f64, mean: impl Fn(f64) -> f64) -> f64 {
+    let top = CANOPY_TOP_SIGMA_U / sylva_wind::spectrum::SIGMA_PER_U_STAR[0];
+    if z <= h {
+        let at_top = mean(h);
+        if at_top > 0.0 { top * mean(z) / at_top } else { top }
+    } else if z < 2.0 * h {
+        top + (1.0 - top) * (z - h) / h
+    } else {
+        1.0
+    }
+}
+
+/// The open ground's gusts against the field's: its friction velocity (of its log law, met
+/// by the forest's at [`BLENDING_HEIGHTS`] · `h`) over the forest's U*.
+pub fn open_gust(params: &WindParams, h: f64) -> f64 {
+    let zb = BLENDING_HEIGHTS * h;
+    let open_u_star = sylva_wind::KARMAN * params.mean_speed(zb) / (zb / OPEN_ROUGHNESS).ln();
+    open_u_star / params.u_star.max(1e-9)
+}
+
+/// Per joint, the factors on a tree's gusts (its wind less the field's mean) at each
+/// joint's height `heights[i]`, over the open ground (first: the open ground's friction
+/// velocity over the forest's, the same at every height, its σ_u 2.5 times that) and
+/// inside a canopy of height `h` (second: [`canopy_gust`]).
+pub fn gust_factors(params: &WindParams, h: f64, heights: &[f32]) -> (Vec<f32>, Vec<f32>) {
+    let open = open_gust(params, h) as f32;
+    let inside = heights
+        .iter()
+        .map(|&z| canopy_gust(z as f64, h, |z| params.mean_speed(z)) as f32)
+        .collect();
+    (vec![open; heights.len()], inside)
 }
 
 /// ForestGALES' edge factor: a tree's maximum bending moment at fetch x from a windward edge

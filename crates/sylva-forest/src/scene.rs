@@ -259,9 +259,10 @@ pub struct SceneSpec {
     /// The canopy's own wind (`sylva_forest::canopy`), default on with a preset or a wind
     /// file: a preset's profile becomes the stand's (log law over it, exponential inside,
     /// from its trees' mean height and leaf area) unless `wind_profile` is set; every joint
-    /// feels the mean wind of its own height; trees at the windward edge get the open
-    /// ground's profile, the canopy's taking over with the distance into the forest. Off: one
-    /// wind per tree, sampled at 0.7 of its height, the same at every joint.
+    /// feels the mean wind of its own height and gusts of the canopy's size there; trees
+    /// near the windward edge a mix with the open ground's wind that loads them as measured
+    /// edges are (ForestGALES' edge factor). Off: one wind per tree, sampled at 0.7 of its
+    /// height, the same at every joint.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub canopy_wind: Option<bool>,
     /// Direction the wind blows towards, degrees counter-clockwise from +x. Default 20.

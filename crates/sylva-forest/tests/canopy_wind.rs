@@ -110,3 +110,29 @@ fn with_the_canopy_wind_off_or_a_steady_wind_there_is_no_stand() {
     let forest = Forest::new(&steady).expect("forest");
     assert!(forest.stand().is_none() && forest.shelter_of(0).is_none());
 }
+
+#[test]
+fn gusts_at_the_canopy_top_are_the_measured_size_and_below_it_keep_its_intensity() {
+    // Deep inside the stand: σ_u at the canopy top is 1.8 U* (Raupach, Finnigan & Brunet
+    // 1996) where the field's, at 2h and above, is 2.5 U*: 0.72 of the gusts felt at 2h;
+    // below the top the gusts shrink with the mean (a constant turbulence intensity).
+    let forest = Forest::new(&stand_scene(true, 900)).expect("forest");
+    let h = forest.stand().expect("canopy wind on").height;
+    let (_, interior) = edge_and_interior(&forest);
+    let moments = |z: f64| {
+        let xs: Vec<f64> = (0..512)
+            .map(|k| forest.tree_wind(interior, z, 0.1 * k as f64).expect("tree")[0] as f64)
+            .collect();
+        let mean = xs.iter().sum::<f64>() / 512.0;
+        let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / 512.0;
+        (mean, var.sqrt())
+    };
+    let (top, above) = (moments(h), moments(2.0 * h));
+    let ratio = top.1 / above.1;
+    assert!((ratio - 1.8 / 2.5).abs() < 0.01, "σ at h over σ at 2h: {ratio}");
+    for f in [0.25, 0.5, 0.8] {
+        let (mean, sigma) = moments(f * h);
+        let (ti, ti_top) = (sigma / mean, top.1 / top.0);
+        assert!((ti / ti_top - 1.0).abs() < 0.01, "intensity at {f} h {ti} against {ti_top} at h");
+    }
+}

@@ -80,6 +80,10 @@ pub struct SwaySpecies {
     /// height ([`SwaySpecies::set_wind_heights`]).
     pub(crate) wind_open: Vec<f32>,
     pub(crate) wind_inside: Vec<f32>,
+    /// Per joint, the factor on the gusts (an instance's wind less its mean,
+    /// [`crate::SwayBatch::set_mean_wind`]), in the open and inside; empty: the mean's.
+    pub(crate) gust_open: Vec<f32>,
+    pub(crate) gust_inside: Vec<f32>,
 }
 
 /// A skeleton cut into a small top, closed under taking parents, and whole subtrees below it
@@ -196,6 +200,8 @@ impl SwaySpecies {
             drag_scale: crown_drag_scale(skeleton, &params),
             wind_open: Vec::new(),
             wind_inside: Vec::new(),
+            gust_open: Vec::new(),
+            gust_inside: Vec::new(),
         };
         let scale = sp.drag_scale;
         let cbar = (params.youngs_modulus / params.wood_density).sqrt();
@@ -340,15 +346,47 @@ impl SwaySpecies {
     /// ([`crate::SwayBatch::set_shelter`]). A mean wind profile divided by the mean speed where
     /// the instance's wind is sampled gives the factors: the mean wind at every joint is then
     /// the profile's at its height. Two empty slices: the same wind at every joint (the
-    /// default). Factors must be finite and ≥ 0, one per joint.
+    /// default). Factors must be finite and ≥ 0, one per joint. The gusts take the same
+    /// factors until [`SwaySpecies::set_gust_heights`] gives them their own.
     pub fn set_wind_heights(&mut self, open: &[f32], inside: &[f32]) -> Result<(), SwayParamError> {
-        let n = self.len();
         if open.is_empty() && inside.is_empty() {
             self.wind_open.clear();
             self.wind_inside.clear();
+            self.gust_open.clear();
+            self.gust_inside.clear();
             return Ok(());
         }
-        for (field, f) in [("wind_open", open), ("wind_inside", inside)] {
+        self.check_factors(("wind_open", open), ("wind_inside", inside))?;
+        self.wind_open = open.to_vec();
+        self.wind_inside = inside.to_vec();
+        self.gust_open = open.to_vec();
+        self.gust_inside = inside.to_vec();
+        Ok(())
+    }
+
+    /// Give the gusts their own factors per joint (after [`SwaySpecies::set_wind_heights`],
+    /// which they otherwise share): an instance's wind u with mean ū
+    /// ([`crate::SwayBatch::set_mean_wind`]) is felt at joint `i` as m ū + g (u − ū), m the
+    /// mean's factor and g the gusts' (`open[i]` … `inside[i]` by shelter, as the mean's).
+    /// Refused without mean factors set; factors finite and ≥ 0, one per joint.
+    pub fn set_gust_heights(&mut self, open: &[f32], inside: &[f32]) -> Result<(), SwayParamError> {
+        if self.wind_open.is_empty() {
+            let expected = "mean factors first (set_wind_heights)";
+            return Err(SwayParamError { field: "gust_open", value: open.len() as f32, expected });
+        }
+        self.check_factors(("gust_open", open), ("gust_inside", inside))?;
+        self.gust_open = open.to_vec();
+        self.gust_inside = inside.to_vec();
+        Ok(())
+    }
+
+    fn check_factors(
+        &self,
+        a: (&'static str, &[f32]),
+        b: (&'static str, &[f32]),
+    ) -> Result<(), SwayParamError> {
+        let n = self.len();
+        for (field, f) in [a, b] {
             if f.len() != n {
                 let expected = "one factor per joint";
                 return Err(SwayParamError { field, value: f.len() as f32, expected });
@@ -357,8 +395,6 @@ impl SwaySpecies {
                 return Err(SwayParamError { field, value, expected: "finite, >= 0" });
             }
         }
-        self.wind_open = open.to_vec();
-        self.wind_inside = inside.to_vec();
         Ok(())
     }
 
@@ -367,19 +403,24 @@ impl SwaySpecies {
         !self.wind_open.is_empty()
     }
 
-    /// Per lane: the factor on the wind at joint `i` for lanes of shelter `shelter`; `None`
-    /// without height factors (the wind then passes through as it is).
+    /// Per lane: the factors on the mean wind and on the gusts at joint `i` for lanes of
+    /// shelter `shelter`; `None` without height factors (the wind then passes through as it
+    /// is).
     #[inline(always)]
     pub(crate) fn wind_factor<const W: usize>(
         &self,
         i: usize,
         shelter: &[f32; crate::batch::LANES],
-    ) -> Option<[f32; W]> {
+    ) -> Option<crate::batch::JointWind<W>> {
         if self.wind_open.is_empty() {
             return None;
         }
         let (open, gain) = (self.wind_open[i], self.wind_inside[i] - self.wind_open[i]);
-        Some(std::array::from_fn(|l| open + shelter[l] * gain))
+        let (gust, more) = (self.gust_open[i], self.gust_inside[i] - self.gust_open[i]);
+        Some(crate::batch::JointWind {
+            mean: std::array::from_fn(|l| open + shelter[l] * gain),
+            gust: std::array::from_fn(|l| gust + shelter[l] * more),
+        })
     }
 
     /// The tree's drag area C_d·A at rest in a steady wind of `speed` m/s, m²: every

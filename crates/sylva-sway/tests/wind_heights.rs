@@ -98,3 +98,43 @@ fn height_factors_are_checked_and_named() {
     sp.set_wind_heights(&[], &[]).expect("cleared");
     assert!(!sp.has_wind_heights());
 }
+
+#[test]
+fn gusts_take_their_own_factor_and_the_mean_its_own() {
+    // Mean factors 1, gust factors 0: an instance in a gusty wind u whose mean is ū moves
+    // exactly as one without factors in ū itself. Gust factors 2: as one in ū + 2 (u − ū).
+    let sp = aspen();
+    let n = sp.len();
+    let mean = [6.0f32, 1.0, 0.0];
+    let gusty = |k: usize| {
+        let s = (k as f32 * 0.37).sin();
+        [mean[0] + 2.0 * s, mean[1] - 1.5 * s, 0.8 * s]
+    };
+    for (gust, scale) in [(0.0f32, 0.0f32), (2.0, 2.0)] {
+        let mut with = SwayBatch::new(sp.clone(), 1);
+        with.set_wind_heights(&vec![1.0; n], &vec![1.0; n]).expect("mean factors");
+        with.set_gust_heights(&vec![gust; n], &vec![gust; n]).expect("gust factors");
+        with.set_mean_wind(0, mean);
+        let mut plain = SwayBatch::new(sp.clone(), 1);
+        for k in 0..90 {
+            let u = gusty(k);
+            with.step(1.0 / 60.0, &[u]);
+            let felt: [f32; 3] = std::array::from_fn(|c| mean[c] + scale * (u[c] - mean[c]));
+            plain.step(1.0 / 60.0, &[felt]);
+        }
+        let (a, b) = (angles(&with, 0), angles(&plain, 0));
+        let worst = a
+            .iter()
+            .zip(&b)
+            .map(|(x, y)| (x[0] - y[0]).abs().max((x[1] - y[1]).abs()))
+            .fold(0.0f32, f32::max);
+        // The same but for rounding (the factors and the mean are applied in another order).
+        assert!(worst < 1e-4, "gust factor {gust}: {worst} rad apart");
+    }
+    // Gust factors without mean factors are refused.
+    let mut bare = aspen();
+    assert_eq!(
+        bare.set_gust_heights(&vec![1.0; n], &vec![1.0; n]).expect_err("no mean").field,
+        "gust_open"
+    );
+}

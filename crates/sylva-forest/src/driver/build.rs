@@ -292,6 +292,7 @@ fn new_species(
         order,
         coarse_wind: 0,
         near_wind: 0,
+        mean_speed: 0.0,
     })
 }
 

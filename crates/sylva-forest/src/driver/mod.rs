@@ -200,6 +200,9 @@ pub struct SpeciesRuntime {
     coarse_wind: usize,
     /// Simulated instances that read the near field in the last step.
     near_wind: usize,
+    /// The field's mean speed at the species' sample height, m/s, with the canopy wind (the
+    /// mean its gusts are taken about); 0 without.
+    mean_speed: f32,
 }
 
 impl SpeciesRuntime {

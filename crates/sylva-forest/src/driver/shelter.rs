@@ -5,8 +5,12 @@
 use sylva_tree::WIND_SAMPLE_HEIGHT;
 
 use super::{Forest, SpeciesRuntime};
-use crate::canopy::{EdgeFactor, Shelter, Stand, field_mean, height_factors, open_speed};
+use crate::canopy::{
+    EdgeFactor, Shelter, Stand, canopy_gust, field_mean, gust_factors, height_factors, open_gust,
+    open_speed,
+};
 use crate::scene::{Placement, SceneSpec, WindSource};
+use crate::wind::steer;
 
 /// The canopy wind of a scene's trees, where the scene has it on (`canopy_wind`, default on
 /// with a preset or a wind file; a steady wind is the same everywhere): the stand (mean
@@ -63,9 +67,10 @@ impl Forest {
     }
 
     /// The wind tree `t` feels `z` m above its foot at time `time` s (world axes, m/s, live
-    /// controls applied): its instance group's sample of the field, times the canopy wind's
-    /// factor for that height and its group's shelter, as its simulation takes it (the same
-    /// at every height with the canopy wind off). `None`: no such tree.
+    /// controls applied): its instance group's sample of the field, its mean and its gusts
+    /// each times the canopy wind's factor for that height and its group's shelter, as its
+    /// simulation takes it (the same at every height with the canopy wind off). `None`: no
+    /// such tree.
     pub fn tree_wind(&self, t: usize, z: f64, time: f64) -> Option<[f32; 3]> {
         let &(p, g) = self.trees.get(t)?;
         let s = self.species.get(p.species as usize)?;
@@ -77,13 +82,24 @@ impl Forest {
         let at_sample =
             field_mean(params, zs, WIND_SAMPLE_HEIGHT * s.model.tree.stats.height as f64);
         let x = shelter.at(sample[0], sample[1]) as f64;
-        let here = (1.0 - x) * open_speed(params, stand.height, z) + x * params.mean_speed(z);
-        let f = if at_sample > 1e-6 { (here / at_sample) as f32 } else { 1.0 };
-        Some(w.map(|c| c * f))
+        let h = stand.height;
+        let here = (1.0 - x) * open_speed(params, h, z) + x * params.mean_speed(z);
+        let m = if at_sample > 1e-6 { (here / at_sample) as f32 } else { 1.0 };
+        let inside = canopy_gust(z, h, |z| params.mean_speed(z));
+        let gust = ((1.0 - x) * open_gust(params, h) + x * inside) as f32;
+        let mean = self.mean_wind(at_sample);
+        Some(std::array::from_fn(|c| m * mean[c] + gust * (w[c] - mean[c])))
+    }
+
+    /// The field's mean wind of speed `speed` m/s, in world axes, live controls applied.
+    pub(super) fn mean_wind(&self, speed: f64) -> [f32; 3] {
+        let (sn, cs) = self.wind.field().params.direction_deg.to_radians().sin_cos();
+        steer([speed * cs, speed * sn, 0.0], self.gain, self.turn)
     }
 
     /// Give every species' simulation the height factors of the current wind field: the
-    /// mean wind at each joint the profile's at its height, in the open and inside.
+    /// mean wind at each joint the profile's at its height, in the open and inside, and the
+    /// gusts the canopy's size there; and the field's mean speed where it samples.
     pub(super) fn apply_height_factors(&mut self) {
         let field = self.wind.field();
         let (params, zs) = (&field.params, &field.grid.zs);
@@ -100,9 +116,19 @@ impl Forest {
                 let sample = WIND_SAMPLE_HEIGHT * height;
                 height_factors(params, zs, sample, stand.height, &centres)
             });
+            let on = factors.is_some();
             let (open, inside) = factors.unwrap_or_default();
             // Finite and non-negative by construction: a profile's speeds are.
             let _ = s.batch.set_wind_heights(&open, &inside);
+            s.mean_speed = 0.0;
+            if let (true, Some((stand, _))) = (on, canopy) {
+                let centres: Vec<f32> =
+                    s.batch.species().pressure_centres().iter().map(|c| c[2]).collect();
+                let (open, inside) = gust_factors(params, stand.height, &centres);
+                let _ = s.batch.set_gust_heights(&open, &inside);
+                let sample = WIND_SAMPLE_HEIGHT * s.model.tree.stats.height as f64;
+                s.mean_speed = field_mean(params, zs, sample) as f32;
+            }
         }
     }
 }

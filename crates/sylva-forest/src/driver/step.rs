@@ -29,6 +29,8 @@ struct StepInputs<'a> {
     coarse_levels: bool,
     /// Each point's shelter (the canopy wind; `None` with it off).
     shelter: Option<&'a crate::canopy::Shelter>,
+    /// The field's mean wind of 1 m/s, world axes, live controls applied.
+    mean_dir: [f32; 3],
 }
 
 impl Forest {
@@ -54,6 +56,7 @@ impl Forest {
             animation: self.lod.animation,
             coarse_levels: self.spec.lod.wind,
             shelter: self.canopy_wind.as_ref().map(|c| &c.1),
+            mean_dir: self.mean_wind(1.0),
         };
         // Species in parallel; each samples the shared, read-only field for its groups.
         let work = |s: &mut SpeciesRuntime| step_species(s, &inputs);
@@ -188,12 +191,14 @@ fn sample_wind(s: &mut SpeciesRuntime, k: &StepInputs<'_>) {
             s.near_wind += is_near as usize;
             w
         };
-        if let Some(shelter) = k.shelter {
-            s.batch.set_shelter(lane, shelter.at(g.sample[0], g.sample[1]));
-        }
         let w = steer(w, k.gain, k.turn);
         let (sn, cs) = g.yaw.sin_cos();
         s.winds[lane] = [cs * w[0] + sn * w[1], -sn * w[0] + cs * w[1], w[2]];
+        if let Some(shelter) = k.shelter {
+            s.batch.set_shelter(lane, shelter.at(g.sample[0], g.sample[1]));
+            let m = k.mean_dir.map(|c| c * s.mean_speed);
+            s.batch.set_mean_wind(lane, [cs * m[0] + sn * m[1], -sn * m[0] + cs * m[1], m[2]]);
+        }
         let (shear, tilt) = s.lean.shear_and_tilt(s.winds[lane]);
         g.lean = shear;
         g.tilt = tilt_along(shear, tilt);

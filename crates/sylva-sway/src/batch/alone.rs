@@ -26,8 +26,8 @@ use sylva_core::simd_kernel;
 use sylva_core::v3::dot;
 
 use super::{
-    Group, LANES, Lanes, Lump, MAX_BEND, add_held, any_angle, compose, held_wind, lever_factors,
-    local_palette, own_drag, pass_on, pass_to_parent, small_angle,
+    Group, JointWind, LANES, Lanes, Lump, MAX_BEND, add_held, any_angle, compose, held_wind,
+    lever_factors, local_palette, own_drag, pass_on, pass_to_parent, small_angle,
 };
 use crate::species::{SwaySpecies, Transition};
 
@@ -116,8 +116,8 @@ simd_kernel! {
         let (on, bud) = (st.on[0] as usize, bud[0]);
         // (1a) Each joint's own drag and its moment about the joint, kept in the joint's
         // palette slot (free until pass 2 writes it).
-        let shelter = st.shelter;
-        in_runs(Part::of(st, n), &|part| drags::<W>(sp, aero, inv_ur, u, &shelter, part));
+        let (shelter, mean) = (st.shelter, st.mean);
+        in_runs(Part::of(st, n), &|part| drags::<W>(sp, aero, inv_ur, u, (&shelter, &mean), part));
         // (1b) Tips inwards: a joint's loads are its subtree's (added by its children, all
         // after it), then its own, then the lumped drag of the joints held beyond it; they
         // pass to its parent.
@@ -170,7 +170,7 @@ fn gather<const W: usize>(
     held: Option<&[Lump]>,
     i: usize,
     q: &[[[f32; W]; 3]; 2],
-    f: Option<&[f32; W]>,
+    f: Option<&JointWind<W>>,
 ) {
     for c in 0..6 {
         li[c][0] += own[c][0];
@@ -318,14 +318,15 @@ simd_kernel! {
         aero: &[f32],
         inv_ur: f32,
         u: &[Lanes; 3],
-        shelter: &[f32; LANES],
+        wind_at: (&[f32; LANES], &[Lanes; 3]),
         part: Part<'_, W>,
     ) {
+        let (shelter, mean) = wind_at;
         for (j, lanes) in part.lanes.iter_mut().enumerate() {
             let own = (&mut lanes[..6]).try_into().expect("six rows");
             let i = part.first + j;
             let f = sp.wind_factor::<W>(i, shelter);
-            own_drag::<W, false>(sp, aero, inv_ur, u, f.as_ref(), i, &part.rate[j], &part.weight[j], own);
+            own_drag::<W, false>(sp, aero, inv_ur, u, f.as_ref().map(|f| (f, mean)), i, &part.rate[j], &part.weight[j], own);
         }
     }
 }

@@ -49,7 +49,7 @@ impl SwayBatch {
         let (tr, aero, budget, ni) =
             (&self.transitions, &self.aero_dt, &self.lane_budget, self.instances);
         let (keep, lumped, plans) = (&self.fading_to, &self.lumped, &self.plans);
-        let lane_shelter = &self.lane_shelter;
+        let (lane_shelter, lane_mean) = (&self.lane_shelter, &self.lane_mean);
         let held = |p: usize| lumped.iter().find(|(q, _)| *q == p).map(|(_, v)| v.as_slice());
         let n = sp.len();
         let lanes_of =
@@ -79,9 +79,13 @@ impl SwayBatch {
                 let mut u = [ZERO; 3];
                 let mut bud = [0u32; LANES];
                 let mut shelter = [1.0f32; LANES];
+                let mut mean = [ZERO; 3];
                 let used = W.min(ni - g * LANES);
                 for l in 0..used {
                     shelter[l] = lane_shelter[g * LANES + l];
+                    for c in 0..3 {
+                        mean[c][l] = lane_mean[g * LANES + l][c];
+                    }
                     let w = wind.get(g * LANES + l).copied().unwrap_or([0.0; 3]);
                     for c in 0..3 {
                         u[c][l] = w[c];
@@ -123,6 +127,11 @@ impl SwayBatch {
                             held: held(r),
                             ignored: [false; LANES],
                             shelter: [shelter[l]; LANES],
+                            mean: std::array::from_fn(|c| {
+                                let mut m = ZERO;
+                                m[0] = mean[c][l];
+                                m
+                            }),
                         };
                         let mut u1 = [ZERO; 3];
                         for c in 0..3 {
@@ -153,6 +162,7 @@ impl SwayBatch {
                             held: held(head),
                             ignored: std::array::from_fn(|l| l >= used || solo >> l & 1 == 1),
                             shelter,
+                            mean,
                         };
                         if W == 1 {
                             step_one::<W>(sp, tr, aero, blend, &bud, &u, &mut st);
@@ -289,6 +299,8 @@ pub(super) struct Group<'a, const W: usize> {
     /// Per lane: its shelter, 0 in the open … 1 inside a canopy
     /// ([`SwaySpecies::set_wind_heights`]).
     pub(super) shelter: [f32; LANES],
+    /// Per lane: its mean wind, by component ([`SwayBatch::set_mean_wind`]).
+    pub(super) mean: [Lanes; 3],
 }
 
 simd_kernel! {
@@ -321,7 +333,7 @@ simd_kernel! {
             for i in 0..n {
                 let own = (&mut st.lanes[i][..6]).try_into().expect("six rows");
                 let f = sp.wind_factor::<W>(i, &st.shelter);
-                own_drag::<W, false>(sp, aero, inv_ur, u, f.as_ref(), i, &st.rate[i], &st.weight[i], own);
+                own_drag::<W, false>(sp, aero, inv_ur, u, f.as_ref().map(|f| (f, &st.mean)), i, &st.rate[i], &st.weight[i], own);
             }
         }
         // (1) Loads, tips inwards: loads[i] = (force on the subtree, moment about joint i):
@@ -338,7 +350,7 @@ simd_kernel! {
                     }
                 }
             } else {
-                own_drag::<W, true>(sp, aero, inv_ur, u, f.as_ref(), i, &st.rate[i], &st.weight[i], li);
+                own_drag::<W, true>(sp, aero, inv_ur, u, f.as_ref().map(|f| (f, &st.mean)), i, &st.rate[i], &st.weight[i], li);
             }
             if let Some(held) = st.held {
                 add_held::<W>(li, &held[i], &q, f.as_ref());
@@ -464,27 +476,28 @@ pub(super) fn held_wind<const W: usize>(u: &[Lanes; 3], inv_ur: f32) -> [[[f32; 
     q
 }
 
-/// The lanes' wind `u` times the factors `f` (lanes from `W` on: zero).
+/// The lanes' wind `u` at a joint of factors `f`: its mean `mean` times the mean's factor,
+/// the rest (the gusts) times the gusts' (lanes from `W` on: zero).
 #[inline(always)]
-fn scale_wind<const W: usize>(u: &[Lanes; 3], f: &[f32; W]) -> [Lanes; 3] {
+fn scale_wind<const W: usize>(u: &[Lanes; 3], f: &JointWind<W>, mean: &[Lanes; 3]) -> [Lanes; 3] {
     let mut out = [ZERO; 3];
     for c in 0..3 {
         for l in 0..W {
-            out[c][l] = u[c][l] * f[l];
+            out[c][l] = f.gust[l] * u[c][l] + (f.mean[l] - f.gust[l]) * mean[c][l];
         }
     }
     out
 }
 
 /// Add the lumped drag of the joints held beyond a joint (`lump`, in the wind `q` of
-/// [`held_wind`]) to its loads `li`; `f`, the joint's height factor on the wind, scales the
-/// drag by f² (the held joints feel the wind at the joint's height).
+/// [`held_wind`]) to its loads `li`; `f`, the joint's height factors, scales the drag by
+/// the square of the mean's (the held joints feel the wind at the joint's height).
 #[inline(always)]
 pub(super) fn add_held<const W: usize>(
     li: &mut [[f32; W]; 6],
     lump: &Lump,
     q: &[[[f32; W]; 3]; 2],
-    f: Option<&[f32; W]>,
+    f: Option<&JointWind<W>>,
 ) {
     for (part, q) in lump.iter().zip(q) {
         let [d, cx, cy, cz] = *part;
@@ -492,7 +505,7 @@ pub(super) fn add_held<const W: usize>(
         if let Some(f) = f {
             for c in 0..3 {
                 for l in 0..W {
-                    q[c][l] *= f[l] * f[l];
+                    q[c][l] *= f.mean[l] * f.mean[l];
                 }
             }
         }
@@ -550,8 +563,9 @@ pub(super) fn pass_on<const W: usize>(
 }
 
 /// A joint's own drag, per lane: (force, moment about the joint) of eq.-8 drag on its
-/// segment and leaves, in the wind (the lane's wind `u` times the joint's height factor `f`,
-/// [`SwaySpecies::set_wind_heights`]) relative to the segment's motion — added to `out`
+/// segment and leaves, in the wind (the lane's wind `u` at the joint's height factors `f`
+/// with the lanes' mean wind, [`SwaySpecies::set_gust_heights`]) relative to the segment's
+/// motion — added to `out`
 /// (`ADD`) or written to it.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
@@ -560,7 +574,7 @@ pub(super) fn own_drag<const W: usize, const ADD: bool>(
     aero: &[f32],
     inv_ur: f32,
     u: &[Lanes; 3],
-    f: Option<&[f32; W]>,
+    f: Option<(&JointWind<W>, &[Lanes; 3])>,
     i: usize,
     ra: &[[f32; W]; 2],
     w: &[f32; W],
@@ -569,8 +583,8 @@ pub(super) fn own_drag<const W: usize, const ADD: bool>(
     let scaled;
     let u = match f {
         None => u,
-        Some(f) => {
-            scaled = scale_wind::<W>(u, f);
+        Some((f, mean)) => {
+            scaled = scale_wind::<W>(u, f, mean);
             &scaled
         }
     };

@@ -100,6 +100,14 @@ pub const LANES: usize = 16;
 /// A value per lane of a group.
 pub type Lanes = [f32; LANES];
 
+/// Per lane, a joint's factors on its instance's mean wind and on the gusts
+/// ([`SwaySpecies::set_gust_heights`]).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct JointWind<const W: usize> {
+    pub(crate) mean: [f32; W],
+    pub(crate) gust: [f32; W],
+}
+
 const ZERO: Lanes = [0.0; LANES];
 
 /// Bytes of animation state per joint and lane stored: 17 `f32` (two angles, two rates, the
@@ -180,6 +188,8 @@ pub struct SwayBatch {
     lane_moving: Vec<u32>,
     /// Per instance: its shelter from the wind, 0 … 1 ([`SwayBatch::set_shelter`]).
     lane_shelter: Vec<f32>,
+    /// Per instance: its mean wind ([`SwayBatch::set_mean_wind`]).
+    lane_mean: Vec<[f32; 3]>,
     /// Per instance: the joints the last step computed for it (its palettes beyond are not
     /// current; it shows them at their anchors).
     lane_computed: Vec<u32>,
@@ -221,6 +231,7 @@ impl SwayBatch {
             lane_moving: vec![n as u32; instances],
             lane_computed: vec![n as u32; instances],
             lane_shelter: vec![1.0; instances],
+            lane_mean: vec![[0.0; 3]; instances],
             alone_limit: usize::MAX,
             plans: Vec::new(),
             lumped: Vec::new(),
@@ -468,11 +479,28 @@ impl SwayBatch {
         self.lane_request.swap(a, b);
         self.lane_budget.swap(a, b);
         self.lane_shelter.swap(a, b);
+        self.lane_mean.swap(a, b);
     }
 
     /// Let the wind differ with height, per joint ([`SwaySpecies::set_wind_heights`]).
     pub fn set_wind_heights(&mut self, open: &[f32], inside: &[f32]) -> Result<(), SwayParamError> {
         self.species.set_wind_heights(open, inside)
+    }
+
+    /// Give the gusts their own height factors ([`SwaySpecies::set_gust_heights`]).
+    pub fn set_gust_heights(&mut self, open: &[f32], inside: &[f32]) -> Result<(), SwayParamError> {
+        self.species.set_gust_heights(open, inside)
+    }
+
+    /// Instance `i`'s mean wind (m/s, tree space, as its wind in [`SwayBatch::step`]): what
+    /// of its wind the mean factors scale, the rest being gusts
+    /// ([`SwaySpecies::set_gust_heights`]; default still air, every bit of the wind a gust,
+    /// which changes nothing while the gusts share the mean's factors). Not finite, or `i`
+    /// out of range: ignored.
+    pub fn set_mean_wind(&mut self, i: usize, mean: [f32; 3]) {
+        if let (Some(m), true) = (self.lane_mean.get_mut(i), mean.iter().all(|c| c.is_finite())) {
+            *m = mean;
+        }
     }
 
     /// Instance `i`'s shelter: 0 where its wind is the open ground's (a forest's windward
