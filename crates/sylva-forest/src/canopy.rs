@@ -54,6 +54,15 @@ impl Stand {
     }
 }
 
+impl Stand {
+    /// The canopy-drag length L_c = h / (c_d · LAI), m; the canopy's flow develops over
+    /// about 3 L_c of forest (Belcher, Jerram & Hunt 2003), what [`Shelter`] asks of a
+    /// forest's depth along the wind.
+    pub fn drag_length(&self) -> f64 {
+        self.height / (FOLIAGE_DRAG * self.lai.max(0.1))
+    }
+}
+
 /// Mean speed at height `z` over the open ground upwind of a forest of canopy height `h` in
 /// a wind of `params`, m/s: the log law of [`OPEN_ROUGHNESS`], equal to the forest's profile
 /// at [`BLENDING_HEIGHTS`] · h. Below 1 m, its value at 1 m.
@@ -193,6 +202,10 @@ pub struct Shelter {
     along: [f64; 2],
     /// Per cell: where the forest upwind of it begins, as a distance along the wind.
     edge: Vec<f64>,
+    /// Per cell: where the forest downwind of it ends, as a distance along the wind.
+    rear: Vec<f64>,
+    /// The depth of forest along the wind that develops the canopy's flow, m.
+    deep: f64,
     /// Per cell: whether a tree stands in it.
     occupied: Vec<bool>,
     factor: EdgeFactor,
@@ -205,8 +218,9 @@ pub struct Shelter {
 impl Shelter {
     /// The shelter of a forest of trees at `feet` (x, y, m), in a wind blowing towards
     /// `direction_deg` (counter-clockwise from +x), on cells of `cell` m, with the edge
-    /// factor `factor`, gaps up to `gap` m crossed, and the open wind `ratio` times the
-    /// canopy's at the crown ([`Shelter::set_ratio`]). Fetches are followed up to
+    /// factor `factor`, gaps up to `gap` m crossed, the open wind `ratio` times the
+    /// canopy's at the crown ([`Shelter::set_ratio`]), and `deep` m of forest along the wind
+    /// needed for the canopy's flow ([`Shelter::at`]). Fetches are followed up to
     /// [`INTERIOR_HEIGHTS`] canopy heights.
     pub fn new(
         feet: &[[f32; 2]],
@@ -214,7 +228,7 @@ impl Shelter {
         cell: f64,
         factor: EdgeFactor,
         gap: f64,
-        ratio: f64,
+        (ratio, deep): (f64, f64),
     ) -> Shelter {
         let cell = cell.max(0.5);
         let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
@@ -237,6 +251,8 @@ impl Shelter {
             ny,
             along: [cs, sn],
             edge: vec![f64::NEG_INFINITY; nx * ny],
+            rear: vec![f64::INFINITY; nx * ny],
+            deep: deep.max(1e-3),
             occupied: vec![false; nx * ny],
             factor,
             ratio,
@@ -251,7 +267,14 @@ impl Shelter {
                 first[c] = first[c].min(s.downwind(x, y));
             }
         }
-        let step = 0.5 * cell;
+        // Per cell, its downwind-most tree's distance along the wind.
+        let mut last_tree = vec![f64::NEG_INFINITY; nx * ny];
+        for p in feet {
+            let (x, y) = (p[0] as f64, p[1] as f64);
+            if let Some(c) = s.cell_of(x, y) {
+                last_tree[c] = last_tree[c].max(s.downwind(x, y));
+            }
+        }
         for iy in 0..ny {
             for ix in 0..nx {
                 let c = iy * nx + ix;
@@ -260,34 +283,42 @@ impl Shelter {
                 }
                 let x = s.origin[0] + (ix as f64 + 0.5) * cell;
                 let y = s.origin[1] + (iy as f64 + 0.5) * cell;
-                // Walk upwind until the forest ends (a run of empty cells longer than `gap`,
-                // or the grid's edge); the edge is the last occupied cell's upwind-most tree.
-                let (mut d, mut last, mut empty_from) = (0.0, c, None);
-                let mut open = false;
-                while d < s.most + cell {
-                    d += step;
-                    match s.cell_of(x - cs * d, y - sn * d).map(|k| (k, s.occupied[k])) {
-                        Some((k, true)) => {
-                            empty_from = None;
-                            last = k;
-                        }
-                        Some((_, false)) => {
-                            let from = *empty_from.get_or_insert(d);
-                            if d - from > gap {
-                                open = true;
-                                break;
-                            }
-                        }
-                        None => {
-                            open = true;
-                            break;
-                        }
-                    }
-                }
-                s.edge[c] = if open { first[last] } else { f64::NEG_INFINITY };
+                // Upwind to the edge (the last occupied cell's upwind-most tree), downwind to
+                // the forest's end (the last occupied cell's downwind-most tree).
+                s.edge[c] = s.walk(x, y, -1.0, gap).map_or(f64::NEG_INFINITY, |k| first[k]);
+                s.rear[c] = s.walk(x, y, 1.0, gap).map_or(f64::INFINITY, |k| last_tree[k]);
             }
         }
         s
+    }
+
+    /// From (x, y), along the wind (`sense` 1) or against it (−1), the last occupied cell
+    /// before the forest ends (a run of empty cells longer than `gap`, or the grid's edge);
+    /// `None` when it goes on past the longest fetch followed.
+    fn walk(&self, x: f64, y: f64, sense: f64, gap: f64) -> Option<usize> {
+        let [cs, sn] = self.along;
+        let mut last = self.cell_of(x, y)?;
+        let (mut d, mut empty_from) = (0.0, None);
+        while d < self.most + self.cell {
+            d += 0.5 * self.cell;
+            match self
+                .cell_of(x + sense * cs * d, y + sense * sn * d)
+                .map(|k| (k, self.occupied[k]))
+            {
+                Some((k, true)) => {
+                    empty_from = None;
+                    last = k;
+                }
+                Some((_, false)) => {
+                    let from = *empty_from.get_or_insert(d);
+                    if d - from > gap {
+                        return Some(last);
+                    }
+                }
+                None => return Some(last),
+            }
+        }
+        None
     }
 
     /// Distance of (x, y) along the wind.
@@ -317,14 +348,26 @@ impl Shelter {
         }
     }
 
+    /// The depth of forest along the wind through (x, y), m: from its windward edge to its
+    /// downwind end (0 outside it).
+    pub fn depth(&self, x: f64, y: f64) -> f64 {
+        match self.cell_of(x, y) {
+            Some(c) if self.occupied[c] => (self.rear[c] - self.edge[c]).max(0.0),
+            _ => 0.0,
+        }
+    }
+
     /// The shelter at (x, y): the mix whose wind at the crown, squared, is the edge factor at
-    /// its fetch times the canopy's; 1 where the open wind is no faster than the canopy's.
+    /// its fetch times the canopy's (1 where the open wind is no faster than the canopy's),
+    /// times the share of `deep` the forest's depth there reaches: a clump shorter along the
+    /// wind than the canopy's flow needs to develop stays in the open wind.
     pub fn at(&self, x: f64, y: f64) -> f32 {
+        let depth = (self.depth(x, y) / self.deep).min(1.0);
         if self.ratio <= 1.0 + 1e-9 {
-            return 1.0;
+            return depth as f32;
         }
         let r = self.factor.at(self.fetch(x, y)).sqrt();
-        ((self.ratio - r) / (self.ratio - 1.0)).clamp(0.0, 1.0) as f32
+        (((self.ratio - r) / (self.ratio - 1.0)).clamp(0.0, 1.0) * depth) as f32
     }
 
     /// The open ground's mean wind over the canopy's at the crown's height, for the field's
@@ -356,19 +399,19 @@ mod tests {
     fn fetch_grows_from_the_windward_edge_across_the_forest() {
         // 40 × 40 trees 5 m apart, wind along +x: the fetch is the distance from x = 0.
         let far = EdgeFactor::new(5.0, 100.0);
-        let s = Shelter::new(&square(40, 5.0), 0.0, 10.0, far, 15.0, 3.0);
+        let s = Shelter::new(&square(40, 5.0), 0.0, 10.0, far, 15.0, (3.0, 1.0));
         for x in [0.0, 50.0, 100.0, 150.0, 190.0] {
             let f = s.fetch(x, 100.0);
             assert!((f - x).abs() < 1e-9, "fetch {f} m at x = {x} m");
         }
         // Wind along −x: the edge is the other side.
-        let s = Shelter::new(&square(40, 5.0), 180.0, 10.0, far, 15.0, 3.0);
+        let s = Shelter::new(&square(40, 5.0), 180.0, 10.0, far, 15.0, (3.0, 1.0));
         assert!(s.fetch(195.0, 100.0) < 1e-9 && (s.fetch(0.0, 100.0) - 195.0).abs() < 1e-9);
         // The shelter rises towards 1 inside: a 15 m stand, the open wind 3 times the
         // canopy's at the crown; at the edge the crown's wind squared is the edge factor
         // times the interior's.
         let f = EdgeFactor::new(5.0, 15.0);
-        let s = Shelter::new(&square(40, 5.0), 0.0, 10.0, f, 15.0, 3.0);
+        let s = Shelter::new(&square(40, 5.0), 0.0, 10.0, f, 15.0, (3.0, 1.0));
         let mix = |x: f64| {
             let sh = s.at(x, 100.0) as f64;
             ((1.0 - sh) * 3.0 + sh).powi(2)
@@ -378,12 +421,28 @@ mod tests {
     }
 
     #[test]
+    fn a_clump_shorter_than_the_canopy_flow_needs_stays_in_the_open_wind() {
+        // A stand 195 m deep along the wind, and a clump of 4 × 4 trees 15 m deep, both
+        // asking 100 m of forest: the stand's middle is sheltered, the clump's trees keep
+        // 15 % of it at most.
+        let f = EdgeFactor::new(5.0, 15.0);
+        let stand = Shelter::new(&square(40, 5.0), 0.0, 10.0, f, 15.0, (3.0, 100.0));
+        assert!((stand.depth(100.0, 100.0) - 195.0).abs() < 1e-9);
+        assert!(stand.at(100.0, 100.0) > 0.99);
+        let clump = Shelter::new(&square(4, 5.0), 0.0, 10.0, f, 15.0, (3.0, 100.0));
+        assert!((clump.depth(10.0, 10.0) - 15.0).abs() < 1e-9);
+        for x in [0.0, 5.0, 10.0, 15.0] {
+            assert!(clump.at(x, 7.0) <= 0.15, "{} at x {x}", clump.at(x, 7.0));
+        }
+    }
+
+    #[test]
     fn a_clearing_narrower_than_the_gap_is_crossed_and_a_wide_one_is_an_edge() {
         // Two stands along x with a 10 m gap, then with a 60 m gap between them.
         for (gap, crossed) in [(10.0f32, true), (60.0, false)] {
             let mut feet = square(20, 5.0);
             feet.extend(square(20, 5.0).iter().map(|p| [p[0] + 95.0 + gap, p[1]]));
-            let s = Shelter::new(&feet, 0.0, 5.0, EdgeFactor::new(5.0, 100.0), 15.0, 3.0);
+            let s = Shelter::new(&feet, 0.0, 5.0, EdgeFactor::new(5.0, 100.0), 15.0, (3.0, 1.0));
             let f = s.fetch(100.0 + gap as f64 + 10.0, 50.0);
             if crossed {
                 assert!((f - 110.0 - gap as f64).abs() < 1e-9, "gap {gap} m: fetch {f}");

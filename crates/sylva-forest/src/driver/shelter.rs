@@ -16,7 +16,8 @@ use crate::wind::steer;
 /// with a preset or a wind file; a steady wind is the same everywhere): the stand (mean
 /// height, leaf area over the ground its trees cover) and the shelter on a grid of cells
 /// two spacings wide, gaps up to a canopy height crossed, with ForestGALES' edge factor for
-/// the stand's mean spacing.
+/// the stand's mean spacing, and three canopy-drag lengths of forest along the wind needed
+/// for the canopy's flow.
 pub(super) fn canopy_of(
     spec: &SceneSpec,
     trees: &[(Placement, u32)],
@@ -35,12 +36,14 @@ pub(super) fn canopy_of(
     let feet: Vec<[f32; 2]> = trees.iter().map(|(p, _)| [p.position[0], p.position[1]]).collect();
     let (cell, direction) = (2.0 * spec.spacing as f64, spec.wind_direction_deg as f64);
     let mut shelter =
-        Shelter::new(&feet, direction, cell, EdgeFactor::new(1.0, height), height, 1.0);
+        Shelter::new(&feet, direction, cell, EdgeFactor::new(1.0, height), height, (1.0, 1.0));
     let ground = shelter.area().max(1.0);
     let stand = Stand { height, lai: leaves / ground };
     // The factor for the stand's mean spacing; the open-to-canopy ratio comes with the field.
     let edge = EdgeFactor::new((ground / n).sqrt(), height);
-    shelter = Shelter::new(&feet, direction, cell, edge, height, 1.0);
+    // The canopy's flow needs about three canopy-drag lengths of forest to develop.
+    let deep = 3.0 * stand.drag_length();
+    shelter = Shelter::new(&feet, direction, cell, edge, height, (1.0, deep));
     Some((stand, shelter))
 }
 
