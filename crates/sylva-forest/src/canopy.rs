@@ -43,12 +43,14 @@ pub struct Stand {
 impl Stand {
     /// The stand's mean wind profile: the log law over it (d = ⅔h, z0 = 0.1h) and the
     /// exponential law inside, continuous at h, with the attenuation of its leaf area.
+    /// (Held within what a profile takes: h at most 150 m, so d at most 100 m; z0 at most
+    /// 10 m.)
     pub fn profile(&self) -> Profile {
-        let h = self.height;
+        let h = self.height.clamp(0.1, 150.0);
         Profile::Canopy {
             h,
             a: canopy_attenuation(self.lai.max(0.1), FOLIAGE_DRAG),
-            z0: 0.1 * h,
+            z0: (0.1 * h).min(10.0),
             d: 2.0 * h / 3.0,
         }
     }
@@ -467,6 +469,17 @@ mod tests {
         let (dense, sparse) = (EdgeFactor::new(3.0, 15.0), EdgeFactor::new(6.0, 15.0));
         assert!(dense.at(0.0) > sparse.at(0.0) && sparse.at(0.0) > 1.3, "{}", sparse.at(0.0));
         assert!((sparse.at(10.0 * 15.0) - 1.0).abs() < 1e-3);
+    }
+
+    #[test]
+    fn every_stand_a_scene_can_hold_makes_a_valid_profile() {
+        for height in [0.05, 0.5, 15.0, 90.0, 150.0, 400.0] {
+            for lai in [0.0, 0.5, 3.0, 40.0] {
+                let p =
+                    WindParams { profile: Stand { height, lai }.profile(), ..Default::default() };
+                p.validate().unwrap_or_else(|e| panic!("h {height} m, LAI {lai}: {e}"));
+            }
+        }
     }
 
     #[test]
