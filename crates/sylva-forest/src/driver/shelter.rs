@@ -112,26 +112,23 @@ impl Forest {
         }
         let canopy = &self.canopy_wind;
         for s in &mut self.species {
-            let factors = canopy.as_ref().and_then(|(stand, _)| {
-                let height = s.model.tree.stats.height as f64;
-                let centres: Vec<f32> =
-                    s.batch.species().pressure_centres().iter().map(|c| c[2]).collect();
-                let sample = WIND_SAMPLE_HEIGHT * height;
-                height_factors(params, zs, sample, stand.height, &centres)
-            });
-            let on = factors.is_some();
-            let (open, inside) = factors.unwrap_or_default();
+            s.mean_speed = 0.0;
+            // Without the canopy wind (or where the field is still), no factors: the same
+            // wind at every joint.
+            let _ = s.batch.set_wind_heights(&[], &[]);
+            let Some((stand, _)) = canopy else { continue };
+            let centres: Vec<f32> =
+                s.batch.species().pressure_centres().iter().map(|c| c[2]).collect();
+            let sample = WIND_SAMPLE_HEIGHT * s.model.tree.stats.height as f64;
+            let Some((open, inside)) = height_factors(params, zs, sample, stand.height, &centres)
+            else {
+                continue;
+            };
             // Finite and non-negative by construction: a profile's speeds are.
             let _ = s.batch.set_wind_heights(&open, &inside);
-            s.mean_speed = 0.0;
-            if let (true, Some((stand, _))) = (on, canopy) {
-                let centres: Vec<f32> =
-                    s.batch.species().pressure_centres().iter().map(|c| c[2]).collect();
-                let (open, inside) = gust_factors(params, stand.height, &centres);
-                let _ = s.batch.set_gust_heights(&open, &inside);
-                let sample = WIND_SAMPLE_HEIGHT * s.model.tree.stats.height as f64;
-                s.mean_speed = field_mean(params, zs, sample) as f32;
-            }
+            let (open, inside) = gust_factors(params, stand.height, &centres);
+            let _ = s.batch.set_gust_heights(&open, &inside);
+            s.mean_speed = field_mean(params, zs, sample) as f32;
         }
     }
 }
