@@ -217,6 +217,39 @@ pub struct Shelter {
     most: f64,
 }
 
+/// The grid of cells `cell` m wide over trees at `feet`, one empty cell beyond them on every
+/// side: its origin and its cells along x and y.
+fn cells(feet: &[[f32; 2]], cell: f64) -> ([f64; 2], usize, usize) {
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for p in feet {
+        for k in 0..2 {
+            lo[k] = lo[k].min(p[k] as f64);
+            hi[k] = hi[k].max(p[k] as f64);
+        }
+    }
+    if feet.is_empty() {
+        (lo, hi) = ([0.0; 2], [0.0; 2]);
+    }
+    let count = |k: usize| ((hi[k] - lo[k]) / cell).floor() as usize + 3;
+    ([lo[0] - cell, lo[1] - cell], count(0), count(1))
+}
+
+/// The ground trees at `feet` cover, m²: the area of the cells `cell` m wide that hold one
+/// (the grid [`Shelter`] finds the forest on).
+pub fn covered_area(feet: &[[f32; 2]], cell: f64) -> f64 {
+    let cell = cell.max(0.5);
+    let (origin, nx, ny) = cells(feet, cell);
+    let mut occupied = vec![false; nx * ny];
+    for p in feet {
+        let ix = ((p[0] as f64 - origin[0]) / cell) as usize;
+        let iy = ((p[1] as f64 - origin[1]) / cell) as usize;
+        if ix < nx && iy < ny {
+            occupied[iy * nx + ix] = true;
+        }
+    }
+    occupied.iter().filter(|&&o| o).count() as f64 * cell * cell
+}
+
 impl Shelter {
     /// The shelter of a forest of trees at `feet` (x, y, m), in a wind blowing towards
     /// `direction_deg` (counter-clockwise from +x), on cells of `cell` m, with the edge
@@ -233,21 +266,10 @@ impl Shelter {
         (ratio, deep): (f64, f64),
     ) -> Shelter {
         let cell = cell.max(0.5);
-        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-        for p in feet {
-            for k in 0..2 {
-                lo[k] = lo[k].min(p[k] as f64);
-                hi[k] = hi[k].max(p[k] as f64);
-            }
-        }
-        if feet.is_empty() {
-            (lo, hi) = ([0.0; 2], [0.0; 2]);
-        }
-        let count = |k: usize| ((hi[k] - lo[k]) / cell).floor() as usize + 3;
-        let (nx, ny) = (count(0), count(1));
+        let (origin, nx, ny) = cells(feet, cell);
         let (sn, cs) = direction_deg.to_radians().sin_cos();
         let mut s = Shelter {
-            origin: [lo[0] - cell, lo[1] - cell],
+            origin,
             cell,
             nx,
             ny,
@@ -382,11 +404,6 @@ impl Shelter {
     pub fn edge_factor(&self) -> EdgeFactor {
         self.factor
     }
-
-    /// The ground the forest covers: its cells' area, m².
-    pub fn area(&self) -> f64 {
-        self.occupied.iter().filter(|&&o| o).count() as f64 * self.cell * self.cell
-    }
 }
 
 #[cfg(test)]
@@ -400,6 +417,8 @@ mod tests {
     #[test]
     fn fetch_grows_from_the_windward_edge_across_the_forest() {
         // 40 × 40 trees 5 m apart, wind along +x: the fetch is the distance from x = 0.
+        // The ground it covers: 20 × 20 cells of 10 m hold its trees.
+        assert_eq!(covered_area(&square(40, 5.0), 10.0), 40_000.0);
         let far = EdgeFactor::new(5.0, 100.0);
         let s = Shelter::new(&square(40, 5.0), 0.0, 10.0, far, 15.0, (3.0, 1.0));
         for x in [0.0, 50.0, 100.0, 150.0, 190.0] {

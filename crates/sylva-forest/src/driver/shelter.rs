@@ -6,8 +6,8 @@ use sylva_tree::WIND_SAMPLE_HEIGHT;
 
 use super::{Forest, SpeciesRuntime};
 use crate::canopy::{
-    EdgeFactor, Shelter, Stand, canopy_gust, field_mean, gust_factors, height_factors, open_gust,
-    open_speed,
+    EdgeFactor, Shelter, Stand, canopy_gust, covered_area, field_mean, gust_factors,
+    height_factors, open_gust, open_speed,
 };
 use crate::scene::{Placement, SceneSpec, WindSource};
 use crate::wind::steer;
@@ -35,15 +35,13 @@ pub(super) fn canopy_of(
         trees.iter().map(|(p, _)| (stats(p).leaf_area * p.scale * p.scale) as f64).sum();
     let feet: Vec<[f32; 2]> = trees.iter().map(|(p, _)| [p.position[0], p.position[1]]).collect();
     let (cell, direction) = (2.0 * spec.spacing as f64, spec.wind_direction_deg as f64);
-    let mut shelter =
-        Shelter::new(&feet, direction, cell, EdgeFactor::new(1.0, height), height, (1.0, 1.0));
-    let ground = shelter.area().max(1.0);
+    let ground = covered_area(&feet, cell).max(1.0);
     let stand = Stand { height, lai: leaves / ground };
     // The factor for the stand's mean spacing; the open-to-canopy ratio comes with the field.
     let edge = EdgeFactor::new((ground / n).sqrt(), height);
     // The canopy's flow needs about three canopy-drag lengths of forest to develop.
     let deep = 3.0 * stand.drag_length();
-    shelter = Shelter::new(&feet, direction, cell, edge, height, (1.0, deep));
+    let shelter = Shelter::new(&feet, direction, cell, edge, height, (1.0, deep));
     Some((stand, shelter))
 }
 
