@@ -107,6 +107,87 @@ impl Camera {
     }
 }
 
+/// Orbit camera: yaw and pitch about a target, at a distance.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Orbit {
+    /// Point looked at, world m.
+    pub target: [f32; 3],
+    /// Azimuth of the eye about the target, rad.
+    pub yaw: f32,
+    /// Elevation of the eye, rad.
+    pub pitch: f32,
+    /// Eye to target, m.
+    pub distance: f32,
+    /// Vertical field of view, degrees.
+    pub fov: f32,
+    /// Far plane, m.
+    pub far: f32,
+}
+
+impl Orbit {
+    /// The orbit that sees what `c` sees.
+    pub fn from_camera(c: &Camera) -> Orbit {
+        let d = [c.eye[0] - c.target[0], c.eye[1] - c.target[1], c.eye[2] - c.target[2]];
+        let distance = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt().max(1e-3);
+        Orbit {
+            target: c.target,
+            yaw: d[1].atan2(d[0]),
+            pitch: (d[2] / distance).clamp(-1.0, 1.0).asin(),
+            distance,
+            fov: c.fov_deg,
+            far: c.far,
+        }
+    }
+
+    /// The camera.
+    pub fn camera(&self) -> Camera {
+        let (cp, sp) = (self.pitch.cos(), self.pitch.sin());
+        let eye = [
+            self.target[0] + self.distance * cp * self.yaw.cos(),
+            self.target[1] + self.distance * cp * self.yaw.sin(),
+            self.target[2] + self.distance * sp,
+        ];
+        Camera { eye, target: self.target, fov_deg: self.fov, near: 0.5, far: self.far }
+    }
+
+    /// The ray (origin, unit direction) through pixel (`x`, `y`) of a `w × h` image.
+    pub fn ray(&self, x: f32, y: f32, w: f32, h: f32) -> ([f32; 3], [f32; 3]) {
+        let c = self.camera();
+        let f = c.forward();
+        let up = [0.0, 0.0, 1.0];
+        let r = norm(cross(f, up));
+        let u = cross(r, f);
+        let t = (0.5 * c.fov_deg.to_radians()).tan();
+        let (sx, sy) = ((2.0 * x / w - 1.0) * t * w / h, (1.0 - 2.0 * y / h) * t);
+        let d: [f32; 3] = std::array::from_fn(|i| f[i] + sx * r[i] + sy * u[i]);
+        (c.eye, norm(d))
+    }
+
+    /// Turn the eye about the target for a pointer dragged by (`dx`, `dy`) pixels: right
+    /// turns the view left, down raises the eye (pitch held between −0.1 and 1.5 rad).
+    pub fn drag(&mut self, dx: f32, dy: f32) {
+        self.yaw -= 0.005 * dx;
+        self.pitch = (self.pitch + 0.005 * dy).clamp(-0.1, 1.5);
+    }
+
+    /// Move the eye towards the target by `steps` wheel lines (10 % each; negative: away),
+    /// between 2 m and 5 km.
+    pub fn zoom(&mut self, steps: f32) {
+        self.distance = (self.distance * 0.9f32.powf(steps)).clamp(2.0, 5000.0);
+    }
+
+    /// Move the target over `dt` seconds by `forward` (along the view, level), `right` and
+    /// `up`, each −1 … 1, at a speed that grows with the distance to it.
+    pub fn travel(&mut self, forward: f32, right: f32, up: f32, dt: f32) {
+        let speed = 0.8 * self.distance.max(10.0) * dt;
+        let (fx, fy) = (-self.yaw.cos(), -self.yaw.sin());
+        let mv = [forward * fx + right * fy, forward * fy - right * fx, up];
+        for (t, m) in self.target.iter_mut().zip(mv) {
+            *t += m * speed;
+        }
+    }
+}
+
 /// A camera's view cone (the cone around the view direction through the image corners),
 /// for per-object culling and projected sizes.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -27,6 +27,7 @@
 pub mod camera;
 pub mod canopy;
 pub mod clip;
+pub mod clock;
 pub mod driver;
 mod groups;
 mod lanes;
@@ -34,7 +35,7 @@ pub mod occlusion;
 pub mod scene;
 pub mod wind;
 
-pub use camera::{Camera, Mat4, ShadowBox, ViewCone};
+pub use camera::{Camera, Mat4, Orbit, ShadowBox, ViewCone};
 pub use driver::{
     Bucket, Forest, ForestError, FrameData, FrameStats, Instance, LodSettings, MAX_NEAR_POINTS,
     NEAR_REACH, REGROUP_FADE, REGROUP_TRAVEL, SceneWind, SpeciesRuntime, TreeInfo, wind_field,

@@ -225,17 +225,25 @@ pub(crate) fn map_rows(
     width: u32,
     padded_row: u32,
 ) -> Result<Vec<u8>, RenderError> {
+    pollster::block_on(map_rows_async(gpu, buffer, width, padded_row))
+}
+
+/// [`map_rows`] as a future: natively it is ready at once (the device is polled until the
+/// mapping is done); on the web it is ready once the browser has mapped the buffer, the
+/// page's event loop running meanwhile.
+pub(crate) async fn map_rows_async(
+    gpu: &Gpu,
+    buffer: &wgpu::Buffer,
+    width: u32,
+    padded_row: u32,
+) -> Result<Vec<u8>, RenderError> {
     let slice = buffer.slice(..);
-    let (tx, rx) = std::sync::mpsc::channel();
-    slice.map_async(wgpu::MapMode::Read, move |r| {
-        let _ = tx.send(r);
-    });
+    let (done, mapped) = crate::oneshot::channel();
+    slice.map_async(wgpu::MapMode::Read, move |r| done.send(r));
     gpu.device
         .poll(wgpu::PollType::Wait { submission_index: None, timeout: None })
         .map_err(|e| RenderError::Readback(e.to_string()))?;
-    rx.recv()
-        .map_err(|e| RenderError::Readback(e.to_string()))?
-        .map_err(|e| RenderError::Readback(e.to_string()))?;
+    mapped.await.map_err(|e| RenderError::Readback(e.to_string()))?;
     let mut out =
         Vec::with_capacity((width * 4) as usize * (buffer.size() / u64::from(padded_row)) as usize);
     {

@@ -31,10 +31,13 @@
 mod gpu;
 mod headless;
 pub mod layout;
+mod oneshot;
 pub mod passes;
 mod passtimes;
 mod renderer;
 mod shared;
+// A thread waits on the GPU; on the web wgpu's handles stay on the page's thread.
+#[cfg(not(target_arch = "wasm32"))]
 mod timer;
 
 pub use egui;
@@ -44,5 +47,6 @@ pub use passes::panel::{PanelFrame, PanelPass};
 pub use passtimes::PARTS as PASS_PARTS;
 pub use renderer::{Overlay, Renderer, SceneAssets};
 pub use shared::{DEPTH, SHADER_PARTS, SHADERS, host_depth_state, shader_source};
+#[cfg(not(target_arch = "wasm32"))]
 pub use timer::GpuTimer;
 pub use wgpu;

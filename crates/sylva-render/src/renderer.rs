@@ -129,6 +129,17 @@ impl Renderer {
         width: u32,
         height: u32,
     ) -> Result<Renderer, RenderError> {
+        pollster::block_on(Renderer::for_forest_async(gpu, forest, format, width, height))
+    }
+
+    /// [`Renderer::for_forest`] as a future, for the web (see [`Renderer::new_async`]).
+    pub async fn for_forest_async(
+        gpu: &Gpu,
+        forest: &Forest,
+        format: wgpu::TextureFormat,
+        width: u32,
+        height: u32,
+    ) -> Result<Renderer, RenderError> {
         let models: Vec<&TreeModel> = forest.species.iter().map(|s| &s.model).collect();
         let crowns = forest.crowns();
         let assets = SceneAssets {
@@ -151,13 +162,28 @@ impl Renderer {
                 ..forest.spec.lighting
             },
         };
-        Renderer::new(gpu, &assets, format, width, height)
+        Renderer::new_async(gpu, &assets, format, width, height).await
     }
 
     /// Build the passes for a colour target of `format` and `width × height` texels, and
     /// upload the scene's tree models (meshes per LOD, textures with mip chains, impostors
     /// rendered from each species) and ground.
     pub fn new(
+        gpu: &Gpu,
+        assets: &SceneAssets<'_>,
+        format: wgpu::TextureFormat,
+        width: u32,
+        height: u32,
+    ) -> Result<Renderer, RenderError> {
+        pollster::block_on(Renderer::new_async(gpu, assets, format, width, height))
+    }
+
+    /// [`Renderer::new`] as a future. The impostors are baked on the GPU and read back;
+    /// natively the future is ready when first polled (the device is waited on), while on
+    /// the web the read-back completes only as the page's event loop runs, so a page must
+    /// await this (wasm-bindgen-futures) and not call [`Renderer::new`], which would wait
+    /// for ever.
+    pub async fn new_async(
         gpu: &Gpu,
         assets: &SceneAssets<'_>,
         format: wgpu::TextureFormat,
@@ -212,7 +238,7 @@ impl Renderer {
         };
         let mut species = Vec::with_capacity(assets.models.len());
         for m in assets.models {
-            species.push(upload_species(gpu, m, &species_layout, &far, &bake)?);
+            species.push(upload_species(gpu, m, &species_layout, &far, &bake).await?);
         }
         // The woodland around the forest takes the colour of the forest's own impostors.
         let woodland = assets.woodland.as_ref().map(|w| {
@@ -785,7 +811,7 @@ pub(crate) fn targets(
 
 /// One species on the GPU: its bark and leaf textures (the leaf atlas with opacity-weighted,
 /// coverage-preserving mips), its meshes at every level, and its impostor baked.
-fn upload_species(
+async fn upload_species(
     gpu: &Gpu,
     m: &TreeModel,
     species_layout: &wgpu::BindGroupLayout,
@@ -831,7 +857,7 @@ fn upload_species(
         m.lods.iter().map(|l| (branch::mesh(gpu, l), leaf::mesh(gpu, l, m.leaves.cells))).collect();
     let baked = lods.get(bake_level(m));
     let meshes = baked.map(|(b, l)| (b.as_ref(), l.as_ref())).unwrap_or((None, None));
-    let far = far.bake(gpu, bake, m, &textures, meshes)?;
+    let far = far.bake(gpu, bake, m, &textures, meshes).await?;
     let mut joints_read: Vec<usize> = m
         .lods
         .iter()

@@ -122,37 +122,32 @@ impl Controls {
                 {
                     self.dragged += (x - px).abs() + (y - py).abs();
                     if self.dragged > CLICK_SLOP {
-                        v.orbit.yaw -= 0.005 * (x - px) as f32;
-                        v.orbit.pitch = (v.orbit.pitch + 0.005 * (y - py) as f32).clamp(-0.1, 1.5);
+                        v.orbit.drag((x - px) as f32, (y - py) as f32);
                     }
                 }
                 self.cursor = Some((x, y));
             }
             Input::Wheel(lines) => {
-                v.orbit.distance = (v.orbit.distance * 0.9f32.powf(lines)).clamp(2.0, 5000.0);
+                v.orbit.zoom(lines);
             }
         }
     }
 
     /// Move the camera target for the keys held over `dt` seconds of real time.
     pub fn fly(&self, v: &mut Viewer, dt: f32) {
-        let speed = 0.8 * v.orbit.distance.max(10.0) * dt;
-        let (fx, fy) = (-v.orbit.yaw.cos(), -v.orbit.yaw.sin());
-        let mut mv = [0.0f32; 3];
+        let (mut forward, mut right, mut up) = (0.0, 0.0, 0.0);
         for k in &self.held {
             match k {
-                KeyCode::KeyW => mv = [mv[0] + fx, mv[1] + fy, mv[2]],
-                KeyCode::KeyS => mv = [mv[0] - fx, mv[1] - fy, mv[2]],
-                KeyCode::KeyA => mv = [mv[0] - fy, mv[1] + fx, mv[2]],
-                KeyCode::KeyD => mv = [mv[0] + fy, mv[1] - fx, mv[2]],
-                KeyCode::KeyQ => mv[2] -= 1.0,
-                KeyCode::KeyE => mv[2] += 1.0,
+                KeyCode::KeyW => forward += 1.0,
+                KeyCode::KeyS => forward -= 1.0,
+                KeyCode::KeyA => right -= 1.0,
+                KeyCode::KeyD => right += 1.0,
+                KeyCode::KeyQ => up -= 1.0,
+                KeyCode::KeyE => up += 1.0,
                 _ => {}
             }
         }
-        for (t, m) in v.orbit.target.iter_mut().zip(mv) {
-            *t += m * speed;
-        }
+        v.orbit.travel(forward, right, up, dt);
     }
 }
 

@@ -6,13 +6,10 @@ use std::collections::VecDeque;
 use std::sync::mpsc::{Receiver, channel};
 use std::time::Instant;
 
-use sylva_forest::{Camera, CameraKey, Forest, FrameData, LodSettings, SceneSpec};
+pub use sylva_forest::Orbit;
+pub use sylva_forest::clock::{Clock, MAX_SUBSTEPS, SUBSTEP};
+use sylva_forest::{CameraKey, Forest, FrameData, LodSettings, SceneSpec};
 
-/// Simulation substep, s: the sway advances in steps of at most this.
-pub const SUBSTEP: f32 = 1.0 / 60.0;
-/// Most substeps per frame (0.2 s of simulated time). A frame slower than that (× the time
-/// scale) leaves the simulation behind real time: the viewer shows "slow motion".
-pub const MAX_SUBSTEPS: u32 = 12;
 /// Seconds between the keys of a recorded camera path.
 pub const RECORD_EVERY_S: f32 = 0.25;
 /// Seconds of history the plots keep.
@@ -76,98 +73,6 @@ pub enum Action {
     Replay(bool),
     /// Close the viewer.
     Quit,
-}
-
-/// Fixed-substep clock: real time in, whole substeps out, never more than
-/// [`MAX_SUBSTEPS`] a frame.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Clock {
-    /// Simulated time owed and not yet stepped, s (less than one substep).
-    carry: f32,
-    /// Whether the last frame hit the cap (the simulation runs slower than real time).
-    pub slow: bool,
-}
-
-impl Default for Clock {
-    fn default() -> Self {
-        Clock { carry: 0.0, slow: false }
-    }
-}
-
-impl Clock {
-    /// Substeps of [`SUBSTEP`] to run after `real_dt` seconds at `scale` simulated seconds
-    /// per second. Time beyond the cap is dropped (and `slow` set), not carried over, so a
-    /// slow frame never makes the next one slower.
-    pub fn advance(&mut self, real_dt: f32, scale: f32) -> u32 {
-        let owed = self.carry + (real_dt.max(0.0) * scale.max(0.0)).min(1e6);
-        let whole = (owed / SUBSTEP).floor();
-        if whole > MAX_SUBSTEPS as f32 {
-            self.slow = true;
-            self.carry = 0.0;
-            MAX_SUBSTEPS
-        } else {
-            self.slow = false;
-            self.carry = owed - whole * SUBSTEP;
-            whole as u32
-        }
-    }
-}
-
-/// Orbit camera: yaw and pitch about a target, at a distance.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Orbit {
-    /// Point looked at, world m.
-    pub target: [f32; 3],
-    /// Azimuth of the eye about the target, rad.
-    pub yaw: f32,
-    /// Elevation of the eye, rad.
-    pub pitch: f32,
-    /// Eye to target, m.
-    pub distance: f32,
-    /// Vertical field of view, degrees.
-    pub fov: f32,
-    /// Far plane, m.
-    pub far: f32,
-}
-
-impl Orbit {
-    /// The orbit that sees what `c` sees.
-    pub fn from_camera(c: &Camera) -> Orbit {
-        let d = [c.eye[0] - c.target[0], c.eye[1] - c.target[1], c.eye[2] - c.target[2]];
-        let distance = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt().max(1e-3);
-        Orbit {
-            target: c.target,
-            yaw: d[1].atan2(d[0]),
-            pitch: (d[2] / distance).clamp(-1.0, 1.0).asin(),
-            distance,
-            fov: c.fov_deg,
-            far: c.far,
-        }
-    }
-
-    /// The camera.
-    pub fn camera(&self) -> Camera {
-        let (cp, sp) = (self.pitch.cos(), self.pitch.sin());
-        let eye = [
-            self.target[0] + self.distance * cp * self.yaw.cos(),
-            self.target[1] + self.distance * cp * self.yaw.sin(),
-            self.target[2] + self.distance * sp,
-        ];
-        Camera { eye, target: self.target, fov_deg: self.fov, near: 0.5, far: self.far }
-    }
-
-    /// The ray (origin, unit direction) through pixel (`x`, `y`) of a `w × h` image.
-    pub fn ray(&self, x: f32, y: f32, w: f32, h: f32) -> ([f32; 3], [f32; 3]) {
-        let c = self.camera();
-        let f = c.forward();
-        let up = [0.0, 0.0, 1.0];
-        let r = sylva_core::v3::norm(sylva_core::v3::cross(f, up));
-        let u = sylva_core::v3::cross(r, f);
-        let t = (0.5 * c.fov_deg.to_radians()).tan();
-        let (sx, sy) = ((2.0 * x / w - 1.0) * t * w / h, (1.0 - 2.0 * y / h) * t);
-        let d: [f32; 3] = std::array::from_fn(|i| f[i] + sx * r[i] + sy * u[i]);
-        (c.eye, sylva_core::v3::norm(d))
-    }
 }
 
 /// Settings the panel edits (what the forest was last asked for).

@@ -45,13 +45,23 @@ impl Crowns {
 impl Forest {
     /// Build the forest of `spec`: layout, tree models, simulations and wind field.
     pub fn new(spec: &SceneSpec) -> Result<Forest, ForestError> {
+        Forest::with_species(spec, &[])
+    }
+
+    /// [`Forest::new`], with species already read: an entry of `spec.species` whose name is
+    /// one of `given`'s is grown from that species instead of being looked up as a preset or
+    /// a file (a host without a file system, such as a web page, reads the files itself).
+    pub fn with_species(
+        spec: &SceneSpec,
+        given: &[(String, Species)],
+    ) -> Result<Forest, ForestError> {
         let terrain = Terrain::new(spec);
         let placements = layout(spec, &terrain);
         let radius = placements
             .iter()
             .map(|p| (p.position[0].powi(2) + p.position[1].powi(2)).sqrt())
             .fold(0.0, f32::max);
-        let models = load_models(spec)?;
+        let models = load_models(spec, given)?;
         let mut species = Vec::with_capacity(models.len());
         let mut trees: Vec<(Placement, u32)> = placements.iter().map(|&p| (p, 0)).collect();
         let total = trees.len().max(1);
@@ -186,16 +196,22 @@ fn start_camera(spec: &SceneSpec, path: &[CameraKey], radius: f32) -> Camera {
 }
 
 /// Models, one per species, in parallel (deterministic: each from its own seed).
-fn load_models(spec: &SceneSpec) -> Result<Vec<TreeModel>, ForestError> {
+fn load_models(
+    spec: &SceneSpec,
+    given: &[(String, Species)],
+) -> Result<Vec<TreeModel>, ForestError> {
     let models: Vec<Result<TreeModel, ForestError>> = spec
         .species
         .par_iter()
         .enumerate()
         .map(|(i, s)| {
-            let sp = Species::load(&s.name).map_err(|e| ForestError::Species {
-                name: s.name.clone(),
-                message: e.to_string(),
-            })?;
+            let sp = match given.iter().find(|(n, _)| *n == s.name) {
+                Some((_, sp)) => sp.clone(),
+                None => Species::load(&s.name).map_err(|e| ForestError::Species {
+                    name: s.name.clone(),
+                    message: e.to_string(),
+                })?,
+            };
             let seed = s.seed.unwrap_or_else(|| spec.seed.wrapping_add(1000 * i as u64 + 1));
             sp.model(seed, LOD_LEVELS)
                 .map_err(|e| ForestError::Species { name: s.name.clone(), message: e.to_string() })

@@ -63,7 +63,7 @@ impl FarPass {
     /// Bake `model`'s impostor: render its views, read them back, build the mip chains and
     /// upload them. `textures` is the species' bark and leaf bind group; `meshes` its
     /// branch and leaf meshes at [`bake_level`].
-    pub fn bake(
+    pub async fn bake(
         &self,
         gpu: &Gpu,
         ctx: &BakeContext<'_>,
@@ -74,7 +74,7 @@ impl FarPass {
         let level = &model.lods[bake_level(model)];
         let fr = Frame::of(level);
         let Frame { radius, z0, z1, extent, center, depth_range } = fr;
-        let views = render_views(gpu, ctx, model, textures, meshes, &fr)?;
+        let views = render_views(gpu, ctx, model, textures, meshes, &fr).await?;
         let (w, h) = (VIEWS * VIEW_SIZE, ROWS * VIEW_SIZE);
         let albedo = &views.albedo;
         let (albedo_mips, normal_mips) = impostor_mips(albedo, &views.normal, w, h, (VIEWS, ROWS));
@@ -151,7 +151,7 @@ impl FarPass {
 }
 
 /// Render every view of `model` at rest into the atlas and read it back.
-fn render_views(
+async fn render_views(
     gpu: &Gpu,
     ctx: &BakeContext<'_>,
     model: &TreeModel,
@@ -229,7 +229,7 @@ fn render_views(
         }
     }
     // Depth32Float reads back as four bytes a texel, as RGBA8 does.
-    let read = read_back(gpu, enc, &[&albedo_tex, &normal_tex, &depth_tex], w, h)?;
+    let read = read_back(gpu, enc, &[&albedo_tex, &normal_tex, &depth_tex], w, h).await?;
     // The bake's depth is linear along each view (orthographic): 0 … 1 across
     // ±depth_range about the plane through the views' centre, nearest first.
     let depth: Vec<u8> = read[2]
@@ -292,7 +292,7 @@ fn view_groups(
 
 /// Submit `enc` with copies of `textures` (RGBA8, `w × h`) and read them back, rows top
 /// first.
-pub(super) fn read_back(
+pub(super) async fn read_back(
     gpu: &Gpu,
     mut enc: wgpu::CommandEncoder,
     textures: &[&wgpu::Texture],
@@ -325,5 +325,9 @@ pub(super) fn read_back(
         })
         .collect();
     gpu.queue.submit([enc.finish()]);
-    buffers.iter().map(|b| crate::headless::map_rows(gpu, b, w, padded)).collect()
+    let mut read = Vec::with_capacity(buffers.len());
+    for b in &buffers {
+        read.push(crate::headless::map_rows_async(gpu, b, w, padded).await?);
+    }
+    Ok(read)
 }
