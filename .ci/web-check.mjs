@@ -37,33 +37,33 @@ const url = `http://localhost:${server.address().port}/`;
 
 // SwiftShader's Vulkan device under WebGPU, composited through ANGLE on Vulkan: without a
 // GPU, the flags under which Chromium both runs WebGPU and shows its canvas in screenshots.
-const browser = await puppeteer.launch({
+// WebGL2 runs on ANGLE's SwiftShader GL instead.
+const launch = (args) => puppeteer.launch({
   executablePath: process.env.CHROMIUM ?? "/usr/bin/chromium",
   headless: true,
   protocolTimeout: 600_000,
-  args: [
-    "--no-sandbox",
-    "--enable-unsafe-webgpu",
-    "--enable-unsafe-swiftshader",
-    "--enable-features=Vulkan",
-    "--use-vulkan=swiftshader",
-    "--use-angle=vulkan",
-    "--ignore-gpu-blocklist",
-  ],
+  args: ["--no-sandbox", "--enable-unsafe-swiftshader", ...args],
 });
+const WEBGPU = ["--enable-unsafe-webgpu", "--enable-features=Vulkan", "--use-vulkan=swiftshader", "--use-angle=vulkan", "--ignore-gpu-blocklist"];
+const WEBGL2 = ["--use-angle=swiftshader"];
+let browser = await launch(WEBGPU);
 const failures = [];
 const check = (ok, what) => {
   console.log(`${ok ? "ok  " : "FAIL"} ${what}`);
   if (!ok) failures.push(what);
 };
 const consoleErrors = [];
-const page = await browser.newPage();
 const [W, H] = [960, 640];
-await page.setViewport({ width: W, height: H });
-page.on("console", (m) => {
-  if (m.type() === "error") consoleErrors.push(m.text());
-});
-page.on("pageerror", (e) => consoleErrors.push(`uncaught: ${e.message}`));
+async function open(b) {
+  const p = await b.newPage();
+  await p.setViewport({ width: W, height: H });
+  p.on("console", (m) => {
+    if (m.type() === "error") consoleErrors.push(m.text());
+  });
+  p.on("pageerror", (e) => consoleErrors.push(`uncaught: ${e.message}`));
+  return p;
+}
+let page = await open(browser);
 
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
 const state = () => page.evaluate(() => ({
@@ -161,15 +161,9 @@ async function motion(name) {
   return difference(a, b);
 }
 
-try {
-  const t0 = Date.now();
-  await page.goto(url);
-  let s = await frames(2, 0, 180_000);
-  const backend = await page.$eval("#backend", (e) => e.textContent);
-  console.log(`page at ${url}: ${backend}; first frame ${s.first?.toFixed(0)} ms after navigation (${Date.now() - t0} ms to two frames here)`);
-  check(!s.error, `the page starts without an error shown (${s.error})`);
-
-  const forest = await shot("forest");
+// The canvas shows a forest: not blank, sky above, ground below, foliage between.
+async function looksLikeAForest(name) {
+  const forest = await shot(name);
   const sky = band(forest, 0, 0.12);
   const ground = band(forest, 0.88, 1);
   const lumAll = band(forest, 0, 1);
@@ -184,6 +178,19 @@ try {
   check(ground[2] < ground[1] && ground[2] < sky[2] - 40, `ground below: bottom band rgb ${sx(ground)} is not sky`);
   const leaves = foliage(forest, 0.15, 0.75);
   check(leaves > 0.05, `trees between: ${(100 * leaves).toFixed(1)} % of the middle band is foliage (> 5 %)`);
+
+  return forest;
+}
+
+try {
+  const t0 = Date.now();
+  await page.goto(url);
+  let s = await frames(2, 0, 180_000);
+  const backend = await page.$eval("#backend", (e) => e.textContent);
+  console.log(`page at ${url}: ${backend}; first frame ${s.first?.toFixed(0)} ms after navigation (${Date.now() - t0} ms to two frames here)`);
+  check(!s.error, `the page starts without an error shown (${s.error})`);
+
+  const forest = await looksLikeAForest("forest");
 
   s = await frames(2, 1000);
   const later = await shot("forest-1s-later");
@@ -228,6 +235,17 @@ try {
   s = await frames(4, 2000);
   await shot("scene-A");
   console.log(`scene A: ${s.fps.toFixed(2)} frames per second, ${s.triangles} triangles, trees drawn ${s.trees}`);
+
+  await browser.close();
+  browser = await launch(WEBGL2);
+  page = await open(browser);
+  await page.goto(`${url}?webgl2`);
+  s = await frames(3, 0, 180_000);
+  const gl = await page.$eval("#backend", (e) => e.textContent);
+  check(gl.startsWith("WebGL2") && !s.error, `?webgl2 runs on WebGL2: ${gl}`);
+  await looksLikeAForest("webgl2");
+  s = await frames(2, 1000);
+  console.log(`WebGL2, scene small at full detail: ${s.fps.toFixed(2)} frames per second, ${s.triangles} triangles`);
 
   check(consoleErrors.length === 0, `no console errors${consoleErrors.length ? `: ${consoleErrors.join(" | ")}` : ""}`);
 } catch (e) {

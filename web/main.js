@@ -207,10 +207,18 @@ async function main() {
     try {
         await init();
         sizeCanvas();
-        const app = await App.create(canvas, 'small', $('wind').value);
+        // `?webgl2` in the address: WebGL2 even where the browser has WebGPU.
+        const webgl2 = new URLSearchParams(location.search).has('webgl2');
+        const app = await App.create(canvas, 'small', $('wind').value, webgl2);
         sylva.app = app;
         $('backend').textContent = `${app.backend()} · wind and trees made in the page`;
         bindPanel();
+        if (app.backend().startsWith('WebGL2')) {
+            // Impostors are not drawn right on WebGL2 yet (docs/guide/web.md): full detail.
+            $('lod-geometry').checked = false;
+            app.set_lod(false, $('lod-animation').checked);
+            $('status').textContent = 'WebGL2: impostors not available, geometry LOD off';
+        }
         requestAnimationFrame(loop);
     } catch (e) {
         $('backend').textContent = 'could not start';

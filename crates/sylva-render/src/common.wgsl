@@ -37,8 +37,11 @@ struct Globals {
 @group(0) @binding(0) var<uniform> globals: Globals;
 // Joint palettes (rest -> animated tree space, 3x4 row-major), as the simulation lays them
 // out: element e of an instance's joint j is at base + (12 j + e) * stride, where base and
-// stride come with the instance (up to 16 instances' palettes are interleaved).
+// stride come with the instance (up to 16 instances' palettes are interleaved). Where
+// vertex shaders cannot read storage buffers (WebGL2), the renderer replaces these two
+// declarations with a float texture of the same values (`shared::PALETTE_TEXTURE`).
 @group(0) @binding(1) var<storage, read> palettes: array<f32>;
+fn palette_value(i: u32) -> f32 { return palettes[i]; }
 @group(0) @binding(2) var linear_sampler: sampler;
 // The sun's shadow map (passes/shadow.rs: two cascades side by side, near on the left) and
 // its comparison sampler.
@@ -186,9 +189,9 @@ fn palette(slot: vec2<u32>, j: u32) -> Palette {
     let stride = slot.y;
     let at = slot.x + 12u * j * stride;
     var m: Palette;
-    m.r0 = vec4<f32>(palettes[at], palettes[at + stride], palettes[at + 2u * stride], palettes[at + 3u * stride]);
-    m.r1 = vec4<f32>(palettes[at + 4u * stride], palettes[at + 5u * stride], palettes[at + 6u * stride], palettes[at + 7u * stride]);
-    m.r2 = vec4<f32>(palettes[at + 8u * stride], palettes[at + 9u * stride], palettes[at + 10u * stride], palettes[at + 11u * stride]);
+    m.r0 = vec4<f32>(palette_value(at), palette_value(at + stride), palette_value(at + 2u * stride), palette_value(at + 3u * stride));
+    m.r1 = vec4<f32>(palette_value(at + 4u * stride), palette_value(at + 5u * stride), palette_value(at + 6u * stride), palette_value(at + 7u * stride));
+    m.r2 = vec4<f32>(palette_value(at + 8u * stride), palette_value(at + 9u * stride), palette_value(at + 10u * stride), palette_value(at + 11u * stride));
     return m;
 }
 

@@ -82,19 +82,31 @@ impl Gpu {
         instance: wgpu::Instance,
         surface: Option<&wgpu::Surface<'_>>,
     ) -> Result<Gpu, RenderError> {
-        Gpu::open(instance, surface, None)
+        Gpu::open(instance, surface, |_| {})
     }
 
     /// An offscreen adapter whose device allows storage bindings of at most `max_binding`
     /// bytes (to exercise what a smaller GPU would impose).
     pub fn headless_limited(max_binding: u64) -> Result<Gpu, RenderError> {
-        Gpu::open(Gpu::instance(), None, Some(max_binding))
+        Gpu::headless_with_limits(|limits| {
+            limits.max_storage_buffer_binding_size =
+                limits.max_storage_buffer_binding_size.min(max_binding);
+        })
+    }
+
+    /// An offscreen adapter whose device has the adapter's limits as `adjust` lowers them
+    /// (to exercise what a smaller device imposes: with no storage buffers in vertex
+    /// shaders, as on WebGL2, the renderer keeps its palettes in a texture).
+    pub fn headless_with_limits(
+        adjust: impl FnOnce(&mut wgpu::Limits),
+    ) -> Result<Gpu, RenderError> {
+        Gpu::open(Gpu::instance(), None, adjust)
     }
 
     fn open(
         instance: wgpu::Instance,
         surface: Option<&wgpu::Surface<'_>>,
-        max_binding: Option<u64>,
+        adjust: impl FnOnce(&mut wgpu::Limits),
     ) -> Result<Gpu, RenderError> {
         let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
             power_preference: wgpu::PowerPreference::HighPerformance,
@@ -109,10 +121,7 @@ impl Gpu {
             RenderError::NoAdapter(format!("{e}{}", nvidia_hint(nvidia, chosen).unwrap_or("")))
         })?;
         let mut limits = adapter.limits();
-        if let Some(m) = max_binding {
-            let m = m.min(limits.max_storage_buffer_binding_size);
-            limits.max_storage_buffer_binding_size = m;
-        }
+        adjust(&mut limits);
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("sylva"),
             // Timestamps where the adapter has them, for `Renderer::time_passes`.

@@ -240,10 +240,24 @@ pub(crate) async fn map_rows_async(
     let slice = buffer.slice(..);
     let (done, mapped) = crate::oneshot::channel();
     slice.map_async(wgpu::MapMode::Read, move |r| done.send(r));
-    gpu.device
-        .poll(wgpu::PollType::Wait { submission_index: None, timeout: None })
-        .map_err(|e| RenderError::Readback(e.to_string()))?;
-    mapped.await.map_err(|e| RenderError::Readback(e.to_string()))?;
+    #[cfg(not(target_arch = "wasm32"))]
+    {
+        gpu.device
+            .poll(wgpu::PollType::Wait { submission_index: None, timeout: None })
+            .map_err(|e| RenderError::Readback(e.to_string()))?;
+        mapped.await.map_err(|e| RenderError::Readback(e.to_string()))?;
+    }
+    // The page cannot block: poll, and give the browser a turn until the mapping is done
+    // (WebGPU maps on its own; WebGL2 through wgpu's polling of its fences).
+    #[cfg(target_arch = "wasm32")]
+    loop {
+        let _ = gpu.device.poll(wgpu::PollType::Poll);
+        if let Some(r) = mapped.try_take() {
+            r.map_err(|e| RenderError::Readback(e.to_string()))?;
+            break;
+        }
+        crate::oneshot::next_task().await;
+    }
     let mut out =
         Vec::with_capacity((width * 4) as usize * (buffer.size() / u64::from(padded_row)) as usize);
     {

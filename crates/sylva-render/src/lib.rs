@@ -46,7 +46,10 @@ pub use headless::{Headless, capture_texture, read_texture};
 pub use passes::panel::{PanelFrame, PanelPass};
 pub use passtimes::PARTS as PASS_PARTS;
 pub use renderer::{Overlay, Renderer, SceneAssets};
-pub use shared::{DEPTH, SHADER_PARTS, SHADERS, host_depth_state, shader_source};
+pub use shared::{
+    DEPTH, SHADER_PARTS, SHADERS, device_shader_source, host_depth_state, palettes_in_texture,
+    shader_source,
+};
 #[cfg(not(target_arch = "wasm32"))]
 pub use timer::GpuTimer;
 pub use wgpu;

@@ -42,6 +42,26 @@ impl<T> Sender<T> {
     }
 }
 
+impl<T> Receiver<T> {
+    /// The value, if it has been sent (without waiting).
+    #[cfg_attr(not(target_arch = "wasm32"), allow(dead_code))]
+    pub(crate) fn try_take(&self) -> Option<T> {
+        self.0.lock().unwrap_or_else(PoisonError::into_inner).value.take()
+    }
+}
+
+/// Resolves in the browser's next task (a zero-delay timeout), so that what the browser
+/// does between tasks (a WebGL fence signalled, a buffer mapped) can happen.
+#[cfg(target_arch = "wasm32")]
+pub(crate) async fn next_task() {
+    let promise = js_sys::Promise::new(&mut |resolve, _| {
+        if let Some(w) = web_sys::window() {
+            let _ = w.set_timeout_with_callback(&resolve);
+        }
+    });
+    let _ = wasm_bindgen_futures::JsFuture::from(promise).await;
+}
+
 impl<T> Future for Receiver<T> {
     type Output = T;
 

@@ -16,8 +16,8 @@ use crate::passes::shadow::{SHADOW_SIZE, ShadowPass};
 use crate::passes::sky::SkyPass;
 use crate::passtimes::{PARTS, PassTimes, Stamp, pass_writes, stamp};
 use crate::shared::{
-    DEPTH, GlobalsBinding, Mesh, box_mips, globals_group, globals_layout, instance_buffer,
-    palette_buffer, pipeline_layout, texture_entry, upload_mips,
+    DEPTH, GlobalsBinding, Mesh, Palettes, box_mips, globals_group, globals_layout,
+    instance_buffer, palettes_in_texture, pipeline_layout, texture_entry, upload_mips,
 };
 
 /// What the renderer draws a scene with: tree models (in the scene's species order, as
@@ -76,7 +76,7 @@ pub struct Renderer {
     globals: wgpu::Buffer,
     globals_layout: wgpu::BindGroupLayout,
     sampler: wgpu::Sampler,
-    palettes: wgpu::Buffer,
+    palettes: Palettes,
     instances: wgpu::Buffer,
     /// One bind group per palette window (one when all palettes fit one binding).
     windows: Vec<wgpu::BindGroup>,
@@ -223,7 +223,7 @@ impl Renderer {
             })
         };
         let (globals, globals_far) = (uniform("globals"), uniform("globals, far cascade"));
-        let palettes = palette_buffer(dev, 48 * 1024);
+        let palettes = Palettes::new(dev, 48 * 1024);
         let instances = instance_buffer(dev, 1024);
         let (lit, unlit) = shadow.bindings(&globals, &sampler);
         let windows = vec![globals_group(dev, &globals_layout, &lit, &palettes)];
@@ -666,13 +666,18 @@ impl Renderer {
     fn upload(&mut self, gpu: &Gpu, frame: &FrameData) {
         let dev = &gpu.device;
         let limits = dev.limits();
-        let max_binding = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size);
+        // A palette texture is bound whole: one window.
+        let max_binding = if palettes_in_texture(dev) {
+            u64::MAX
+        } else {
+            limits.max_storage_buffer_binding_size.min(limits.max_buffer_size)
+        };
         let pal_bytes = (frame.palettes.len().max(12) * 4) as u64;
         // Grow the per-frame buffers to the next power of two (within the device's limit).
         let grown = pal_bytes > self.palettes.size();
         if grown {
             let size = pal_bytes.next_power_of_two().min(limits.max_buffer_size);
-            self.palettes = palette_buffer(dev, size);
+            self.palettes = Palettes::new(dev, size);
         }
         let floats = (self.palettes.size() / 4) as usize;
         let fits = self.palettes.size() <= max_binding;
@@ -775,7 +780,7 @@ impl Renderer {
         }
         let n = frame.palettes.len().min(floats);
         if n > 0 {
-            gpu.queue.write_buffer(&self.palettes, 0, bytemuck::cast_slice(&frame.palettes[..n]));
+            self.palettes.write(&gpu.queue, &frame.palettes[..n]);
         }
         if !self.staged.is_empty() {
             gpu.queue.write_buffer(&self.instances, 0, bytemuck::cast_slice(&self.staged));

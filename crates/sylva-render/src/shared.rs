@@ -55,9 +55,34 @@ pub fn shader_source(name: &str) -> Option<String> {
     Some(out)
 }
 
+/// The palettes as `common.wgsl` declares them: a storage buffer.
+pub const PALETTE_STORAGE: &str = "@group(0) @binding(1) var<storage, read> palettes: array<f32>;
+fn palette_value(i: u32) -> f32 { return palettes[i]; }";
+
+/// The same where palettes are a texture ([`palettes_in_texture`]): one float a texel,
+/// [`PALETTE_ROW`] to a row, read with `textureLoad` (which WebGL2's vertex shaders have).
+pub const PALETTE_TEXTURE: &str = "@group(0) @binding(1) var palettes: texture_2d<f32>;
+fn palette_value(i: u32) -> f32 { return textureLoad(palettes, vec2<u32>(i % 2048u, i / 2048u), 0).x; }";
+
+/// Floats per row of the palette texture (the `2048u` of [`PALETTE_TEXTURE`]).
+pub const PALETTE_ROW: u32 = 2048;
+
+/// Whether `dev` keeps the joint palettes in a texture: its vertex shaders cannot read
+/// storage buffers (WebGL2, or a device asked for none). The images are the same.
+pub fn palettes_in_texture(dev: &wgpu::Device) -> bool {
+    dev.limits().max_storage_buffers_per_shader_stage == 0
+}
+
+/// The source compiled for shader file `name` on `dev`: [`shader_source`], with the
+/// palettes declared as a texture where the device keeps them in one.
+pub fn device_shader_source(dev: &wgpu::Device, name: &str) -> Option<String> {
+    let src = shader_source(name)?;
+    Some(if palettes_in_texture(dev) { src.replace(PALETTE_STORAGE, PALETTE_TEXTURE) } else { src })
+}
+
 /// Compile shader file `name` (with `common.wgsl`).
 pub fn shader_module(dev: &wgpu::Device, name: &str) -> wgpu::ShaderModule {
-    let src = shader_source(name).unwrap_or_default();
+    let src = device_shader_source(dev, name).unwrap_or_default();
     dev.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some(name),
         source: wgpu::ShaderSource::Wgsl(src.into()),
@@ -176,7 +201,8 @@ pub fn texture_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
     }
 }
 
-/// Group 0 of every pipeline: globals (uniform), palettes (storage), linear sampler.
+/// Group 0 of every pipeline: globals (uniform), palettes (storage, or a texture:
+/// [`palettes_in_texture`]), linear sampler, the shadow map and its sampler.
 pub fn globals_layout(dev: &wgpu::Device) -> wgpu::BindGroupLayout {
     let buffer_entry = |binding, visibility, ty| wgpu::BindGroupLayoutEntry {
         binding,
@@ -188,11 +214,24 @@ pub fn globals_layout(dev: &wgpu::Device) -> wgpu::BindGroupLayout {
         label: Some("globals"),
         entries: &[
             buffer_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT, wgpu::BufferBindingType::Uniform),
-            buffer_entry(
-                1,
-                wgpu::ShaderStages::VERTEX,
-                wgpu::BufferBindingType::Storage { read_only: true },
-            ),
+            if palettes_in_texture(dev) {
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: wgpu::ShaderStages::VERTEX,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                }
+            } else {
+                buffer_entry(
+                    1,
+                    wgpu::ShaderStages::VERTEX,
+                    wgpu::BufferBindingType::Storage { read_only: true },
+                )
+            },
             wgpu::BindGroupLayoutEntry {
                 binding: 2,
                 visibility: wgpu::ShaderStages::FRAGMENT,
@@ -238,29 +277,36 @@ pub fn globals_group(
     dev: &wgpu::Device,
     layout: &wgpu::BindGroupLayout,
     with: &GlobalsBinding<'_>,
-    palettes: &wgpu::Buffer,
+    palettes: &Palettes,
 ) -> wgpu::BindGroup {
     globals_window(dev, layout, with, palettes, 0, palettes.size())
 }
 
 /// The bind group of [`globals_layout`] with the palettes bound from byte `offset`,
-/// `size` bytes (a window within the device's storage-binding limit).
+/// `size` bytes (a window within the device's storage-binding limit; a texture is bound
+/// whole).
 pub fn globals_window(
     dev: &wgpu::Device,
     layout: &wgpu::BindGroupLayout,
     with: &GlobalsBinding<'_>,
-    palettes: &wgpu::Buffer,
+    palettes: &Palettes,
     offset: u64,
     size: u64,
 ) -> wgpu::BindGroup {
-    let window =
-        wgpu::BufferBinding { buffer: palettes, offset, size: wgpu::BufferSize::new(size) };
+    let window = match palettes {
+        Palettes::Buffer(buffer) => wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+            buffer,
+            offset,
+            size: wgpu::BufferSize::new(size),
+        }),
+        Palettes::Texture { view, .. } => wgpu::BindingResource::TextureView(view),
+    };
     dev.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("globals"),
         layout,
         entries: &[
             wgpu::BindGroupEntry { binding: 0, resource: with.globals.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::Buffer(window) },
+            wgpu::BindGroupEntry { binding: 1, resource: window },
             wgpu::BindGroupEntry {
                 binding: 2,
                 resource: wgpu::BindingResource::Sampler(with.sampler),
@@ -277,14 +323,98 @@ pub fn globals_window(
     })
 }
 
-/// A storage buffer of `size` bytes for palettes.
-pub fn palette_buffer(dev: &wgpu::Device, size: u64) -> wgpu::Buffer {
-    dev.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("palettes"),
-        size,
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    })
+/// The joint palettes on the GPU: a storage buffer, or where the device's vertex shaders
+/// cannot read one ([`palettes_in_texture`]), an `R32Float` texture of [`PALETTE_ROW`]
+/// floats a row.
+#[derive(Debug)]
+pub enum Palettes {
+    /// A storage buffer.
+    Buffer(wgpu::Buffer),
+    /// A texture and its view.
+    Texture {
+        /// The texture.
+        texture: wgpu::Texture,
+        /// Its view, as bound.
+        view: wgpu::TextureView,
+    },
+}
+
+impl Palettes {
+    /// Room for at least `size` bytes of palettes (a texture: whole rows, at most the
+    /// device's largest texture).
+    pub fn new(dev: &wgpu::Device, size: u64) -> Palettes {
+        if !palettes_in_texture(dev) {
+            return Palettes::Buffer(dev.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("palettes"),
+                size,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }));
+        }
+        let floats = size.div_ceil(4).max(1);
+        let max_rows = dev.limits().max_texture_dimension_2d;
+        let rows = (floats.div_ceil(u64::from(PALETTE_ROW)) as u32).clamp(1, max_rows);
+        let texture = dev.create_texture(&wgpu::TextureDescriptor {
+            label: Some("palettes"),
+            size: wgpu::Extent3d { width: PALETTE_ROW, height: rows, depth_or_array_layers: 1 },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::R32Float,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+            view_formats: &[],
+        });
+        let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
+        Palettes::Texture { texture, view }
+    }
+
+    /// Bytes held.
+    pub fn size(&self) -> u64 {
+        match self {
+            Palettes::Buffer(b) => b.size(),
+            Palettes::Texture { texture, .. } => {
+                4 * u64::from(texture.width()) * u64::from(texture.height())
+            }
+        }
+    }
+
+    /// Write `data` from the first float on (it must fit: [`Palettes::size`]).
+    pub fn write(&self, queue: &wgpu::Queue, data: &[f32]) {
+        match self {
+            Palettes::Buffer(b) => queue.write_buffer(b, 0, bytemuck::cast_slice(data)),
+            Palettes::Texture { texture, .. } => {
+                let row = PALETTE_ROW as usize;
+                let (whole, rest) = (data.len() / row, data.len() % row);
+                let put = |y: usize, floats: &[f32], rows: usize| {
+                    queue.write_texture(
+                        wgpu::TexelCopyTextureInfo {
+                            texture,
+                            mip_level: 0,
+                            origin: wgpu::Origin3d { x: 0, y: y as u32, z: 0 },
+                            aspect: wgpu::TextureAspect::All,
+                        },
+                        bytemuck::cast_slice(floats),
+                        wgpu::TexelCopyBufferLayout {
+                            offset: 0,
+                            bytes_per_row: Some(4 * PALETTE_ROW),
+                            rows_per_image: None,
+                        },
+                        wgpu::Extent3d {
+                            width: (floats.len() / rows) as u32,
+                            height: rows as u32,
+                            depth_or_array_layers: 1,
+                        },
+                    );
+                };
+                if whole > 0 {
+                    put(0, &data[..whole * row], whole);
+                }
+                if rest > 0 {
+                    put(whole, &data[whole * row..], 1);
+                }
+            }
+        }
+    }
 }
 
 /// A vertex buffer of `size` bytes for instances.

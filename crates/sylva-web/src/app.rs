@@ -63,16 +63,22 @@ pub struct App {
 
 #[wasm_bindgen]
 impl App {
-    /// Open the GPU on `canvas` (WebGPU where the browser has it, else WebGL2) and grow the
+    /// Open the GPU on `canvas` (WebGPU where the browser has it, else WebGL2; WebGL2 alone
+    /// with `webgl2`) and grow the
     /// built-in scene `scene` (`small`, `A` … `D`) in `wind` (as [`App::set_wind`] takes it).
     pub async fn create(
         canvas: web_sys::HtmlCanvasElement,
         scene: String,
         wind: String,
+        webgl2: bool,
     ) -> Result<App, JsError> {
         let (width, height) = (canvas.width().max(1), canvas.height().max(1));
         let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
-        desc.backends = wgpu::Backends::BROWSER_WEBGPU | wgpu::Backends::GL;
+        desc.backends = if webgl2 {
+            wgpu::Backends::GL
+        } else {
+            wgpu::Backends::BROWSER_WEBGPU | wgpu::Backends::GL
+        };
         let instance = wgpu::util::new_instance_with_webgpu_detection(desc).await;
         let surface = instance.create_surface(wgpu::SurfaceTarget::Canvas(canvas)).map_err(js)?;
         let adapter = instance

@@ -282,6 +282,35 @@ fn palettes_beyond_one_storage_binding_are_drawn_through_windows() {
     assert!(leaves > 500, "trees drawn: {leaves} leaf pixels");
 }
 
+/// Where vertex shaders cannot read storage buffers (WebGL2), the palettes go in a float
+/// texture: a device asked for no storage buffers draws the same image as one with them.
+#[test]
+fn palettes_in_a_texture_draw_the_same_image_as_in_a_storage_buffer() {
+    let mut forest = Forest::new(&SceneSpec::builtin("small").expect("small")).expect("forest");
+    let camera = forest.default_camera();
+    let mut frame = FrameData::default();
+    for _ in 0..20 {
+        forest.step(1.0 / 30.0);
+    }
+    forest.frame(&camera, W as f32 / H as f32, &mut frame);
+    let gpu =
+        sylva_render::Gpu::headless_with_limits(|l| l.max_storage_buffers_per_shader_stage = 0)
+            .expect("adapter");
+    assert!(sylva_render::palettes_in_texture(&gpu.device));
+    let mut texture = Headless::with_gpu(gpu, &forest, W, H).expect("renderer");
+    let mut storage = Headless::new(&forest, W, H).expect("renderer");
+    let plain = sylva_render::Gpu::headless().expect("adapter");
+    assert!(
+        !sylva_render::palettes_in_texture(&plain.device),
+        "this adapter reads storage buffers"
+    );
+    let a = texture.render(&frame, &camera).expect("render");
+    let b = storage.render(&frame, &camera).expect("render");
+    let moved = frame.palettes.iter().filter(|v| v.abs() > 1e-3).count();
+    assert!(moved > 1000, "palettes to read: {moved}");
+    assert_eq!(mean_abs_diff(&a, &b), 0.0, "the palette texture changes the image");
+}
+
 /// One calm frame of `spec` from `camera` (the scene's default when `None`), with its frame
 /// data.
 fn render_spec(spec: &SceneSpec, camera: Option<Camera>) -> (Vec<u8>, FrameData, Camera) {

@@ -9,7 +9,7 @@ use super::outline::outline;
 use super::*;
 use crate::gpu::{Gpu, RenderError};
 use crate::layout::{FarSpecies, Globals};
-use crate::shared::{GlobalsBinding, Mesh, buffer, globals_group, palette_buffer, upload_mips};
+use crate::shared::{GlobalsBinding, Mesh, Palettes, buffer, globals_group, upload_mips};
 
 /// Where a tree's views are taken: the bounds' horizontal radius about the trunk axis and
 /// height range, the side every view covers, its centre height and the depth range.
@@ -165,8 +165,8 @@ async fn render_views(
     let identity: Vec<f32> = (0..joints)
         .flat_map(|_| [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0])
         .collect();
-    let palettes = palette_buffer(dev, (identity.len() * 4) as u64);
-    gpu.queue.write_buffer(&palettes, 0, bytemuck::cast_slice(&identity));
+    let palettes = Palettes::new(dev, (identity.len() * 4) as u64);
+    palettes.write(&gpu.queue, &identity);
     let instance = Instance {
         scale: 1.0,
         palette: PaletteSlot { base: 0, stride: 1 },
@@ -180,7 +180,18 @@ async fn render_views(
     let target = |format, label| crate::headless::capture_texture(dev, (w, h), format, label);
     let albedo_tex = target(BAKE_TARGETS[0], "impostor albedo");
     let normal_tex = target(BAKE_TARGETS[1], "impostor normals");
-    let depth_tex = target(crate::shared::DEPTH, "impostor depth");
+    let depth_tex = dev.create_texture(&wgpu::TextureDescriptor {
+        label: Some("impostor depth"),
+        size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: crate::shared::DEPTH,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+            | wgpu::TextureUsages::COPY_SRC
+            | wgpu::TextureUsages::TEXTURE_BINDING,
+        view_formats: &[],
+    });
     let view = |t: &wgpu::Texture| t.create_view(&wgpu::TextureViewDescriptor::default());
     let (av, nv, dv) = (view(&albedo_tex), view(&normal_tex), view(&depth_tex));
     let mut enc =
@@ -228,21 +239,136 @@ async fn render_views(
             }
         }
     }
-    // Depth32Float reads back as four bytes a texel, as RGBA8 does.
-    let read = read_back(gpu, enc, &[&albedo_tex, &normal_tex, &depth_tex], w, h).await?;
+    // Depth32Float reads back as four bytes a texel, as RGBA8 does; where a depth texture
+    // cannot be copied (WebGL2) its values are drawn into an RGBA8 target's red first (the
+    // eight bits the depth map keeps).
+    let copies_depth = gpu
+        .adapter
+        .get_downlevel_capabilities()
+        .flags
+        .contains(wgpu::DownlevelFlags::DEPTH_TEXTURE_AND_BUFFER_COPIES);
+    let depth_read =
+        if copies_depth { depth_tex } else { depth_as_colour(gpu, &mut enc, &dv, w, h) };
+    let read = read_back(gpu, enc, &[&albedo_tex, &normal_tex, &depth_read], w, h).await?;
     // The bake's depth is linear along each view (orthographic): 0 … 1 across
     // ±depth_range about the plane through the views' centre, nearest first.
-    let depth: Vec<u8> = read[2]
-        .chunks_exact(4)
-        .map(|b| {
-            let z = f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
-            (z.clamp(0.0, 1.0) * 255.0).round() as u8
-        })
-        .collect();
+    let depth = depth_bytes(&read[2], copies_depth);
     let mut read = read;
     let normal = read.swap_remove(1);
     let albedo = read.swap_remove(0);
     Ok(Views { albedo, normal, depth })
+}
+
+/// The depth map's bytes from what was read back: Depth32Float texels (`copied`), or the
+/// red of an RGBA8 target [`depth_as_colour`] drew.
+fn depth_bytes(read: &[u8], copied: bool) -> Vec<u8> {
+    read.chunks_exact(4)
+        .map(|b| {
+            if copied {
+                let z = f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+                (z.clamp(0.0, 1.0) * 255.0).round() as u8
+            } else {
+                b[0]
+            }
+        })
+        .collect()
+}
+
+/// Draws a depth texture's values into a colour target (`Rgba8Unorm`, the depth in red:
+/// the eight bits the depth map keeps), for devices that cannot copy depth textures to
+/// buffers (WebGL2, whose float colour targets need an extension besides). The depth is
+/// bound as an unfilterable float texture: GLSL has no `textureLoad` of a depth texture.
+const DEPTH_AS_COLOUR: &str = "
+@group(0) @binding(0) var depth: texture_2d<f32>;
+@vertex fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
+    let p = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
+    return vec4<f32>(p * 2.0 - 1.0, 0.0, 1.0);
+}
+@fragment fn fs_main(@builtin(position) at: vec4<f32>) -> @location(0) vec4<f32> {
+    return vec4<f32>(textureLoad(depth, vec2<i32>(at.xy), 0).x, 0.0, 0.0, 1.0);
+}";
+
+/// Record a pass that draws `depth`'s values (a `w × h` depth view) into a new
+/// `Rgba8Unorm` texture, and return it (see [`DEPTH_AS_COLOUR`]).
+fn depth_as_colour(
+    gpu: &Gpu,
+    enc: &mut wgpu::CommandEncoder,
+    depth: &wgpu::TextureView,
+    w: u32,
+    h: u32,
+) -> wgpu::Texture {
+    let dev = &gpu.device;
+    let format = wgpu::TextureFormat::Rgba8Unorm;
+    let out = crate::headless::capture_texture(dev, (w, h), format, "impostor depth as colour");
+    let layout = dev.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("depth as colour"),
+        entries: &[wgpu::BindGroupLayoutEntry {
+            binding: 0,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                view_dimension: wgpu::TextureViewDimension::D2,
+                multisampled: false,
+            },
+            count: None,
+        }],
+    });
+    let group = dev.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("depth as colour"),
+        layout: &layout,
+        entries: &[wgpu::BindGroupEntry {
+            binding: 0,
+            resource: wgpu::BindingResource::TextureView(depth),
+        }],
+    });
+    let module = dev.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("depth as colour"),
+        source: wgpu::ShaderSource::Wgsl(DEPTH_AS_COLOUR.into()),
+    });
+    let pipeline_layout = crate::shared::pipeline_layout(dev, "depth as colour", &[&layout]);
+    let pipeline = dev.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some("depth as colour"),
+        layout: Some(&pipeline_layout),
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some("vs_main"),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        fragment: Some(wgpu::FragmentState {
+            module: &module,
+            entry_point: Some("fs_main"),
+            compilation_options: Default::default(),
+            targets: &[Some(format.into())],
+        }),
+        primitive: wgpu::PrimitiveState::default(),
+        depth_stencil: None,
+        multisample: wgpu::MultisampleState::default(),
+        multiview_mask: None,
+        cache: None,
+    });
+    let view = out.create_view(&wgpu::TextureViewDescriptor::default());
+    let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some("depth as colour"),
+        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+            view: &view,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations {
+                load: wgpu::LoadOp::Clear(wgpu::Color::WHITE),
+                store: wgpu::StoreOp::Store,
+            },
+        })],
+        depth_stencil_attachment: None,
+        timestamp_writes: None,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    });
+    pass.set_pipeline(&pipeline);
+    pass.set_bind_group(0, &group, &[]);
+    pass.draw(0..3, 0..1);
+    drop(pass);
+    out
 }
 
 /// Per view of the atlas, group 0: an orthographic camera about the tree's centre looking
@@ -251,7 +377,7 @@ fn view_groups(
     gpu: &Gpu,
     ctx: &BakeContext<'_>,
     fr: &Frame,
-    palettes: &wgpu::Buffer,
+    palettes: &Palettes,
 ) -> Vec<wgpu::BindGroup> {
     let dev = &gpu.device;
     let (extent, center, depth_range) = (fr.extent, fr.center, fr.depth_range);
@@ -330,4 +456,105 @@ pub(super) async fn read_back(
         read.push(crate::headless::map_rows_async(gpu, b, w, padded).await?);
     }
     Ok(read)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The bake's depth drawn into a colour target (WebGL2's path) reads back as the depth
+    /// texture copied directly does, texel for texel: a ramp across x and down y.
+    #[test]
+    fn depth_drawn_as_colour_reads_back_as_the_depth_copied() {
+        let gpu = Gpu::headless().expect("adapter");
+        let dev = &gpu.device;
+        let (w, h) = (64u32, 32u32);
+        let depth = dev.create_texture(&wgpu::TextureDescriptor {
+            label: Some("ramp"),
+            size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: crate::shared::DEPTH,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::COPY_SRC
+                | wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        });
+        let dv = depth.create_view(&wgpu::TextureViewDescriptor::default());
+        let ramp = DEPTH_AS_COLOUR.split("@fragment").next().unwrap_or_default().replace(
+            "@group(0) @binding(0) var depth: texture_2d<f32>;",
+            "@fragment fn fs_main(@builtin(position) at: vec4<f32>) -> @builtin(frag_depth) f32 {
+                return at.x / 128.0 + at.y / 64.0;
+            }",
+        );
+        let module = dev.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("ramp"),
+            source: wgpu::ShaderSource::Wgsl(ramp.into()),
+        });
+        let pipeline = dev.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("ramp"),
+            layout: None,
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &[],
+            }),
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: Some(wgpu::DepthStencilState {
+                depth_compare: Some(wgpu::CompareFunction::Always),
+                ..crate::shared::host_depth_state()
+            }),
+            multisample: wgpu::MultisampleState::default(),
+            multiview_mask: None,
+            cache: None,
+        });
+        let mut enc = dev.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+        {
+            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("ramp"),
+                color_attachments: &[],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &dv,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_pipeline(&pipeline);
+            pass.draw(0..3, 0..1);
+        }
+        let colour = depth_as_colour(&gpu, &mut enc, &dv, w, h);
+        let read =
+            pollster::block_on(read_back(&gpu, enc, &[&depth, &colour], w, h)).expect("read back");
+        let value = |bytes: &[u8], x: u32, y: u32| {
+            let i = (4 * (y * w + x)) as usize;
+            f32::from_le_bytes([bytes[i], bytes[i + 1], bytes[i + 2], bytes[i + 3]])
+        };
+        let corner = value(&read[0], w - 1, h - 1);
+        assert!((corner - (63.5 / 128.0 + 31.5 / 64.0)).abs() < 1e-3, "the ramp: {corner}");
+        let (copied, drawn) = (depth_bytes(&read[0], true), depth_bytes(&read[1], false));
+        assert!(copied.iter().collect::<std::collections::BTreeSet<_>>().len() > 50, "a ramp");
+        // The GPU's conversion to eight bits may round a value half-way the other way.
+        let off: Vec<_> = copied
+            .iter()
+            .zip(&drawn)
+            .filter(|(a, b)| a != b)
+            .map(|(a, b)| a.abs_diff(*b))
+            .collect();
+        assert!(off.iter().all(|&d| d <= 1), "depth drawn as colour is off by {off:?}");
+        assert!(off.len() * 100 <= copied.len(), "{} of {} texels differ", off.len(), copied.len());
+    }
 }
