@@ -71,6 +71,7 @@ const state = () => page.evaluate(() => ({
   busy: window.sylva?.busy ?? true,
   app: !!window.sylva?.app,
   first: window.sylva?.firstFrameMs,
+  start: window.sylva?.startMs,
   fps: window.sylva?.fps ?? 0,
   error: document.getElementById("error").hidden ? "" : document.getElementById("error").textContent,
   status: document.getElementById("status").textContent,
@@ -187,7 +188,7 @@ try {
   await page.goto(url);
   let s = await frames(2, 0, 180_000);
   const backend = await page.$eval("#backend", (e) => e.textContent);
-  console.log(`page at ${url}: ${backend}; first frame ${s.first?.toFixed(0)} ms after navigation (${Date.now() - t0} ms to two frames here)`);
+  console.log(`page at ${url}: ${backend}; first frame ${s.first?.toFixed(0)} ms after navigation, ${s.start?.toFixed(0)} ms of it starting the engine (${Date.now() - t0} ms to two frames here)`);
   check(!s.error, `the page starts without an error shown (${s.error})`);
 
   const forest = await looksLikeAForest("forest");

@@ -8,8 +8,9 @@ const $ = (id) => document.getElementById(id);
 const canvas = $('forest');
 
 // What scripts (and the browser test) read: the app, frames drawn, the time from navigation
-// to the first frame (ms), the latest figures.
-const sylva = { app: null, frames: 0, firstFrameMs: null, fps: 0, busy: false, figures: {} };
+// to the first frame (ms) and how long of it the engine took to start (ms: module, forest,
+// renderer), the latest figures.
+const sylva = { app: null, frames: 0, firstFrameMs: null, startMs: null, fps: 0, busy: false, figures: {} };
 window.sylva = sylva;
 
 function showError(e) {
@@ -205,12 +206,14 @@ function loop(t) {
 
 async function main() {
     try {
+        const started = performance.now();
         await init();
         sizeCanvas();
         // `?webgl2` in the address: WebGL2 even where the browser has WebGPU.
         const webgl2 = new URLSearchParams(location.search).has('webgl2');
         const app = await App.create(canvas, 'small', $('wind').value, webgl2);
         sylva.app = app;
+        sylva.startMs = performance.now() - started;
         $('backend').textContent = `${app.backend()} · wind and trees made in the page`;
         bindPanel();
         if (app.backend().startsWith('WebGL2')) {
