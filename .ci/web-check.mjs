@@ -246,7 +246,7 @@ try {
   check(gl.startsWith("WebGL2") && !s.error, `?webgl2 runs on WebGL2: ${gl}`);
   await looksLikeAForest("webgl2");
   s = await frames(2, 1000);
-  console.log(`WebGL2, scene small at full detail: ${s.fps.toFixed(2)} frames per second, ${s.triangles} triangles`);
+  console.log(`WebGL2, scene small, default levels: ${s.fps.toFixed(2)} frames per second, ${s.triangles} triangles`);
 
   check(consoleErrors.length === 0, `no console errors${consoleErrors.length ? `: ${consoleErrors.join(" | ")}` : ""}`);
 } catch (e) {

@@ -216,12 +216,6 @@ async function main() {
         sylva.startMs = performance.now() - started;
         $('backend').textContent = `${app.backend()} · wind and trees made in the page`;
         bindPanel();
-        if (app.backend().startsWith('WebGL2')) {
-            // Impostors are not drawn right on WebGL2 yet (docs/guide/web.md): full detail.
-            $('lod-geometry').checked = false;
-            app.set_lod(false, $('lod-animation').checked);
-            $('status').textContent = 'WebGL2: impostors not available, geometry LOD off';
-        }
         requestAnimationFrame(loop);
     } catch (e) {
         $('backend').textContent = 'could not start';

@@ -277,15 +277,19 @@ fn depth_bytes(read: &[u8], copied: bool) -> Vec<u8> {
 /// Draws a depth texture's values into a colour target (`Rgba8Unorm`, the depth in red:
 /// the eight bits the depth map keeps), for devices that cannot copy depth textures to
 /// buffers (WebGL2, whose float colour targets need an extension besides). The depth is
-/// bound as an unfilterable float texture: GLSL has no `textureLoad` of a depth texture.
+/// bound as an unfilterable float texture (GLSL has no `textureLoad` of a depth texture)
+/// and sampled at texel centres through a nearest sampler: in WebGL a float depth texture
+/// read without a nearest sampler is incomplete and reads as 0.
 const DEPTH_AS_COLOUR: &str = "
 @group(0) @binding(0) var depth: texture_2d<f32>;
+@group(0) @binding(1) var nearest: sampler;
 @vertex fn vs_main(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
     let p = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
     return vec4<f32>(p * 2.0 - 1.0, 0.0, 1.0);
 }
 @fragment fn fs_main(@builtin(position) at: vec4<f32>) -> @location(0) vec4<f32> {
-    return vec4<f32>(textureLoad(depth, vec2<i32>(at.xy), 0).x, 0.0, 0.0, 1.0);
+    let size = vec2<f32>(textureDimensions(depth));
+    return vec4<f32>(textureSampleLevel(depth, nearest, at.xy / size, 0.0).x, 0.0, 0.0, 1.0);
 }";
 
 /// Record a pass that draws `depth`'s values (a `w × h` depth view) into a new
@@ -302,24 +306,39 @@ fn depth_as_colour(
     let out = crate::headless::capture_texture(dev, (w, h), format, "impostor depth as colour");
     let layout = dev.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("depth as colour"),
-        entries: &[wgpu::BindGroupLayoutEntry {
-            binding: 0,
-            visibility: wgpu::ShaderStages::FRAGMENT,
-            ty: wgpu::BindingType::Texture {
-                sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                view_dimension: wgpu::TextureViewDimension::D2,
-                multisampled: false,
+        entries: &[
+            wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                    view_dimension: wgpu::TextureViewDimension::D2,
+                    multisampled: false,
+                },
+                count: None,
             },
-            count: None,
-        }],
+            wgpu::BindGroupLayoutEntry {
+                binding: 1,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::NonFiltering),
+                count: None,
+            },
+        ],
+    });
+    let nearest = dev.create_sampler(&wgpu::SamplerDescriptor {
+        label: Some("depth as colour"),
+        ..Default::default()
     });
     let group = dev.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("depth as colour"),
         layout: &layout,
-        entries: &[wgpu::BindGroupEntry {
-            binding: 0,
-            resource: wgpu::BindingResource::TextureView(depth),
-        }],
+        entries: &[
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::TextureView(depth),
+            },
+            wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::Sampler(&nearest) },
+        ],
     });
     let module = dev.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("depth as colour"),
@@ -482,11 +501,20 @@ mod tests {
             view_formats: &[],
         });
         let dv = depth.create_view(&wgpu::TextureViewDescriptor::default());
-        let ramp = DEPTH_AS_COLOUR.split("@fragment").next().unwrap_or_default().replace(
-            "@group(0) @binding(0) var depth: texture_2d<f32>;",
-            "@fragment fn fs_main(@builtin(position) at: vec4<f32>) -> @builtin(frag_depth) f32 {
+        // The pass's vertex stage, and a fragment stage writing a ramp into the depth.
+        let vertex: String = DEPTH_AS_COLOUR
+            .split("@fragment")
+            .next()
+            .unwrap_or_default()
+            .lines()
+            .filter(|l| !l.starts_with("@group"))
+            .collect::<Vec<_>>()
+            .join("\n");
+        let ramp = format!(
+            "{vertex}
+            @fragment fn fs_main(@builtin(position) at: vec4<f32>) -> @builtin(frag_depth) f32 {{
                 return at.x / 128.0 + at.y / 64.0;
-            }",
+            }}"
         );
         let module = dev.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("ramp"),
