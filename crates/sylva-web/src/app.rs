@@ -44,6 +44,9 @@ pub struct App {
     config: wgpu::SurfaceConfiguration,
     /// The format the renderer draws in: the surface's, as sRGB.
     view_format: wgpu::TextureFormat,
+    /// Where the surface is not sRGB itself (WebGPU): the sRGB image the renderer resolves
+    /// into, copied onto the canvas's texture each frame.
+    resolved: Option<wgpu::Texture>,
     renderer: Renderer,
     forest: Forest,
     frame: FrameData,
@@ -105,11 +108,20 @@ impl App {
         let mut config = surface
             .get_default_config(&adapter, width, height)
             .ok_or_else(|| js("the adapter cannot draw on this canvas"))?;
-        let view_format = config.format.add_srgb_suffix();
-        if view_format != config.format {
-            config.view_formats.push(view_format);
+        // The renderer writes linear colour into an sRGB target. A WebGPU canvas holds only
+        // plain formats (wgpu may report the sRGB one): the renderer resolves into an sRGB
+        // texture of its own, copied onto the canvas's (formats that differ only in sRGB
+        // copy as they are). Resolving straight into an sRGB view of the canvas's texture
+        // stores the linear values in Chromium (on SwiftShader at least): a dark image.
+        // WebGL2's surface is sRGB itself, drawn into directly.
+        if adapter.get_info().backend == wgpu::Backend::BrowserWebGpu {
+            config.format = config.format.remove_srgb_suffix();
+            config.usage |= wgpu::TextureUsages::COPY_DST;
         }
+        let view_format = config.format.add_srgb_suffix();
         surface.configure(&device, &config);
+        let resolved = (view_format != config.format)
+            .then(|| resolve_texture(&device, view_format, width, height));
         let software = adapter.get_info().device_type == wgpu::DeviceType::Cpu;
         let mut spec = SceneSpec::builtin(&scene).map_err(js)?;
         spec.set_wind(&page_wind(&wind).map_err(js)?);
@@ -123,6 +135,7 @@ impl App {
             surface,
             config,
             view_format,
+            resolved,
             renderer,
             forest,
             frame: FrameData::default(),
@@ -171,11 +184,21 @@ impl App {
             }
             _ => return,
         };
-        let view = texture.texture.create_view(&wgpu::TextureViewDescriptor {
-            format: Some(self.view_format),
-            ..Default::default()
-        });
-        self.renderer.render(&self.gpu, &self.frame, &camera, &view);
+        let target = self.resolved.as_ref().unwrap_or(&texture.texture);
+        let view = target.create_view(&wgpu::TextureViewDescriptor::default());
+        let mut enc = self
+            .gpu
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
+        self.renderer.encode(&self.gpu, &mut enc, &self.frame, &camera, &view);
+        if let Some(resolved) = &self.resolved {
+            enc.copy_texture_to_texture(
+                resolved.as_image_copy(),
+                texture.texture.as_image_copy(),
+                resolved.size(),
+            );
+        }
+        self.gpu.queue.submit([enc.finish()]);
         self.gpu.queue.present(texture);
     }
 
@@ -187,6 +210,10 @@ impl App {
             self.config.height = height;
             self.surface.configure(&self.gpu.device, &self.config);
             self.renderer.resize(&self.gpu, width, height);
+            if self.resolved.is_some() {
+                let format = self.view_format;
+                self.resolved = Some(resolve_texture(&self.gpu.device, format, width, height));
+            }
         }
     }
 
@@ -375,6 +402,25 @@ impl App {
 
 fn js_text(e: impl std::fmt::Display) -> String {
     e.to_string()
+}
+
+/// The sRGB image the renderer resolves into on WebGPU (see [`App::create`]).
+fn resolve_texture(
+    device: &wgpu::Device,
+    format: wgpu::TextureFormat,
+    width: u32,
+    height: u32,
+) -> wgpu::Texture {
+    device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("frame, sRGB"),
+        size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    })
 }
 
 /// A wind the page can make: a preset or a steady speed (a wind file cannot be read here).
