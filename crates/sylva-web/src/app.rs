@@ -411,16 +411,7 @@ fn resolve_texture(
     width: u32,
     height: u32,
 ) -> wgpu::Texture {
-    device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("frame, sRGB"),
-        size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-        view_formats: &[],
-    })
+    sylva_render::capture_texture(device, (width, height), format, "frame, sRGB")
 }
 
 /// A wind the page can make: a preset or a steady speed (a wind file cannot be read here).

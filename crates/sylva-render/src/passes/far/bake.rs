@@ -180,18 +180,7 @@ async fn render_views(
     let target = |format, label| crate::headless::capture_texture(dev, (w, h), format, label);
     let albedo_tex = target(BAKE_TARGETS[0], "impostor albedo");
     let normal_tex = target(BAKE_TARGETS[1], "impostor normals");
-    let depth_tex = dev.create_texture(&wgpu::TextureDescriptor {
-        label: Some("impostor depth"),
-        size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: crate::shared::DEPTH,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT
-            | wgpu::TextureUsages::COPY_SRC
-            | wgpu::TextureUsages::TEXTURE_BINDING,
-        view_formats: &[],
-    });
+    let depth_tex = depth_target(dev, w, h, "impostor depth");
     let view = |t: &wgpu::Texture| t.create_view(&wgpu::TextureViewDescriptor::default());
     let (av, nv, dv) = (view(&albedo_tex), view(&normal_tex), view(&depth_tex));
     let mut enc =
@@ -257,6 +246,22 @@ async fn render_views(
     let normal = read.swap_remove(1);
     let albedo = read.swap_remove(0);
     Ok(Views { albedo, normal, depth })
+}
+
+/// A `w × h` depth target that can be read back: copied, or drawn by [`depth_as_colour`].
+fn depth_target(dev: &wgpu::Device, w: u32, h: u32, label: &str) -> wgpu::Texture {
+    dev.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: crate::shared::DEPTH,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+            | wgpu::TextureUsages::COPY_SRC
+            | wgpu::TextureUsages::TEXTURE_BINDING,
+        view_formats: &[],
+    })
 }
 
 /// The depth map's bytes from what was read back: Depth32Float texels (`copied`), or the
@@ -488,18 +493,7 @@ mod tests {
         let gpu = Gpu::headless().expect("adapter");
         let dev = &gpu.device;
         let (w, h) = (64u32, 32u32);
-        let depth = dev.create_texture(&wgpu::TextureDescriptor {
-            label: Some("ramp"),
-            size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: crate::shared::DEPTH,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT
-                | wgpu::TextureUsages::COPY_SRC
-                | wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        });
+        let depth = depth_target(dev, w, h, "ramp");
         let dv = depth.create_view(&wgpu::TextureViewDescriptor::default());
         // The pass's vertex stage, and a fragment stage writing a ramp into the depth.
         let vertex: String = DEPTH_AS_COLOUR
