@@ -10,6 +10,11 @@
 use sylva_forest::{SceneSpec, SpeciesShare};
 use sylva_tree::Species;
 
+/// The most trees a scene grown in the page may have: scene D's 50 000. A page has one
+/// thread and at most 4 GB; a million trees would freeze it for minutes and then run out of
+/// memory, so such a scene is refused with a named error instead (`sylva view` grows it).
+pub const PAGE_MAX_TREES: usize = 50_000;
+
 /// What a dropped file holds.
 #[derive(Debug, Clone)]
 pub enum Dropped {
@@ -32,9 +37,15 @@ pub fn looks_like_scene(text: &str) -> bool {
 /// Read the file `file` (its name, for errors and as a species' name) holding `text`.
 pub fn read_dropped(file: &str, text: &str) -> Result<Dropped, String> {
     if looks_like_scene(text) {
-        SceneSpec::from_toml(file, text)
-            .map(|s| Dropped::Scene(Box::new(s)))
-            .map_err(|e| e.to_string())
+        let spec = SceneSpec::from_toml(file, text).map_err(|e| e.to_string())?;
+        if spec.trees > PAGE_MAX_TREES {
+            return Err(format!(
+                "{file}: `trees` = {} is more than the page grows ({PAGE_MAX_TREES}); \
+                 `sylva view` grows it",
+                spec.trees
+            ));
+        }
+        Ok(Dropped::Scene(Box::new(spec)))
     } else {
         Species::from_toml(file, text)
             .map(|s| Dropped::Species(file.to_string(), Box::new(s)))
@@ -100,6 +111,9 @@ mod tests {
         assert!(e.contains("oak.toml") && e.contains("line 2"), "{e}");
         let e = read_dropped("x.toml", "trees = [\n").expect_err("bad syntax");
         assert!(e.contains("x.toml"), "{e}");
+        let big = SCENE.replace("trees = 3", "trees = 1000000");
+        let e = read_dropped("big.toml", &big).expect_err("too many for a page");
+        assert!(e.contains("big.toml") && e.contains("`trees` = 1000000"), "{e}");
         let e = close_up("aspen", "gale").expect_err("no such wind");
         assert!(e.contains("gale"), "{e}");
     }
