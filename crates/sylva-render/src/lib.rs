@@ -36,6 +36,7 @@ pub mod passes;
 mod passtimes;
 mod renderer;
 mod shared;
+mod species;
 // A thread waits on the GPU; on the web wgpu's handles stay on the page's thread.
 #[cfg(not(target_arch = "wasm32"))]
 mod timer;

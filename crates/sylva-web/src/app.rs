@@ -262,19 +262,7 @@ impl App {
     /// it from its camera. The app is handed over and back (the impostors' bake is awaited);
     /// what failed is kept for [`App::take_error`], the app unchanged.
     pub async fn set_scene(mut self, name: String, wind: String) -> App {
-        let outcome = match SceneSpec::builtin(&name).map_err(js_text) {
-            Ok(mut spec) => match page_wind(&wind) {
-                Ok(w) => {
-                    spec.set_wind(&w);
-                    self.replace(&spec).await.map(|()| format!("scene {}", spec.name))
-                }
-                Err(e) => Err(e),
-            },
-            Err(e) => Err(e),
-        };
-        if outcome.is_ok() {
-            self.orbit = Orbit::from_camera(&self.forest.default_camera());
-        }
+        let outcome = self.builtin_scene(&name, &wind).await;
         self.report(outcome)
     }
 
@@ -291,21 +279,7 @@ impl App {
     /// and back as [`App::set_scene`]). A bad file's error names the file and the line or
     /// field, as `sylva` does.
     pub async fn read_file(mut self, file: String, text: String) -> App {
-        let outcome = match read_dropped(&file, &text) {
-            Ok(Dropped::Scene(spec)) => match self.replace(&spec).await {
-                Ok(()) => {
-                    self.orbit = Orbit::from_camera(&self.forest.default_camera());
-                    Ok(format!("scene {}: {} trees", spec.name, self.forest.trees()))
-                }
-                Err(e) => Err(e),
-            },
-            Ok(Dropped::Species(name, species)) => {
-                self.species.retain(|(n, _)| *n != name);
-                self.species.push((name.clone(), *species));
-                self.close_up(&name).await
-            }
-            Err(e) => Err(e),
-        };
+        let outcome = self.dropped(&file, &text).await;
         self.report(outcome)
     }
 
@@ -364,15 +338,40 @@ impl App {
     /// Grow `spec` (with the species files read so far) and rebuild the renderer for it;
     /// on failure nothing changes.
     async fn replace(&mut self, spec: &SceneSpec) -> Result<(), String> {
-        let forest = grow(spec, &self.species, self.software).map_err(js_text)?;
+        let forest = grow(spec, &self.species, self.software).map_err(|e| e.to_string())?;
         let (w, h) = (self.config.width, self.config.height);
         self.renderer = Renderer::for_forest_async(&self.gpu, &forest, self.view_format, w, h)
             .await
-            .map_err(js_text)?;
+            .map_err(|e| e.to_string())?;
         self.forest = forest;
         self.frame = FrameData::default();
         self.clock = Clock::default();
         Ok(())
+    }
+
+    /// The built-in scene `name` in `wind`, seen from its camera.
+    async fn builtin_scene(&mut self, name: &str, wind: &str) -> Result<String, String> {
+        let mut spec = SceneSpec::builtin(name).map_err(|e| e.to_string())?;
+        spec.set_wind(&page_wind(wind)?);
+        self.replace(&spec).await?;
+        self.orbit = Orbit::from_camera(&self.forest.default_camera());
+        Ok(format!("scene {}", spec.name))
+    }
+
+    /// The file `file` holding `text`: a scene grown, or a species kept and shown close up.
+    async fn dropped(&mut self, file: &str, text: &str) -> Result<String, String> {
+        match read_dropped(file, text)? {
+            Dropped::Scene(spec) => {
+                self.replace(&spec).await?;
+                self.orbit = Orbit::from_camera(&self.forest.default_camera());
+                Ok(format!("scene {}: {} trees", spec.name, self.forest.trees()))
+            }
+            Dropped::Species(name, species) => {
+                self.species.retain(|(n, _)| *n != name);
+                self.species.push((name.clone(), *species));
+                self.close_up(&name).await
+            }
+        }
     }
 
     /// One tree of species `name` close up, framed by its height.
@@ -398,10 +397,6 @@ impl App {
         }
         self
     }
-}
-
-fn js_text(e: impl std::fmt::Display) -> String {
-    e.to_string()
 }
 
 /// The sRGB image the renderer resolves into on WebGPU (see [`App::create`]).
