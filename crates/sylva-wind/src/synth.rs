@@ -168,9 +168,31 @@ fn phasor(key: u64, k: u64) -> C64 {
     // u = u53 / 2^53; 4u = u53 / 2^51; q = round(4u), r = (4u − q)·π/2.
     let u53 = (h >> 11) as i64;
     let q = (u53 + (1 << 50)) >> 51;
+    quarter_turns(
+        q as u64,
+        (u53 - (q << 51)) as f32 * (std::f32::consts::FRAC_PI_2 / 2_251_799_813_685_248.0),
+    )
+}
+
+/// Two unit phasors from one hash, 32 bits of phase each (the embedding's: it draws four
+/// times as many phasors as the grid has points). The phase of `h32` is 2π·h32/2^32 in
+/// steps of 1.5e-9 rad, finer than the f32 remainder's 1e-7; otherwise as [`phasor`].
+#[inline(always)]
+fn phasor32(h32: u32) -> C64 {
+    let v = i64::from(h32);
+    let q = (v + (1 << 29)) >> 30;
+    quarter_turns(
+        q as u64,
+        (v - (q << 30)) as f32 * (std::f32::consts::FRAC_PI_2 / 1_073_741_824.0),
+    )
+}
+
+/// e^{i(qπ/2 + r)} for r ∈ [−π/4, π/4]: cos r and sin r by polynomials in f32, then q
+/// quarter turns by bit selects.
+#[inline(always)]
+fn quarter_turns(q: u64, r: f32) -> C64 {
     // The remainder in f32: Taylor to r⁸ (cos) and r⁹ (sin) is exact to f32 precision on
     // [−π/4, π/4] (truncation < 3e-8), and twice as many f32 lanes fit a vector.
-    let r = (u53 - (q << 51)) as f32 * (std::f32::consts::FRAC_PI_2 / 2_251_799_813_685_248.0);
     let r2 = r * r;
     let c = (1.0
         + r2 * (-1.0 / 2.0 + r2 * (1.0 / 24.0 + r2 * (-1.0 / 720.0 + r2 * (1.0 / 40_320.0)))))
@@ -182,7 +204,6 @@ fn phasor(key: u64, k: u64) -> C64 {
         as f64;
     // Rotate by q quarter turns: (re, im) = (c, s), (−s, c), (−c, −s), (s, −c) for q = 0…3,
     // as bit selects: swap c and s when q is odd, then flip signs.
-    let q = q as u64;
     let swap = 0u64.wrapping_sub(q & 1);
     let (cb, sb) = (c.to_bits(), sn.to_bits());
     let a = (cb & !swap) | (sb & swap);
@@ -209,6 +230,37 @@ simd_kernel! {
                     *o = C64::new(o.re * r + e.re * s, o.im * r + e.im * s);
                 }
             }
+        }
+    }
+}
+
+/// The phasor of index `k` on the line with key `key` in the embedding's stream: the low
+/// (even `k`) or high (odd `k`) half of the hash of k/2.
+#[inline(always)]
+fn paired_phasor(key: u64, k: u64) -> C64 {
+    let h = mix64(key.wrapping_add((k >> 1).wrapping_mul(GOLDEN)));
+    phasor32((h >> (32 * (k & 1))) as u32)
+}
+
+simd_kernel! {
+    /// Consecutive phasors of the embedding's stream: out[i] = [`paired_phasor`](key, k0 + i),
+    /// one hash for each pair.
+    fn phasor_span(key: u64, k0: u64, out: &mut [C64]) {
+        let (head, rest) = out.split_at_mut(usize::from(k0 % 2 == 1).min(out.len()));
+        if let Some(o) = head.first_mut() {
+            *o = paired_phasor(key, k0);
+        }
+        let k1 = k0 + head.len() as u64;
+        let last = k1 + rest.len() as u64 - 1;
+        let mut pairs = rest.chunks_exact_mut(2);
+        for (i, o) in (&mut pairs).enumerate() {
+            let h = mix64(key.wrapping_add((k1 / 2 + i as u64).wrapping_mul(GOLDEN)));
+            o[0] = phasor32(h as u32);
+            o[1] = phasor32((h >> 32) as u32);
+        }
+        let tail = pairs.into_remainder();
+        if let Some(o) = tail.first_mut() {
+            *o = paired_phasor(key, last);
         }
     }
 }
@@ -513,6 +565,7 @@ fn synth_component<'a, T: Sample>(
     out: Sink<'a, T>,
     layout: &'a OutLayout,
     columns: std::ops::Range<usize>,
+    spare: &mut Vec<C64>,
     progress: &(dyn Fn(f64) + Sync),
 ) -> Result<f64, WindError> {
     let lines = Lines::new(params, grid, comp, synth.seed);
@@ -525,7 +578,7 @@ fn synth_component<'a, T: Sample>(
         }
         Method::Cholesky => cholesky(params, grid, comp, &lines, &mut emitter, progress)?,
         Method::Embedding => {
-            coherence_error = embedding(params, grid, comp, &lines, &mut emitter, progress)?;
+            coherence_error = embedding(params, grid, comp, &lines, &mut emitter, spare, progress)?;
         }
     }
     Ok(coherence_error)
@@ -572,7 +625,17 @@ pub fn synthesize_component_f64(
     let add = vec![0.0; grid.nz()];
     let layout = OutLayout { frame_stride: n, offset: 0, row: grid.nx(), x0: 0, add };
     let sink = Sink::Buffer(OutPtr(out.as_mut_ptr(), out.len()));
-    synth_component(params, grid, synth, comp, sink, &layout, 0..grid.nx(), &|_| {})?;
+    synth_component(
+        params,
+        grid,
+        synth,
+        comp,
+        sink,
+        &layout,
+        0..grid.nx(),
+        &mut Vec::new(),
+        &|_| {},
+    )?;
     Ok(out)
 }
 
@@ -594,15 +657,25 @@ pub(crate) fn synthesize_into(
     check_config(params, grid, synth)?;
     let n = grid.points();
     let mut worst: f64 = 0.0;
+    // The embedding's coefficient block, kept from one component to the next.
+    let mut spare = Vec::new();
     for comp in Component::ALL {
         let add = mean_added(params, grid, comp);
         let (offset, row) = (comp.index() * n, grid.nx());
         let layout = OutLayout { frame_stride: 3 * n, offset, row, x0: 0, add };
         let c = comp.index() as f64;
         let sink = Sink::Buffer(OutPtr(out.as_mut_ptr(), out.len()));
-        let e = synth_component(params, grid, synth, comp, sink, &layout, 0..grid.nx(), &|f| {
-            progress((c + f) / 3.0)
-        })?;
+        let e = synth_component(
+            params,
+            grid,
+            synth,
+            comp,
+            sink,
+            &layout,
+            0..grid.nx(),
+            &mut spare,
+            &|f| progress((c + f) / 3.0),
+        )?;
         worst = worst.max(e);
     }
     Ok(worst)
@@ -658,12 +731,24 @@ pub fn synthesize_columns(
     check_columns(params, grid, synth, &columns)?;
     let (np, w) = (grid.nz() * grid.ny(), columns.len());
     let mut out = vec![0.0f32; grid.frames * 3 * np * w];
+    // The embedding's coefficient block, kept from one component to the next.
+    let mut spare = Vec::new();
     for comp in Component::ALL {
         let add = mean_added(params, grid, comp);
         let (offset, x0) = (comp.index() * np * w, columns.start);
         let layout = OutLayout { frame_stride: 3 * np * w, offset, row: w, x0, add };
         let sink = Sink::Buffer(OutPtr(out.as_mut_ptr(), out.len()));
-        synth_component(params, grid, synth, comp, sink, &layout, columns.clone(), &|_| {})?;
+        synth_component(
+            params,
+            grid,
+            synth,
+            comp,
+            sink,
+            &layout,
+            columns.clone(),
+            &mut spare,
+            &|_| {},
+        )?;
     }
     Ok(out)
 }
@@ -705,15 +790,25 @@ fn stream_columns(
     progress: &(dyn Fn(f64) + Sync),
 ) -> Result<(), WindError> {
     check_columns(params, grid, synth, &columns)?;
+    // The embedding's coefficient block, kept from one component to the next.
+    let mut spare = Vec::new();
     for comp in Component::ALL {
         let add = mean_added(params, grid, comp);
         let layout = OutLayout { frame_stride: 0, offset: 0, row: 0, x0: 0, add };
         let c = comp.index() as f64;
         let mut each = |x0: usize, cols: usize, rec: &[f32]| emit(comp, x0, cols, rec);
         let sink = Sink::Stream(&mut each);
-        synth_component(params, grid, synth, comp, sink, &layout, columns.clone(), &|f| {
-            progress((c + f) / 3.0)
-        })?;
+        synth_component(
+            params,
+            grid,
+            synth,
+            comp,
+            sink,
+            &layout,
+            columns.clone(),
+            &mut spare,
+            &|f| progress((c + f) / 3.0),
+        )?;
     }
     Ok(())
 }

@@ -36,7 +36,11 @@ use std::sync::Arc;
 
 use rustfft::{Fft, FftPlanner};
 
-use super::{C64, cholesky_lower};
+use sylva_core::simd_kernel;
+
+use super::C64;
+#[cfg(test)]
+use super::cholesky_lower;
 use crate::error::WindError;
 use crate::grid::Grid;
 use crate::params::{CoherenceSpeed, Component, WindParams};
@@ -75,11 +79,15 @@ fn folded_spectrum(a: f64, out: &mut [f64]) {
     let rho = (-a).exp();
     let one_minus_rho2 = -(-2.0 * a).exp_m1();
     let em1 = (-a).exp_m1();
-    for (k, o) in out.iter_mut().enumerate() {
+    for k in 0..=p / 2 {
         // 1 − (−1)^κ ρ^m, accurate when ρ^m is close to 1.
         let lead = if k.is_multiple_of(2) { -(-m * a).exp_m1() } else { 1.0 + (-m * a).exp() };
         let s = (PI * k as f64 / p as f64).sin();
-        *o = lead * one_minus_rho2 / (em1 * em1 + 4.0 * rho * s * s);
+        out[k] = lead * one_minus_rho2 / (em1 * em1 + 4.0 * rho * s * s);
+    }
+    // The kernel is even, so is its spectrum: ĉ(P − κ) = ĉ(κ), exactly.
+    for k in p / 2 + 1..p {
+        out[k] = out[p - k];
     }
 }
 
@@ -119,8 +127,13 @@ pub(super) struct Scratch {
     v: Vec<C64>,
     t: Vec<C64>,
     fft: Vec<C64>,
-    /// The line's coherence field, laid out (z, y, x).
-    pub(super) w: Vec<C64>,
+    /// One row κy of blocks, pair by pair across κx, and which of them failed.
+    lanes: Vec<f64>,
+    fail: Vec<f64>,
+    /// The factored lanes of a row mirrored over all κx.
+    full: Vec<f64>,
+    /// The phasors of one row κy, height column by height column.
+    xi: Vec<C64>,
 }
 
 impl Embedding {
@@ -191,15 +204,30 @@ impl Embedding {
             v: vec![C64::default(); self.nz * self.wavenumbers()],
             t: vec![C64::default(); self.nx * self.py],
             fft: vec![C64::default(); fft_len],
-            w: vec![C64::default(); self.nz * self.ny * self.nx],
+            lanes: vec![0.0; np * (self.px / 2 + 1)],
+            fail: vec![0.0; self.px / 2 + 1],
+            full: vec![0.0; np * self.px],
+            xi: vec![C64::default(); self.nz * self.px],
         }
     }
 
-    /// The unit-variance coherence field of the line at frequency `f` (Hz) into `s.w`, laid
-    /// out (z, y, x), with the phasor of height column `m` and wavenumber `κ = κy·P_x + κx`
-    /// given by `xi(m, κ)`. Returns the bound on the coherence error from blocks that had
-    /// to be projected onto semidefinite ones (0 when the model is a valid covariance).
-    pub(super) fn line(&self, f: f64, xi: &dyn Fn(usize, usize) -> C64, s: &mut Scratch) -> f64 {
+    /// The unit-variance coherence field of the line at frequency `f` (Hz) into `w`, laid
+    /// out (z, y, x). `xi(m, κ0, out)` fills `out` with the phasors of height column `m` at
+    /// the wavenumbers `κ0 …`, where `κ = κy·P_x + κx`. Returns the bound on the coherence
+    /// error from blocks that had to be projected onto semidefinite ones (0 when the model
+    /// is a valid covariance).
+    ///
+    /// The blocks of one row κy are factored side by side, each pair's entries of every κx in
+    /// one array, so the arithmetic runs in vector lanes; each lane computes what
+    /// [`cholesky_lower`] computes, operation for operation, and a lane whose block is not
+    /// semidefinite is redone alone with [`nearest_semidefinite_root`].
+    pub(super) fn line(
+        &self,
+        f: f64,
+        xi: &dyn Fn(usize, usize, &mut [C64]),
+        s: &mut Scratch,
+        w: &mut [C64],
+    ) -> f64 {
         let (nz, px, py) = (self.nz, self.px, self.py);
         for h in 0..nz {
             for k in 0..=h {
@@ -212,19 +240,28 @@ impl Embedding {
         }
         let norm = 1.0 / self.wavenumbers() as f64;
         let mut clipped = 0.0;
-        for ky in 0..py {
-            for kx in 0..px {
-                let kappa = ky * px + kx;
-                for h in 0..nz {
-                    for k in 0..=h {
-                        let q = pair(h, k);
-                        s.m[h * nz + k] = s.z[q] * s.kx[q * px + kx] * s.ky[q * py + ky] * norm;
-                    }
+        // ĉ(κ) = ĉ(P − κ): the blocks of κy and P_y − κy are equal, and within a row those of
+        // κx and P_x − κx; only the lanes κx ≤ P_x/2 of rows κy ≤ P_y/2 are factored.
+        let wh = px / 2 + 1;
+        for ky in 0..=py / 2 {
+            block_row(&s.z, &s.kx, &s.ky[..], ky, py, norm, &mut s.lanes, &mut s.fail);
+            lower_factor_lanes(&mut s.lanes, nz, &mut s.fail);
+            mirror_lanes(&s.lanes, wh, &mut s.full);
+            for ky in [ky, py - ky] {
+                if ky == py {
+                    continue; // κy = 0 has no mirror
                 }
-                // A lower factor (Cholesky) where the block is semidefinite, else the square
-                // root of its nearest semidefinite matrix (full).
-                let mut full = false;
-                if cholesky_lower(&mut s.m, nz).is_err() {
+                let row = ky * px;
+                for m in 0..nz {
+                    xi(m, row, &mut s.xi[m * px..(m + 1) * px]);
+                }
+                for h in 0..nz {
+                    let out = &mut s.v[h * px * py + row..h * px * py + row + px];
+                    apply_factor_row(&s.full, &s.xi, h, px, out);
+                }
+                for kx in (0..px).filter(|&kx| s.fail[kx.min(px - kx)] != 0.0) {
+                    // This block is not semidefinite: the square root of its nearest
+                    // semidefinite matrix (full) instead.
                     for h in 0..nz {
                         for k in 0..=h {
                             let q = pair(h, k);
@@ -234,17 +271,19 @@ impl Embedding {
                         }
                     }
                     clipped += nearest_semidefinite_root(&mut s.m, &mut s.e, nz);
-                    full = true;
-                }
-                for h in 0..nz {
-                    let mut acc = C64::default();
-                    for m in 0..if full { nz } else { h + 1 } {
-                        let l = s.m[h * nz + m];
-                        if l != 0.0 {
-                            acc += xi(m, kappa) * l;
+                    for h in 0..nz {
+                        let mut acc = C64::default();
+                        for m in 0..nz {
+                            let l = s.m[h * nz + m];
+                            if l != 0.0 {
+                                acc += s.xi[m * px + kx] * l;
+                            }
                         }
+                        s.v[h * px * py + row + kx] = acc;
                     }
-                    s.v[h * px * py + kappa] = acc;
+                }
+                if py - ky == ky {
+                    break; // κy = P_y/2 is its own mirror
                 }
             }
         }
@@ -265,11 +304,110 @@ impl Embedding {
             }
             for iy in 0..ny {
                 for ix in 0..nx {
-                    s.w[(h * ny + iy) * nx + ix] = s.t[ix * py + iy];
+                    w[(h * ny + iy) * nx + ix] = s.t[ix * py + iy];
                 }
             }
         }
         clipped
+    }
+}
+
+simd_kernel! {
+    /// The blocks M(κ) of one row κy, pair by pair across the first `fail.len()` κx
+    /// (`lanes[q·w + κx]`, q the packed pair index): Z_hk · ĉ^x_hk(κx) · ĉ^y_hk(κy) /
+    /// (P_x P_y). Clears `fail`.
+    fn block_row(
+        z: &[f64],
+        kx: &[f64],
+        ky: &[f64],
+        row: usize,
+        py: usize,
+        norm: f64,
+        lanes: &mut [f64],
+        fail: &mut [f64],
+    ) {
+        let w = fail.len();
+        let px = kx.len() / z.len();
+        for (q, &zq) in z.iter().enumerate() {
+            let cy = ky[q * py + row];
+            let (spec, out) = (&kx[q * px..q * px + w], &mut lanes[q * w..(q + 1) * w]);
+            for (o, &cx) in out.iter_mut().zip(spec) {
+                *o = zq * cx * cy * norm;
+            }
+        }
+        fail.fill(0.0);
+    }
+}
+
+simd_kernel! {
+    /// [`cholesky_lower`] of every lane's n × n block at once (`lanes` holds the packed
+    /// lower triangle, pair by pair, `fail.len()` lanes each), in place, with the same
+    /// operations in the same order per lane. A lane whose block is not semidefinite gets
+    /// `fail` = 1 and an unusable factor.
+    fn lower_factor_lanes(lanes: &mut [f64], n: usize, fail: &mut [f64]) {
+        let w = fail.len();
+        let mut scale = vec![0.0f64; w];
+        for i in 0..n {
+            let d = &lanes[pair(i, i) * w..(pair(i, i) + 1) * w];
+            for (s, &v) in scale.iter_mut().zip(d) {
+                *s = f64::max(*s, v);
+            }
+        }
+        let mut sum = vec![0.0f64; w];
+        for i in 0..n {
+            for j in 0..=i {
+                sum.copy_from_slice(&lanes[pair(i, j) * w..(pair(i, j) + 1) * w]);
+                for k in 0..j {
+                    let (a, b) = (pair(i, k) * w, pair(j, k) * w);
+                    for (l, s) in sum.iter_mut().enumerate() {
+                        *s -= lanes[a + l] * lanes[b + l];
+                    }
+                }
+                let at = pair(i, j) * w;
+                if i == j {
+                    for (l, (&s, bad)) in sum.iter().zip(fail.iter_mut()).enumerate() {
+                        let tol = scale[l];
+                        if s < -1e-9 * tol || !s.is_finite() {
+                            *bad = 1.0;
+                        }
+                        lanes[at + l] = if s > 1e-12 * tol { s.sqrt() } else { 0.0 };
+                    }
+                } else {
+                    let dj = pair(j, j) * w;
+                    for (l, &s) in sum.iter().enumerate() {
+                        let d = lanes[dj + l];
+                        lanes[at + l] = if d > 0.0 { s / d } else { 0.0 };
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The factored lanes κx < w of every pair spread over the whole row:
+/// full[q·P_x + κx] = half[q·w + min(κx, P_x − κx)], P_x = `full.len()` / pairs.
+fn mirror_lanes(half: &[f64], w: usize, full: &mut [f64]) {
+    let pairs = half.len() / w;
+    let px = full.len() / pairs;
+    for (h, f) in half.chunks(w).zip(full.chunks_mut(px)) {
+        f[..w.min(px)].copy_from_slice(&h[..w.min(px)]);
+        for kx in w..px {
+            f[kx] = h[px - kx];
+        }
+    }
+}
+
+simd_kernel! {
+    /// Row h of the factored blocks applied to the phasors, lane by lane:
+    /// out[κx] = Σ_{m ≤ h} L_hm(κx) ξ_m(κx), summed in the order of m.
+    fn apply_factor_row(lanes: &[f64], xi: &[C64], h: usize, w: usize, out: &mut [C64]) {
+        out.fill(C64::default());
+        for m in 0..=h {
+            let (l, x) = (&lanes[pair(h, m) * w..(pair(h, m) + 1) * w], &xi[m * w..(m + 1) * w]);
+            for ((o, &l), x) in out.iter_mut().zip(l).zip(x) {
+                *o += x * l;
+            }
+        }
     }
 }
 
@@ -377,17 +515,21 @@ mod tests {
         for comp in Component::ALL {
             let emb = Embedding::new(&params, &grid, comp, 0.0).expect("regular grid");
             let mut s = emb.scratch();
+            let mut w = vec![C64::default(); n];
             for f in [0.002, 0.05, 0.4, 2.5] {
                 let mut cov = vec![C64::default(); n * n];
                 for col in 0..grid.nz() * emb.wavenumbers() {
-                    let unit = |m: usize, k: usize| {
-                        C64::new(if m * emb.wavenumbers() + k == col { 1.0 } else { 0.0 }, 0.0)
+                    let unit = |m: usize, k0: usize, out: &mut [C64]| {
+                        for (i, o) in out.iter_mut().enumerate() {
+                            let hit = m * emb.wavenumbers() + k0 + i == col;
+                            *o = C64::new(if hit { 1.0 } else { 0.0 }, 0.0);
+                        }
                     };
-                    let clipped = emb.line(f, &unit, &mut s);
+                    let clipped = emb.line(f, &unit, &mut s, &mut w);
                     assert_eq!(clipped, 0.0, "pair-mean blocks are PSD on this grid");
                     for a in 0..n {
                         for b in 0..n {
-                            cov[a * n + b] += s.w[a] * s.w[b].conj();
+                            cov[a * n + b] += w[a] * w[b].conj();
                         }
                     }
                 }
@@ -441,18 +583,22 @@ mod tests {
         let speeds: Vec<f64> = grid.zs.iter().map(|&z| params.mean_speed(z)).collect();
         let emb = Embedding::new(&params, &grid, Component::V, 0.0).expect("regular grid");
         let mut s = emb.scratch();
+        let mut w = vec![C64::default(); n];
         let mut seen_clip = false;
         for f in [0.0005, 0.002, 0.01] {
             let mut cov = vec![C64::default(); n * n];
             let mut bound: f64 = 0.0;
             for col in 0..grid.nz() * emb.wavenumbers() {
-                let unit = |m: usize, k: usize| {
-                    C64::new(if m * emb.wavenumbers() + k == col { 1.0 } else { 0.0 }, 0.0)
+                let unit = |m: usize, k0: usize, out: &mut [C64]| {
+                    for (i, o) in out.iter_mut().enumerate() {
+                        let hit = m * emb.wavenumbers() + k0 + i == col;
+                        *o = C64::new(if hit { 1.0 } else { 0.0 }, 0.0);
+                    }
                 };
-                bound = emb.line(f, &unit, &mut s);
+                bound = emb.line(f, &unit, &mut s, &mut w);
                 for a in 0..n {
                     for b in 0..n {
-                        cov[a * n + b] += s.w[a] * s.w[b].conj();
+                        cov[a * n + b] += w[a] * w[b].conj();
                     }
                 }
             }

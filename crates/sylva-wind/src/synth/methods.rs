@@ -170,6 +170,7 @@ pub(super) fn embedding<T: Sample>(
     comp: Component,
     lines: &Lines,
     emitter: &mut Emitter<'_, T>,
+    spare: &mut Vec<C64>,
     progress: &(dyn Fn(f64) + Sync),
 ) -> Result<f64, WindError> {
     let (nx, ny, nz) = (grid.nx(), grid.ny(), grid.nz());
@@ -178,53 +179,60 @@ pub(super) fn embedding<T: Sample>(
     let emb = embed::Embedding::new(params, grid, comp, lines.u_ref)?;
     // Coefficients laid out (x, z, y, j), one column after another; every line is
     // independent and fills its own index j of every point.
-    let mut block = vec![C64::default(); nx * col_len];
+    // Every entry is written below, so a block left by the previous component (the same
+    // size) is taken as it is: no second gigabyte to fault in on a large grid.
+    let mut block = std::mem::take(spare);
+    block.resize(nx * col_len, C64::default());
     let out = OutPtr(block.as_mut_ptr(), block.len());
     let done = std::sync::atomic::AtomicUsize::new(0);
     let worst = std::sync::Mutex::new(0.0f64);
     let kappas = emb.wavenumbers();
-    // Tasks take runs of consecutive lines and write each point's run at once: one
-    // burst per point instead of one scattered write per point and line.
+    // Tasks take runs of consecutive lines, keep each line's field whole, then write each
+    // point's run of lines at once: one burst per point instead of one scattered write per
+    // point and line.
     const RUN: usize = 16;
     let np = nz * ny * nx;
     let runs: Vec<usize> = (1..nc - 1).step_by(RUN).collect();
-    runs.par_iter().for_each_init(
-        || (emb.scratch(), vec![C64::default(); np * RUN]),
-        |(s, staged), &j0| {
+    // The work buffers (several MB) are made once per thread: one contiguous share of the
+    // runs each, as every run costs the same.
+    let share = runs.len().div_ceil(rayon::current_num_threads()).max(1);
+    runs.par_chunks(share).for_each(|mine| {
+        let (mut s, mut staged) = (emb.scratch(), vec![C64::default(); np * RUN]);
+        for &j0 in mine {
             let j1 = (j0 + RUN).min(nc - 1);
             for j in j0..j1 {
                 let key = lines.keys[j];
-                let xi = |m: usize, k: usize| phasor(key, (m * kappas + k) as u64);
+                let xi = |m: usize, k0: usize, out: &mut [C64]| {
+                    phasor_span(key, (m * kappas + k0) as u64, out)
+                };
                 let f = lines.omega[j] / (2.0 * PI);
-                let clipped = emb.line(f, &xi, s);
+                let w = &mut staged[(j - j0) * np..(j - j0 + 1) * np];
+                let clipped = emb.line(f, &xi, &mut s, w);
                 if clipped > 0.0
                     && let Ok(mut w) = worst.lock()
                 {
                     *w = w.max(clipped);
                 }
-                for (q, w) in s.w.iter().enumerate() {
-                    staged[q * RUN + (j - j0)] = *w;
-                }
             }
-            for (q, run) in staged.chunks(RUN).enumerate() {
+            for q in 0..np {
                 let (p, ix) = (q / nx, q % nx);
                 let at = ix * col_len + p * nc + j0;
-                for (d, w) in run[..j1 - j0].iter().enumerate() {
+                for d in 0..j1 - j0 {
                     // SAFETY: lines j0 … j1 of every point belong to this task alone,
                     // and the index lies inside `block` (nx · nz · ny · nc entries).
-                    unsafe { out.write(at + d, *w) };
+                    unsafe { out.write(at + d, staged[d * np + q]) };
                 }
             }
             let d = done.fetch_add(j1 - j0, std::sync::atomic::Ordering::Relaxed);
             progress((d + j1 - j0) as f64 / (nc - 2) as f64);
-        },
-    );
+        }
+    });
     let coherence_error = worst.into_inner().unwrap_or(f64::INFINITY);
     let mut fac = vec![C64::default(); nz * nc];
     for (ix, col) in block.chunks(col_len).enumerate() {
         lines.column_factors(params.advection, grid.xs[ix], true, &mut fac);
         emitter.push(ix, col, &fac)?;
     }
-
+    *spare = block;
     Ok(coherence_error)
 }

@@ -65,3 +65,38 @@ fn cholesky_factor_reproduces_the_matrix() {
     let mut bad = vec![1.0, 0.0, 2.0, 1.0];
     assert_eq!(cholesky_lower(&mut bad, 2), Err(1));
 }
+
+/// The embedding's stream takes two phases from each hash: each must still be unit and
+/// uniform in angle, the two halves of one hash uncorrelated, and a span starting or ending
+/// on either half the same phasors, bit for bit, as those indices taken one at a time.
+#[test]
+fn paired_phasors_are_unit_uniform_and_independent_halves() {
+    let key = line_key(11, Component::W, 5);
+    let n = 200_000;
+    let mut span = vec![C64::default(); n];
+    phasor_span(key, 0, &mut span);
+    let mut hist = [0usize; 16];
+    let mut cross = C64::default();
+    for (k, p) in span.iter().enumerate() {
+        assert!((p.norm() - 1.0).abs() < 1e-7);
+        let a = p.im.atan2(p.re) + PI;
+        hist[((a / (2.0 * PI) * 16.0) as usize).min(15)] += 1;
+        if k % 2 == 1 {
+            cross += span[k - 1] * p.conj();
+        }
+    }
+    for h in hist {
+        assert!((h as f64 - 12_500.0).abs() < 650.0, "{hist:?}");
+    }
+    // |mean of n/2 unit products| has σ ≈ 1/√(n/2) = 0.0032 when the halves are independent.
+    let r = cross.norm() / (n / 2) as f64;
+    assert!(r < 0.015, "halves of one hash correlate: {r}");
+    for (k0, len) in [(0u64, 7usize), (1, 7), (1, 8), (5, 1), (40_000, 33)] {
+        let mut got = vec![C64::default(); len];
+        phasor_span(key, k0, &mut got);
+        for (i, g) in got.iter().enumerate() {
+            let want = paired_phasor(key, k0 + i as u64);
+            assert_eq!((g.re.to_bits(), g.im.to_bits()), (want.re.to_bits(), want.im.to_bits()));
+        }
+    }
+}
