@@ -15,9 +15,9 @@
 //!
 //! Prints, per band of along-wind separation, the lag of the peak correlation and its
 //! value; the travel speed fitted through them against the field's convection speed U_c;
-//! and the zero-lag correlation against separation, whose first zero marks half the
-//! streamwise spacing of the gusts, against the mixing layer's 8.1 Ū(h)/Ū′(h) (Raupach,
-//! Finnigan & Brunet 1996) at the canopy top h.
+//! and the zero-lag correlation against separation, whose first minimum marks half the
+//! streamwise spacing of the gusts and its next maximum the spacing, against the mixing
+//! layer's 8.1 Ū(h)/Ū′(h) (Raupach, Finnigan & Brunet 1996) at the canopy top h.
 
 use anyhow::Result;
 use sylva_forest::{Forest, SceneSpec, wind_field_over};
@@ -126,23 +126,40 @@ fn main() -> Result<()> {
     let speed = sxx / sxy.max(1e-9);
     println!("travel speed fitted through the peaks: {speed:.2} m/s, {:.2} × U_c", speed / u_c);
     // The mixing layer's spacing from the profile's shear at h.
-    let du = (params.mean_speed(h + 0.05) - params.mean_speed(h - 0.05)) / 0.1;
-    let spacing = 8.1 * params.mean_speed(h) / du;
-    let half = zero_lag.windows(2).find(|w| w[0].1 > 0.0 && w[1].1 <= 0.0).map(|w| {
-        let ((x0, y0), (x1, y1)) = (w[0], w[1]);
-        x0 + (x1 - x0) * y0 / (y0 - y1)
+    let spacing = sylva_forest::canopy::mixing_layer_spacing(&params, h);
+    // A train of gusts Λ apart correlates with itself at lag 0 as cos(2π d/Λ) decays: the
+    // first minimum at Λ/2, the next maximum at Λ (each refined by a parabola through the
+    // band and its neighbours).
+    let vertex = |k: usize| {
+        let (x0, x1, x2) = (zero_lag[k - 1].0, zero_lag[k].0, zero_lag[k + 1].0);
+        let (y0, y1, y2) = (zero_lag[k - 1].1, zero_lag[k].1, zero_lag[k + 1].1);
+        let d = (x0 - x1) * (x0 - x2) * (x1 - x2);
+        let a = (x2 * (y1 - y0) + x1 * (y0 - y2) + x0 * (y2 - y1)) / d;
+        let b = (x2 * x2 * (y0 - y1) + x1 * x1 * (y2 - y0) + x0 * x0 * (y1 - y2)) / d;
+        if a.abs() > 1e-12 { (-b / (2.0 * a)).clamp(x0, x2) } else { x1 }
+    };
+    let inner = 1..zero_lag.len().saturating_sub(1);
+    let low = inner.clone().find(|&k| {
+        zero_lag[k].1 < 0.0
+            && zero_lag[k].1 <= zero_lag[k - 1].1
+            && zero_lag[k].1 <= zero_lag[k + 1].1
     });
-    match half {
-        Some(x) => println!(
-            "streamwise spacing (twice the zero-lag correlation's first zero): {:.1} m; \
-             8.1 Ū(h)/Ū′(h) = {spacing:.1} m",
-            2.0 * x
+    let high = low.and_then(|l| {
+        inner.clone().find(|&k| {
+            k > l && zero_lag[k].1 >= zero_lag[k - 1].1 && zero_lag[k].1 >= zero_lag[k + 1].1
+        })
+    });
+    match low {
+        Some(l) => println!(
+            "streamwise spacing of the gusts: {:.1} m from the zero-lag correlation's first \
+             minimum (at Λ/2), {} from its next maximum (at Λ); 8.1 Ū(h)/Ū′(h) = {spacing:.1} m",
+            2.0 * vertex(l),
+            high.map_or("none within the bands".to_string(), |k| format!("{:.1} m", vertex(k)))
         ),
         None => println!(
-            "the zero-lag correlation stays above zero to {:.0} m: spacing over {:.0} m; \
+            "the zero-lag correlation has no minimum below zero within {:.0} m; \
              8.1 Ū(h)/Ū′(h) = {spacing:.1} m",
-            BAND * BANDS as f32,
-            2.0 * BAND * BANDS as f32
+            BAND * BANDS as f32
         ),
     }
     Ok(())

@@ -410,6 +410,79 @@ impl Shelter {
 mod tests {
     use super::*;
 
+    /// The eddies are gusts of unit variance whose along-wind correlation falls to its
+    /// minimum half a mixing-layer spacing away and rises again a spacing away.
+    #[test]
+    fn eddies_have_unit_variance_and_the_mixing_layer_spacing() {
+        let stand = Stand { height: 17.5, lai: 3.0 };
+        let p = WindParams { profile: stand.profile(), ..Default::default() };
+        let eddies = Eddies::new(&p, stand.height, EDDY_SHARE, 5);
+        let spacing = mixing_layer_spacing(&p, stand.height);
+        assert!((eddies.spacing() - spacing).abs() < 1e-9 * spacing);
+        // Samples 1 m apart along the wind over many tiles and across-wind lines.
+        let line = |y: f64| -> Vec<f64> {
+            (0..4000).map(|x| eddies.at(x as f64, y, 0.0) as f64).collect()
+        };
+        // Across the wind, lines through every row of the tile (four spacings wide).
+        let across = 4.0 * spacing / 64.0;
+        let lines: Vec<Vec<f64>> = (0..64).map(|k| line(across * k as f64)).collect();
+        let var = lines.iter().flatten().map(|v| v * v).sum::<f64>() / (64.0 * 4000.0);
+        assert!((var - 1.0).abs() < 0.05, "variance {var}");
+        let corr = |lag: usize| {
+            let s: f64 = lines
+                .iter()
+                .map(|l| l.iter().zip(&l[lag..]).map(|(a, b)| a * b).sum::<f64>())
+                .sum();
+            s / (64.0 * (4000 - lag) as f64) / var
+        };
+        let r: Vec<f64> = (0..(1.5 * spacing) as usize).map(corr).collect();
+        let low = (1..r.len() - 1).find(|&k| r[k] < r[k - 1] && r[k] <= r[k + 1]).expect("minimum");
+        let high = (low + 1..r.len() - 1).find(|&k| r[k] > r[k - 1] && r[k] >= r[k + 1]);
+        assert!(r[low] < -0.3, "a train of gusts anticorrelates half a spacing on: {}", r[low]);
+        assert!(
+            (2.0 * low as f64 / spacing - 1.0).abs() < 0.25,
+            "minimum at {low} m, Λx {spacing}"
+        );
+        let high = high.expect("maximum");
+        assert!((high as f64 / spacing - 1.0).abs() < 0.25, "maximum at {high} m, Λx {spacing}");
+    }
+
+    /// The eddies travel downwind at the convection speed: a point moving with them sees
+    /// the same gust a moment later, a fixed point another; over many lifetimes they are
+    /// replaced.
+    #[test]
+    fn eddies_travel_at_the_convection_speed_and_live_a_few_spacings() {
+        let stand = Stand { height: 17.5, lai: 3.0 };
+        let p = WindParams {
+            profile: stand.profile(),
+            convection_speed: Some(12.0),
+            ..Default::default()
+        };
+        let eddies = Eddies::new(&p, stand.height, EDDY_SHARE, 9);
+        let spacing = eddies.spacing();
+        let lag = 0.25 * spacing / 12.0; // a quarter spacing of travel
+        let pts: Vec<(f64, f64, f64)> =
+            (0..2000).map(|k| (3.1 * k as f64, 11.0 * (k % 13) as f64, 0.37 * k as f64)).collect();
+        let corr = |f: &dyn Fn(f64, f64, f64) -> (f32, f32)| {
+            let (mut ab, mut aa, mut bb) = (0.0, 0.0, 0.0);
+            for &(x, y, t) in &pts {
+                let (a, b) = f(x, y, t);
+                ab += (a * b) as f64;
+                aa += (a * a) as f64;
+                bb += (b * b) as f64;
+            }
+            ab / (aa * bb).sqrt()
+        };
+        let moving = corr(&|x, y, t| (eddies.at(x, y, t), eddies.at(x + 12.0 * lag, y, t + lag)));
+        let fixed = corr(&|x, y, t| (eddies.at(x, y, t), eddies.at(x, y, t + lag)));
+        let later = corr(&|x, y, t| {
+            (eddies.at(x, y, t), eddies.at(x + 12.0 * 30.0 * lag, y, t + 30.0 * lag))
+        });
+        assert!(moving > 0.9, "with the eddies: {moving}");
+        assert!(fixed < 0.3, "a quarter spacing later at a fixed point: {fixed}");
+        assert!(later.abs() < 0.15, "after seven spacings of travel: {later}");
+    }
+
     fn square(n: usize, spacing: f32) -> Vec<[f32; 2]> {
         (0..n * n).map(|k| [(k % n) as f32 * spacing, (k / n) as f32 * spacing]).collect()
     }
@@ -515,5 +588,150 @@ mod tests {
             let want = open_speed(&p, 15.0, z as f64);
             assert!((open[k] as f64 * at - want).abs() < 1e-5 * want.max(1.0), "z {z}");
         }
+    }
+}
+
+/// Streamwise spacing of a canopy's mixing-layer eddies, m: Λx = 8.1 Ū(h)/Ū′(h), the shear
+/// taken across ±5 cm of the canopy top `h` of the field `params` (Raupach, Finnigan &
+/// Brunet 1996, from plane mixing layers and a dozen canopies).
+pub fn mixing_layer_spacing(params: &WindParams, h: f64) -> f64 {
+    let shear = (params.mean_speed(h + 0.05) - params.mean_speed(h - 0.05)) / 0.1;
+    8.1 * params.mean_speed(h) / shear.max(1e-9)
+}
+
+/// Share of the along-wind gusts' variance at the canopy top carried by the mixing-layer
+/// eddies, the rest by the field's gusts (a choice: Raupach, Finnigan & Brunet 1996 find
+/// the canopy-top spectra peaked at the eddies' passing frequency, and most of the
+/// momentum carried by them; the share is not measured as such).
+pub const EDDY_SHARE: f64 = 0.5;
+
+/// Tile points per side of [`Eddies`].
+const EDDY_TILE: usize = 64;
+/// The tile is this many streamwise spacings across.
+const EDDY_SPACINGS: f64 = 4.0;
+/// Independent tiles the eddies cycle through, each placed anew at every turn.
+const EDDY_TILES: usize = 4;
+/// An eddy's lifetime, in streamwise spacings travelled (a choice: the eddies are replaced
+/// as they travel, so gusts decorrelate over a few spacings instead of staying frozen).
+const EDDY_LIFE_SPACINGS: f64 = 2.0;
+
+/// The canopy's mixing-layer eddies (Raupach, Finnigan & Brunet 1996): along-wind gusts of
+/// streamwise spacing Λx carried downwind at the convection speed U_c — the waves that
+/// cross a crop or a forest as honami. Periodic tiles four spacings across, drawn once from
+/// a seed: sums of plane waves with wavelengths within about ±25 % of Λx along the wind and
+/// a spanwise spread that makes each gust about a third of Λx wide; unit variance; sampled
+/// bilinearly at (x − U_c t) along the wind. The eddies live about two spacings of travel:
+/// every 2 Λx / U_c one tile fades into the next (cos/sin weights, which keep the variance),
+/// each placed at a fresh offset.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Eddies {
+    /// [`EDDY_TILES`] tiles of [`EDDY_TILE`]² values.
+    values: Vec<f32>,
+    /// Tile step, m.
+    step: f64,
+    /// Convection speed, m/s, and the mean wind's direction (unit, horizontal).
+    speed: f64,
+    dir: [f64; 2],
+    /// Standard deviation of the eddies' along-wind gust, m/s, and the factor left on the
+    /// field's own fluctuations, √(1 − share).
+    sigma: f64,
+    keep: f64,
+    /// Seconds from one tile to the next, and the seed of their offsets.
+    life: f64,
+    seed: u64,
+}
+
+impl Eddies {
+    /// The eddies of a canopy of height `h` in the field `params` (its convection speed, or
+    /// 1.8 Ū(h) where it has none; its direction; its σ_u = 2.5 U*), with `share` of the
+    /// canopy-top gust variance, drawn from `seed`.
+    pub fn new(params: &WindParams, h: f64, share: f64, seed: u64) -> Eddies {
+        let spacing = mixing_layer_spacing(params, h).clamp(1.0, 1.0e4);
+        let side = EDDY_SPACINGS * spacing;
+        let n = EDDY_TILE;
+        let mut rng = sylva_core::rng::SplitMix64::new(seed ^ 0x6564_6469_6573);
+        let mut values = vec![0.0f32; EDDY_TILES * n * n];
+        for tile in values.chunks_mut(n * n) {
+            // Plane waves (i, j) cycles per tile: i about EDDY_SPACINGS along the wind.
+            let mut waves = Vec::new();
+            for i in 2..=6i32 {
+                for j in -6..=6i32 {
+                    let along = i as f64 - EDDY_SPACINGS;
+                    let across = j as f64 / 2.0;
+                    let a = (-0.5 * (along * along + across * across)).exp();
+                    waves.push((i as f64, j as f64, a, std::f64::consts::TAU * rng.unit_f64()));
+                }
+            }
+            // Unit variance: a cosine of amplitude A has variance A²/2.
+            let norm = (waves.iter().map(|w| 0.5 * w.2 * w.2).sum::<f64>()).sqrt();
+            for (k, v) in tile.iter_mut().enumerate() {
+                let (u, w) = ((k % n) as f64 / n as f64, (k / n) as f64 / n as f64);
+                let s: f64 = waves
+                    .iter()
+                    .map(|&(i, j, a, p)| a * (std::f64::consts::TAU * (i * u + j * w) + p).cos())
+                    .sum();
+                *v = (s / norm) as f32;
+            }
+        }
+        let speed = params.convection_speed.unwrap_or(1.8 * params.mean_speed(h)).max(0.1);
+        let share = share.clamp(0.0, 1.0);
+        Eddies {
+            values,
+            step: side / n as f64,
+            speed,
+            dir: params.direction(),
+            sigma: 2.5 * params.u_star * share.sqrt(),
+            keep: (1.0 - share).sqrt(),
+            life: EDDY_LIFE_SPACINGS * spacing / speed,
+            seed,
+        }
+    }
+
+    /// Tile `turn` (of the endless sequence) at tile coordinates (u, v), bilinearly.
+    fn tile_at(&self, turn: i64, u: f64, v: f64) -> f32 {
+        let n = EDDY_TILE;
+        let h =
+            sylva_core::rng::mix64(self.seed ^ (turn as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15));
+        let tile = &self.values[(h as usize % EDDY_TILES) * n * n..][..n * n];
+        let (ou, ov) = (((h >> 16) & 0xffff) as f64, ((h >> 32) & 0xffff) as f64);
+        let (u, v) = (u + ou * n as f64 / 65_536.0, v + ov * n as f64 / 65_536.0);
+        let (fu, fv) = (u.floor(), v.floor());
+        let (du, dv) = ((u - fu) as f32, (v - fv) as f32);
+        let wrap = |c: f64| (c.rem_euclid(n as f64) as usize).min(n - 1);
+        let (i0, j0) = (wrap(fu), wrap(fv));
+        let (i1, j1) = ((i0 + 1) % n, (j0 + 1) % n);
+        let at = |i: usize, j: usize| tile[j * n + i];
+        let lo = at(i0, j0) + (at(i1, j0) - at(i0, j0)) * du;
+        let hi = at(i0, j1) + (at(i1, j1) - at(i0, j1)) * du;
+        lo + (hi - lo) * dv
+    }
+
+    /// The eddies' unit along-wind gust at ground point (`x`, `y`) m and time `t` s.
+    pub fn at(&self, x: f64, y: f64, t: f64) -> f32 {
+        let along = x * self.dir[0] + y * self.dir[1] - self.speed * t;
+        let across = -x * self.dir[1] + y * self.dir[0];
+        let (u, v) = (along / self.step, across / self.step);
+        let age = t / self.life;
+        let turn = age.floor();
+        let (sn, cs) = (std::f64::consts::FRAC_PI_2 * (age - turn)).sin_cos();
+        let turn = turn as i64;
+        (cs as f32) * self.tile_at(turn, u, v) + (sn as f32) * self.tile_at(turn + 1, u, v)
+    }
+    /// The field's wind `w` at point `p` and time `t`, about its mean `mean` m/s there: its
+    /// fluctuations kept at √(1 − share) and the eddies' along-wind gust added, so that the
+    /// gusts' variance is the field's.
+    pub fn mix(&self, w: [f64; 3], p: [f64; 3], t: f64, mean: f64) -> [f64; 3] {
+        let m = [self.dir[0] * mean, self.dir[1] * mean, 0.0];
+        let e = self.sigma * self.at(p[0], p[1], t) as f64;
+        [
+            m[0] + self.keep * (w[0] - m[0]) + e * self.dir[0],
+            m[1] + self.keep * (w[1] - m[1]) + e * self.dir[1],
+            self.keep * w[2],
+        ]
+    }
+
+    /// The streamwise spacing the eddies were drawn with, m.
+    pub fn spacing(&self) -> f64 {
+        self.step * EDDY_TILE as f64 / EDDY_SPACINGS
     }
 }

@@ -179,6 +179,7 @@ impl Forest {
             grouped: (eye, 0.0),
             regroup_fade: REGROUP_FADE,
             canopy_wind,
+            eddies: None,
         };
         forest.apply_height_factors();
         Ok(forest)

@@ -283,6 +283,8 @@ pub struct Forest {
     regroup_fade: f32,
     /// The canopy wind: the stand and each point's shelter (`None` with it off).
     canopy_wind: Option<(crate::canopy::Stand, crate::canopy::Shelter)>,
+    /// The canopy's mixing-layer eddies (with the canopy wind).
+    eddies: Option<crate::canopy::Eddies>,
 }
 
 /// The keys of the camera path `spec.path` of a forest on `terrain` whose trees stand

@@ -6,8 +6,8 @@ use sylva_tree::WIND_SAMPLE_HEIGHT;
 
 use super::{Forest, SpeciesRuntime};
 use crate::canopy::{
-    EdgeFactor, Shelter, Stand, canopy_gust, covered_area, field_mean, gust_factors,
-    height_factors, open_gust, open_speed,
+    EDDY_SHARE, Eddies, EdgeFactor, Shelter, Stand, canopy_gust, covered_area, field_mean,
+    gust_factors, height_factors, open_gust, open_speed,
 };
 use crate::scene::{Placement, SceneSpec, WindSource};
 use crate::wind::steer;
@@ -104,9 +104,12 @@ impl Forest {
     pub(super) fn apply_height_factors(&mut self) {
         let field = self.wind.field();
         let (params, zs) = (&field.params, &field.grid.zs);
+        self.eddies = None;
         if let Some((stand, shelter)) = &mut self.canopy_wind {
             let crown = WIND_SAMPLE_HEIGHT * stand.height;
             shelter.set_ratio(open_speed(params, stand.height, crown) / params.mean_speed(crown));
+            let seed = self.spec.seed ^ field.synth.seed;
+            self.eddies = Some(Eddies::new(params, stand.height, EDDY_SHARE, seed));
         }
         let canopy = &self.canopy_wind;
         for s in &mut self.species {

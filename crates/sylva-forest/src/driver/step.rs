@@ -31,6 +31,8 @@ struct StepInputs<'a> {
     shelter: Option<&'a crate::canopy::Shelter>,
     /// The field's mean wind of 1 m/s, world axes, live controls applied.
     mean_dir: [f32; 3],
+    /// The canopy's mixing-layer eddies (with the canopy wind).
+    eddies: Option<&'a crate::canopy::Eddies>,
 }
 
 impl Forest {
@@ -57,6 +59,7 @@ impl Forest {
             coarse_levels: self.spec.lod.wind,
             shelter: self.canopy_wind.as_ref().map(|c| &c.1),
             mean_dir: self.mean_wind(1.0),
+            eddies: self.eddies.as_ref(),
         };
         // Species in parallel; each samples the shared, read-only field for its groups.
         let work = |s: &mut SpeciesRuntime| step_species(s, &inputs);
@@ -190,6 +193,10 @@ fn sample_wind(s: &mut SpeciesRuntime, k: &StepInputs<'_>) {
             let (w, is_near) = wind_near(k.pyramid.level(0), k.near, k.centre, g.sample, k.t);
             s.near_wind += is_near as usize;
             w
+        };
+        let w = match k.eddies {
+            Some(e) => e.mix(w, g.sample, k.t, s.mean_speed as f64),
+            None => w,
         };
         let w = steer(w, k.gain, k.turn);
         let (sn, cs) = g.yaw.sin_cos();
