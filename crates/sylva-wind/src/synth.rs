@@ -243,7 +243,7 @@ fn paired_phasor(key: u64, k: u64) -> C64 {
 }
 
 simd_kernel! {
-    /// Consecutive phasors of the embedding's stream: out[i] = [`paired_phasor`](key, k0 + i),
+    /// Consecutive phasors of the embedding's stream: out[i] = paired_phasor(key, k0 + i),
     /// one hash for each pair.
     fn phasor_span(key: u64, k0: u64, out: &mut [C64]) {
         let (head, rest) = out.split_at_mut(usize::from(k0 % 2 == 1).min(out.len()));
