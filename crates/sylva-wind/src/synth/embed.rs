@@ -132,6 +132,8 @@ pub(super) struct Scratch {
     fail: Vec<f64>,
     /// The factored lanes of a row mirrored over all κx.
     full: Vec<f64>,
+    /// The factor's per-lane scale and running sum.
+    work: Vec<f64>,
     /// The phasors of one row κy, height column by height column.
     xi: Vec<C64>,
 }
@@ -207,6 +209,7 @@ impl Embedding {
             lanes: vec![0.0; np * (self.px / 2 + 1)],
             fail: vec![0.0; self.px / 2 + 1],
             full: vec![0.0; np * self.px],
+            work: vec![0.0; 2 * (self.px / 2 + 1)],
             xi: vec![C64::default(); self.nz * self.px],
         }
     }
@@ -245,7 +248,7 @@ impl Embedding {
         let wh = px / 2 + 1;
         for ky in 0..=py / 2 {
             block_row(&s.z, &s.kx, &s.ky[..], ky, py, norm, &mut s.lanes, &mut s.fail);
-            lower_factor_lanes(&mut s.lanes, nz, &mut s.fail);
+            lower_factor_lanes(&mut s.lanes, nz, &mut s.fail, &mut s.work);
             mirror_lanes(&s.lanes, wh, &mut s.full);
             for ky in [ky, py - ky] {
                 if ky == py {
@@ -343,17 +346,17 @@ simd_kernel! {
     /// [`cholesky_lower`] of every lane's n × n block at once (`lanes` holds the packed
     /// lower triangle, pair by pair, `fail.len()` lanes each), in place, with the same
     /// operations in the same order per lane. A lane whose block is not semidefinite gets
-    /// `fail` = 1 and an unusable factor.
-    fn lower_factor_lanes(lanes: &mut [f64], n: usize, fail: &mut [f64]) {
+    /// `fail` = 1 and an unusable factor. `work` holds 2 · `fail.len()` values.
+    fn lower_factor_lanes(lanes: &mut [f64], n: usize, fail: &mut [f64], work: &mut [f64]) {
         let w = fail.len();
-        let mut scale = vec![0.0f64; w];
+        let (scale, sum) = work.split_at_mut(w);
+        scale.fill(0.0);
         for i in 0..n {
             let d = &lanes[pair(i, i) * w..(pair(i, i) + 1) * w];
             for (s, &v) in scale.iter_mut().zip(d) {
                 *s = f64::max(*s, v);
             }
         }
-        let mut sum = vec![0.0f64; w];
         for i in 0..n {
             for j in 0..=i {
                 sum.copy_from_slice(&lanes[pair(i, j) * w..(pair(i, j) + 1) * w]);
