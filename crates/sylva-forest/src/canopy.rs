@@ -113,9 +113,22 @@ pub fn height_factors(
 }
 
 /// σ_u / U* at the canopy top: the mean over the canopies Raupach, Finnigan & Brunet 1996
-/// gather (σ_w / U* is 1.1 there; their ratio to U* against the surface layer's 2.5 and 1.25,
-/// 0.72 and 0.88, is taken as the u component's, 0.72, for every component).
+/// gather. Against the surface layer's 2.5 (the field's) the factor is 0.72; the gust
+/// factors ([`canopy_gust`]) take it for every component, and the across-wind component
+/// keeps it (σ_v = 1.44 U* against the field's 2.0: they give no σ_v).
 pub const CANOPY_TOP_SIGMA_U: f64 = 1.8;
+
+/// σ_w / U* at the canopy top: the mean over the canopies Raupach, Finnigan & Brunet 1996
+/// gather (against the surface layer's 1.25, the field's: a factor 0.88).
+pub const CANOPY_TOP_SIGMA_W: f64 = 1.1;
+
+/// The vertical gusts' factor at the canopy top over the along-wind gusts':
+/// ([`CANOPY_TOP_SIGMA_W`] / 1.25) / ([`CANOPY_TOP_SIGMA_U`] / 2.5) ≈ 1.22, applied to the
+/// vertical fluctuation at a tree's sample by its shelter ([`Eddies::mix`]).
+pub fn vertical_gust_ratio() -> f64 {
+    let field = sylva_wind::spectrum::SIGMA_PER_U_STAR;
+    (CANOPY_TOP_SIGMA_W / field[2]) / (CANOPY_TOP_SIGMA_U / field[0])
+}
 
 /// The gusts' size at height `z` against the field's (whose σ_u is 2.5 U* at every height,
 /// `sylva_wind::spectrum::SIGMA_PER_U_STAR`): inside a canopy of height `h`,
@@ -154,6 +167,25 @@ pub fn gust_factors(params: &WindParams, h: f64, heights: &[f32]) -> (Vec<f32>, 
         .map(|&z| canopy_gust(z as f64, h, |z| params.mean_speed(z)) as f32)
         .collect();
     (vec![open; heights.len()], inside)
+}
+
+/// The peak factor on the gusts in a crown's peak wind, mean + k σ_u: the expected largest
+/// of a 10-minute record of a response at about 0.3 Hz (a tree's sway), Davenport 1964's
+/// √(2 ln νT) + 0.5772 / √(2 ln νT) with νT = 180: 3.40. ForestGALES' edge factor is on
+/// the record's maximum bending moment (Gardiner et al. 1997's wind tunnel).
+pub const PEAK_FACTOR: f64 = 3.40;
+
+/// The open ground's peak wind over the canopy's at a crown `crown` m up in a forest of
+/// height `h` ([`Shelter::set_ratio`]): each its mean plus [`PEAK_FACTOR`] times its
+/// along-wind gusts' σ (the open ground's friction velocity's, [`open_gust`]; the canopy's,
+/// [`canopy_gust`]). ForestGALES' edge factor is on the maximum bending moment, which the
+/// peak wind sets, and the open ground has the faster mean but the smaller gusts.
+pub fn crown_peak_ratio(params: &WindParams, h: f64, crown: f64) -> f64 {
+    let sigma = sylva_wind::spectrum::SIGMA_PER_U_STAR[0] * params.u_star;
+    let open = open_speed(params, h, crown) + PEAK_FACTOR * open_gust(params, h) * sigma;
+    let inside = params.mean_speed(crown)
+        + PEAK_FACTOR * canopy_gust(crown, h, |z| params.mean_speed(z)) * sigma;
+    if inside > 1e-9 { open / inside } else { 1.0 }
 }
 
 /// ForestGALES' edge factor: a tree's maximum bending moment at fetch x from a windward edge
@@ -211,7 +243,7 @@ pub struct Shelter {
     /// Per cell: whether a tree stands in it.
     occupied: Vec<bool>,
     factor: EdgeFactor,
-    /// The open ground's mean wind over the canopy's at the crown's height.
+    /// The open ground's peak wind over the canopy's at the crown's height.
     ratio: f64,
     /// Longest fetch followed, m.
     most: f64,
@@ -253,8 +285,8 @@ pub fn covered_area(feet: &[[f32; 2]], cell: f64) -> f64 {
 impl Shelter {
     /// The shelter of a forest of trees at `feet` (x, y, m), in a wind blowing towards
     /// `direction_deg` (counter-clockwise from +x), on cells of `cell` m, with the edge
-    /// factor `factor`, gaps up to `gap` m crossed, the open wind `ratio` times the
-    /// canopy's at the crown ([`Shelter::set_ratio`]), and `deep` m of forest along the wind
+    /// factor `factor`, gaps up to `gap` m crossed, the open wind's peak `ratio` times
+    /// the canopy's at the crown ([`Shelter::set_ratio`]), and `deep` m of forest along the wind
     /// needed for the canopy's flow ([`Shelter::at`]). Fetches are followed up to
     /// [`INTERIOR_HEIGHTS`] canopy heights.
     pub fn new(
@@ -381,8 +413,9 @@ impl Shelter {
         }
     }
 
-    /// The shelter at (x, y): the mix whose wind at the crown, squared, is the edge factor at
-    /// its fetch times the canopy's (1 where the open wind is no faster than the canopy's),
+    /// The shelter at (x, y): the mix whose peak wind at the crown (mean and gusts, both
+    /// mixed linearly by the shelter), squared, is the edge factor at its fetch times the
+    /// canopy's (1 where the open wind's peak is no faster than the canopy's),
     /// times the share of `deep` the forest's depth there reaches: a clump shorter along the
     /// wind than the canopy's flow needs to develop stays in the open wind.
     pub fn at(&self, x: f64, y: f64) -> f32 {
@@ -394,8 +427,8 @@ impl Shelter {
         (((self.ratio - r) / (self.ratio - 1.0)).clamp(0.0, 1.0) * depth) as f32
     }
 
-    /// The open ground's mean wind over the canopy's at the crown's height, for the field's
-    /// profile.
+    /// The open ground's peak wind over the canopy's at the crown's height, for the field's
+    /// profile ([`crown_peak_ratio`]).
     pub fn set_ratio(&mut self, ratio: f64) {
         self.ratio = if ratio.is_finite() { ratio } else { 1.0 };
     }
@@ -445,6 +478,65 @@ mod tests {
         );
         let high = high.expect("maximum");
         assert!((high as f64 / spacing - 1.0).abs() < 0.25, "maximum at {high} m, Λx {spacing}");
+    }
+
+    /// The canopy's turbulence by shelter: at the windward edge (shelter 0) the field's wind
+    /// unchanged; deeper in, the eddies take their share of the along-wind variance while
+    /// that variance stays the field's, the across-wind gusts stay the field's and the
+    /// vertical ones grow to σ_w / σ_u = 1.1 / 1.8 at the canopy top (Raupach, Finnigan &
+    /// Brunet 1996) once the gust factors common to all components are applied.
+    #[test]
+    fn canopy_turbulence_grows_with_shelter_and_keeps_the_along_wind_variance() {
+        let stand = Stand { height: 17.5, lai: 3.0 };
+        let p = WindParams { profile: stand.profile(), direction_deg: 30.0, ..Default::default() };
+        let eddies = Eddies::new(&p, stand.height, EDDY_SHARE, 9);
+        let d = p.direction();
+        let mean = p.mean_speed(0.7 * stand.height);
+        let sigma = sylva_wind::spectrum::SIGMA_PER_U_STAR.map(|s| s * p.u_star);
+        let mut rng = sylva_core::rng::SplitMix64::new(3);
+        let mut gauss = || {
+            let (a, b) = (rng.unit_f64().max(1e-12), rng.unit_f64());
+            (-2.0 * a.ln()).sqrt() * (std::f64::consts::TAU * b).cos()
+        };
+        // Field winds: mean along d, independent gusts of the field's sizes, at points
+        // and times spread over many eddies.
+        let samples: Vec<([f64; 3], [f64; 3], f64)> = (0..40_000)
+            .map(|k| {
+                let (u, v, w) = (sigma[0] * gauss(), sigma[1] * gauss(), sigma[2] * gauss());
+                let wind = [(mean + u) * d[0] - v * d[1], (mean + u) * d[1] + v * d[0], w];
+                let at = [(k % 200) as f64 * 7.3, (k / 200) as f64 * 5.1, 12.0];
+                (wind, at, k as f64 * 0.37)
+            })
+            .collect();
+        let moments = |x: f64| {
+            let mut m = [0.0f64; 3];
+            for (wind, at, t) in &samples {
+                let o = eddies.mix(*wind, *at, *t, mean, x);
+                let along = o[0] * d[0] + o[1] * d[1] - mean;
+                let across = -o[0] * d[1] + o[1] * d[0];
+                m[0] += along * along;
+                m[1] += across * across;
+                m[2] += o[2] * o[2];
+            }
+            m.map(|v| (v / samples.len() as f64).sqrt())
+        };
+        for (wind, at, t) in samples.iter().take(100) {
+            let o = eddies.mix(*wind, *at, *t, mean, 0.0);
+            assert!((0..3).all(|c| (o[c] - wind[c]).abs() < 1e-9), "the edge: the field's wind");
+        }
+        let field = moments(0.0);
+        for x in [0.5, 1.0] {
+            let m = moments(x);
+            assert!((m[0] / field[0] - 1.0).abs() < 0.03, "along-wind σ at {x}: {m:?} {field:?}");
+            assert!((m[1] / field[1] - 1.0).abs() < 1e-9, "across-wind σ at {x}");
+            let want = 1.0 + x * (vertical_gust_ratio() - 1.0);
+            assert!((m[2] / field[2] - want).abs() < 1e-9, "vertical σ at {x}");
+        }
+        // Deep inside, with the gust factor every component takes at the top (0.72):
+        let top = CANOPY_TOP_SIGMA_U / sylva_wind::spectrum::SIGMA_PER_U_STAR[0];
+        let m = moments(1.0);
+        assert!((top * m[0] / p.u_star - 1.8).abs() < 0.06, "σ_u {}", top * m[0] / p.u_star);
+        assert!((top * m[2] / p.u_star - 1.1).abs() < 0.04, "σ_w {}", top * m[2] / p.u_star);
     }
 
     /// The eddies travel downwind at the convection speed: a point moving with them sees
@@ -632,10 +724,10 @@ pub struct Eddies {
     /// Convection speed, m/s, and the mean wind's direction (unit, horizontal).
     speed: f64,
     dir: [f64; 2],
-    /// Standard deviation of the eddies' along-wind gust, m/s, and the factor left on the
-    /// field's own fluctuations, √(1 − share).
+    /// Standard deviation of the eddies' along-wind gust deep in the canopy, m/s, and their
+    /// share of the along-wind gusts' variance there.
     sigma: f64,
-    keep: f64,
+    share: f64,
     /// Seconds from one tile to the next, and the seed of their offsets.
     life: f64,
     seed: u64,
@@ -681,7 +773,7 @@ impl Eddies {
             speed,
             dir: params.direction(),
             sigma: 2.5 * params.u_star * share.sqrt(),
-            keep: (1.0 - share).sqrt(),
+            share,
             life: EDDY_LIFE_SPACINGS * spacing / speed,
             seed,
         }
@@ -717,16 +809,28 @@ impl Eddies {
         let turn = turn as i64;
         (cs as f32) * self.tile_at(turn, u, v) + (sn as f32) * self.tile_at(turn + 1, u, v)
     }
-    /// The field's wind `w` at point `p` and time `t`, about its mean `mean` m/s there: its
-    /// fluctuations kept at √(1 − share) and the eddies' along-wind gust added, so that the
-    /// gusts' variance is the field's.
-    pub fn mix(&self, w: [f64; 3], p: [f64; 3], t: f64, mean: f64) -> [f64; 3] {
-        let m = [self.dir[0] * mean, self.dir[1] * mean, 0.0];
-        let e = self.sigma * self.at(p[0], p[1], t) as f64;
+    /// The canopy's turbulence at point `p` and time `t` for a tree of shelter `shelter`
+    /// (0 at the windward edge … 1 deep inside, [`Shelter::at`]), from the field's wind `w`
+    /// there about its mean `mean` m/s. The mixing-layer eddies grow with the shelter: they
+    /// take `share · shelter` of the along-wind gusts' variance (the field's along-wind
+    /// fluctuation kept at √(1 − share · shelter), the eddies' gust added at
+    /// √shelter of their size), so the along-wind variance stays the field's; the
+    /// across-wind fluctuation is the field's; the vertical one is raised by
+    /// 1 + shelter · ([`vertical_gust_ratio`] − 1), so that with the gust factors the
+    /// sway takes for every component ([`canopy_gust`]) σ_w at the canopy top is
+    /// [`CANOPY_TOP_SIGMA_W`] U*.
+    pub fn mix(&self, w: [f64; 3], p: [f64; 3], t: f64, mean: f64, shelter: f64) -> [f64; 3] {
+        let x = shelter.clamp(0.0, 1.0);
+        let d = self.dir;
+        let (du, dv) = (w[0] - d[0] * mean, w[1] - d[1] * mean);
+        // The fluctuation along the mean wind and across it.
+        let (along, across) = (du * d[0] + dv * d[1], -du * d[1] + dv * d[0]);
+        let keep = (1.0 - self.share * x).sqrt();
+        let along = mean + keep * along + x.sqrt() * self.sigma * self.at(p[0], p[1], t) as f64;
         [
-            m[0] + self.keep * (w[0] - m[0]) + e * self.dir[0],
-            m[1] + self.keep * (w[1] - m[1]) + e * self.dir[1],
-            self.keep * w[2],
+            along * d[0] - across * d[1],
+            along * d[1] + across * d[0],
+            (1.0 + x * (vertical_gust_ratio() - 1.0)) * w[2],
         ]
     }
 

@@ -6,11 +6,11 @@ use sylva_tree::WIND_SAMPLE_HEIGHT;
 
 use super::{Forest, SpeciesRuntime};
 use crate::canopy::{
-    EDDY_SHARE, Eddies, EdgeFactor, Shelter, Stand, canopy_gust, covered_area, field_mean,
-    gust_factors, height_factors, open_gust, open_speed,
+    EDDY_SHARE, Eddies, EdgeFactor, Shelter, Stand, canopy_gust, covered_area, crown_peak_ratio,
+    field_mean, gust_factors, height_factors, open_gust, open_speed,
 };
 use crate::scene::{Placement, SceneSpec, WindSource};
-use crate::wind::steer;
+use crate::wind::{steer, wind_near};
 
 /// The canopy wind of a scene's trees, where the scene has it on (`canopy_wind`, default on
 /// with a preset or a wind file; a steady wind is the same everywhere): the stand (mean
@@ -68,21 +68,30 @@ impl Forest {
     }
 
     /// The wind tree `t` feels `z` m above its foot at time `time` s (world axes, m/s, live
-    /// controls applied): its instance group's sample of the field, its mean and its gusts
-    /// each times the canopy wind's factor for that height and its group's shelter, as its
-    /// simulation takes it (the same at every height with the canopy wind off). `None`: no
+    /// controls applied): its instance group's sample of the field with the canopy's
+    /// eddies and vertical gusts by its group's shelter ([`crate::canopy::Eddies::mix`]),
+    /// its mean and its gusts each times the canopy wind's factor for that height and that
+    /// shelter, as its simulation takes it (on the field's finest level) (the same at every height with the canopy wind off). `None`: no
     /// such tree.
     pub fn tree_wind(&self, t: usize, z: f64, time: f64) -> Option<[f32; 3]> {
         let &(p, g) = self.trees.get(t)?;
         let s = self.species.get(p.species as usize)?;
         let sample = s.groups.get(g as usize)?.sample;
-        let w = self.wind_at(sample, time);
-        let Some((stand, shelter)) = &self.canopy_wind else { return Some(w) };
+        let Some((stand, shelter)) = &self.canopy_wind else {
+            return Some(self.wind_at(sample, time));
+        };
         let field = self.wind.field();
         let (params, zs) = (&field.params, &field.grid.zs);
         let at_sample =
             field_mean(params, zs, WIND_SAMPLE_HEIGHT * s.model.tree.stats.height as f64);
         let x = shelter.at(sample[0], sample[1]) as f64;
+        let raw =
+            wind_near(self.wind.level(0), self.near.as_ref(), self.near_centre(), sample, time).0;
+        let raw = match &self.eddies {
+            Some(e) => e.mix(raw, sample, time, at_sample, x),
+            None => raw,
+        };
+        let w = steer(raw, self.gain, self.turn);
         let h = stand.height;
         let here = (1.0 - x) * open_speed(params, h, z) + x * params.mean_speed(z);
         let m = if at_sample > 1e-6 { (here / at_sample) as f32 } else { 1.0 };
@@ -107,7 +116,7 @@ impl Forest {
         self.eddies = None;
         if let Some((stand, shelter)) = &mut self.canopy_wind {
             let crown = WIND_SAMPLE_HEIGHT * stand.height;
-            shelter.set_ratio(open_speed(params, stand.height, crown) / params.mean_speed(crown));
+            shelter.set_ratio(crown_peak_ratio(params, stand.height, crown));
             let seed = self.spec.seed ^ field.synth.seed;
             self.eddies = Some(Eddies::new(params, stand.height, EDDY_SHARE, seed));
         }

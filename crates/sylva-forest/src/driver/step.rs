@@ -194,15 +194,16 @@ fn sample_wind(s: &mut SpeciesRuntime, k: &StepInputs<'_>) {
             s.near_wind += is_near as usize;
             w
         };
-        let w = match k.eddies {
-            Some(e) => e.mix(w, g.sample, k.t, s.mean_speed as f64),
-            None => w,
+        let shelter = k.shelter.map(|sh| sh.at(g.sample[0], g.sample[1]));
+        let w = match (k.eddies, shelter) {
+            (Some(e), Some(x)) => e.mix(w, g.sample, k.t, s.mean_speed as f64, x as f64),
+            _ => w,
         };
         let w = steer(w, k.gain, k.turn);
         let (sn, cs) = g.yaw.sin_cos();
         s.winds[lane] = [cs * w[0] + sn * w[1], -sn * w[0] + cs * w[1], w[2]];
-        if let Some(shelter) = k.shelter {
-            s.batch.set_shelter(lane, shelter.at(g.sample[0], g.sample[1]));
+        if let Some(shelter) = shelter {
+            s.batch.set_shelter(lane, shelter);
             let m = k.mean_dir.map(|c| c * s.mean_speed);
             s.batch.set_mean_wind(lane, [cs * m[0] + sn * m[1], -sn * m[0] + cs * m[1], m[2]]);
         }
