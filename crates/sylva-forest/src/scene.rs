@@ -46,7 +46,7 @@ pub enum SceneError {
         expected: &'static str,
     },
     /// No scene of that name.
-    #[error("no scene named `{0}` (built in: small, A, B, C, D; or give a .toml file)")]
+    #[error("no scene named `{0}` (built in: small, A, B, C, D, E; or give a .toml file)")]
     Unknown(String),
 }
 
@@ -568,11 +568,18 @@ const SCENE_A: &str = include_str!("../scenes/A.toml");
 const SCENE_B: &str = include_str!("../scenes/B.toml");
 const SCENE_C: &str = include_str!("../scenes/C.toml");
 const SCENE_D: &str = include_str!("../scenes/D.toml");
+const SCENE_E: &str = include_str!("../scenes/E.toml");
 
 /// Built-in scenes: (name, TOML). `A` … `D` are the paper's Table-3 scenes (1 000, 3 000,
-/// 10 000 and 50 000 trees of the same species mix).
-pub const SCENES: [(&str, &str); 5] =
-    [("small", SMALL), ("A", SCENE_A), ("B", SCENE_B), ("C", SCENE_C), ("D", SCENE_D)];
+/// 10 000 and 50 000 trees of the same species mix); `E` a million of them to the horizon.
+pub const SCENES: [(&str, &str); 6] = [
+    ("small", SMALL),
+    ("A", SCENE_A),
+    ("B", SCENE_B),
+    ("C", SCENE_C),
+    ("D", SCENE_D),
+    ("E", SCENE_E),
+];
 
 impl SceneSpec {
     /// A built-in scene.

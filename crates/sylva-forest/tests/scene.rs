@@ -165,6 +165,33 @@ fn frames_draw_every_visible_tree_once_with_valid_palettes_and_trees_move() {
     assert!(f.palettes.iter().all(|v| v.is_finite()));
 }
 
+/// Scene E: a million trees at D's spacing, about 10 km across, on hills with relief, laid out the same
+/// for the same seed; its high flight stays hundreds of metres over the ground and looks
+/// across the forest to its far side.
+#[test]
+fn scene_e_is_a_million_trees_to_the_horizon_with_a_high_flight() {
+    let spec = SceneSpec::builtin("E").expect("built-in");
+    assert_eq!(spec.trees, 1_000_000);
+    let t = Terrain::new(&spec);
+    let a = layout(&spec, &t);
+    assert_eq!(a.len(), 1_000_000);
+    let radius = a.iter().map(|p| p.position[0].hypot(p.position[1])).fold(0.0, f32::max);
+    assert!((4000.0..5500.0).contains(&radius), "forest radius {radius} m");
+    let relief = a.iter().map(|p| p.position[2]).fold(f32::MIN, f32::max)
+        - a.iter().map(|p| p.position[2]).fold(f32::MAX, f32::min);
+    assert!(relief > 40.0, "hills of {relief} m");
+    assert_eq!(a[..1000], layout(&spec, &Terrain::new(&spec))[..1000], "same seed, same layout");
+    let keys = spec.paths.get("high-flight").expect("scene E's high flight");
+    for k in keys {
+        let over = k.eye[2] - t.height(k.eye[0], k.eye[1]);
+        assert!(over > 300.0, "the high flight {over} m over the ground at t = {}", k.t);
+        let inside = k.target[0].hypot(k.target[1]) < radius;
+        assert!(inside, "at t = {} it looks at {:?}, outside the forest", k.t, k.target);
+    }
+    let far = keys.iter().map(|k| k.eye[0].hypot(k.eye[1])).fold(0.0, f32::max);
+    assert!(far > radius, "it comes in from beyond the edge");
+}
+
 #[test]
 fn table3_scenes_and_camera_paths_are_deterministic() {
     for (name, trees) in [("A", 1000), ("B", 3000), ("C", 10_000), ("D", 50_000)] {

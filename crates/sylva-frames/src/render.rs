@@ -11,7 +11,7 @@ use sylva_wind::io::atomic::AtomicFile;
 
 #[derive(Debug, Args)]
 pub struct RenderArgs {
-    /// Scene: a built-in name (small, A, B, C, D) or a scene file (.toml).
+    /// Scene: a built-in name (small, A, B, C, D, E) or a scene file (.toml).
     #[arg(long, default_value = "A")]
     pub scene: String,
     /// Seconds of simulated time to render.

@@ -33,7 +33,7 @@ use state::{Action, Finished, Viewer};
 
 #[derive(Debug, Args)]
 pub struct ViewArgs {
-    /// Scene: a built-in name (small, A, B, C, D) or a scene file (.toml).
+    /// Scene: a built-in name (small, A, B, C, D, E) or a scene file (.toml).
     #[arg(long, default_value = "A")]
     pub scene: String,
     /// Geometry-LOD threshold h₀ (see `sylva render --help`). Default: the scene's on a

@@ -18,7 +18,7 @@ pub enum ForestCommand {
 
 #[derive(Debug, Args)]
 pub struct ExportArgs {
-    /// Built-in scene (small, A, B, C, D) or a scene file (.toml).
+    /// Built-in scene (small, A, B, C, D, E) or a scene file (.toml).
     #[arg(long, default_value = "small")]
     scene: String,
     /// Wind instead of the scene's: a preset, a steady speed in m/s, or a wind file.

@@ -55,7 +55,7 @@ pub struct Table3Bench {
     scenes: String,
     /// Camera paths each scene runs along, comma-separated: fly-in (the scene's own, or
     /// the default fly-in), walk (eye height through the forest), low-flight (across the
-    /// canopy), a name of the scene's `paths`, or all (the three built in). A scene on a
+    /// canopy), a name of the scene's `paths`, or all (the three built in and the scene's own). A scene on a
     /// path other than the fly-in is reported as "SCENE PATH", and a summary gives each
     /// scene's worst path.
     #[arg(long, default_value = "fly-in")]
@@ -141,14 +141,17 @@ pub fn run(a: Table3Bench) -> anyhow::Result<()> {
     let mut results: Vec<(String, usize, Vec<Cell>)> = Vec::new();
     let mut floors: Vec<Floor> = Vec::new();
     let mut adapter = String::new();
-    let paths: Vec<&str> = if a.path.trim() == "all" {
-        sylva_forest::BUILTIN_PATHS.to_vec()
-    } else {
-        a.path.split(',').map(str::trim).collect()
-    };
     let mut jobs = Vec::new();
     for name in &names {
         let base = SceneSpec::load(name)?;
+        // `all`: the three built in, then the scene's own named paths.
+        let paths: Vec<&str> = if a.path.trim() == "all" {
+            let own = base.paths.keys().map(String::as_str);
+            let own = own.filter(|p| !sylva_forest::BUILTIN_PATHS.contains(p));
+            sylva_forest::BUILTIN_PATHS.iter().copied().chain(own).collect()
+        } else {
+            a.path.split(',').map(str::trim).collect()
+        };
         for &path in &paths {
             jobs.push(on_path(&base, path)?);
         }
