@@ -104,6 +104,11 @@ typedef struct SylvaInstance {
    * An impostor's leaf tilt, as IEEE half-precision bits.
    */
   uint16_t tilt[2];
+  /**
+   * How much wider than its tree an impostor is drawn, across the line of sight (1;
+   * more for far trees kept by the thinning).
+   */
+  float spread;
 } SylvaInstance;
 
 /**

@@ -104,6 +104,9 @@ pub struct SylvaInstance {
     pub lean: [u16; 2],
     /// An impostor's leaf tilt, as IEEE half-precision bits.
     pub tilt: [u16; 2],
+    /// How much wider than its tree an impostor is drawn, across the line of sight (1;
+    /// more for far trees kept by the thinning).
+    pub spread: f32,
 }
 
 /// One leaf card of a mesh level, tree space: a square of side `size` about `center`,
@@ -156,6 +159,7 @@ const _: () = {
     assert!(offset_of!(SylvaInstance, tag) == offset_of!(Instance, tag));
     assert!(offset_of!(SylvaInstance, lean) == offset_of!(Instance, lean));
     assert!(offset_of!(SylvaInstance, tilt) == offset_of!(Instance, tilt));
+    assert!(offset_of!(SylvaInstance, spread) == offset_of!(Instance, spread));
     assert!(size_of::<SylvaLeafCard>() == size_of::<LeafCluster>());
     assert!(align_of::<SylvaLeafCard>() == align_of::<LeafCluster>());
     assert!(offset_of!(SylvaLeafCard, joint) == offset_of!(LeafCluster, joint));

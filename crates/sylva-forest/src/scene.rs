@@ -373,6 +373,10 @@ pub struct LodSpec {
     /// (they still cast their shadows). Default off: in the built-in scenes it hides few
     /// trees for the time it costs (docs/decisions/0014-occlusion-culling.md).
     pub occlusion: bool,
+    /// Thinning of far impostors, pixels (0 … 256): trees drawn as impostors and shorter
+    /// in the image than this are thinned out stochastically, the ones kept drawn wider so
+    /// the far canopy covers the image as before (`LodSettings::thin_px`). Default 0: off.
+    pub thin_px: f32,
 }
 
 impl Default for LodSpec {
@@ -385,6 +389,7 @@ impl Default for LodSpec {
             far_level: crate::driver::DEFAULT_FAR_LEVEL,
             error_px: 0.0,
             occlusion: false,
+            thin_px: 0.0,
         }
     }
 }
@@ -737,6 +742,9 @@ impl SceneSpec {
         }
         if !(0.0..=64.0).contains(&self.lod.error_px) {
             return Err(bad("lod.error_px", self.lod.error_px.to_string(), "0 … 64 pixels"));
+        }
+        if !(0.0..=256.0).contains(&self.lod.thin_px) {
+            return Err(bad("lod.thin_px", self.lod.thin_px.to_string(), "0 … 256 pixels"));
         }
         if !(1..=6).contains(&self.lod.far_level) {
             return Err(bad("lod.far_level", self.lod.far_level.to_string(), "1 … 6"));

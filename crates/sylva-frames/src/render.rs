@@ -77,6 +77,12 @@ pub struct LodArgs {
     /// fraction (0: every level by the fraction). Default: the scene's (`[lod] error_px`).
     #[arg(long, value_parser = crate::finite::<f32>)]
     pub lod_error: Option<f32>,
+    /// Thinning of far impostors, pixels (0 … 256; 0: off): trees drawn as impostors and
+    /// shorter in the image than this are thinned out stochastically, the ones kept drawn
+    /// wider so the far canopy covers the image as before. Default: the scene's (`[lod]
+    /// thin_px`).
+    #[arg(long, value_parser = crate::finite::<f32>)]
+    pub thin_px: Option<f32>,
     /// Memory the forest's animation state may take, GB (replaces the scene's
     /// `max_state_mb`). Without it the cap is the scene's, and at most three quarters of
     /// the memory this machine has free.
@@ -98,6 +104,12 @@ impl LodArgs {
                 bail!("--lod-error {px}: must be 0 … 64 pixels");
             }
             spec.lod.error_px = px;
+        }
+        if let Some(px) = self.thin_px {
+            if !(0.0..=256.0).contains(&px) {
+                bail!("--thin-px {px}: must be 0 … 256 pixels");
+            }
+            spec.lod.thin_px = px;
         }
         apply_max_memory(spec, self.max_memory)?;
         spec.lod.geometry &= !self.no_geometry_lod;

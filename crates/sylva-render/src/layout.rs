@@ -241,10 +241,11 @@ pub const INSTANCE_ATTRIBUTES: [wgpu::VertexAttribute; 6] = [
 
 /// The impostors' instance attributes: [`INSTANCE_ATTRIBUTES`] and `LeanIn` in far.wgsl,
 /// the crown's lean and how it turns the leaves (`Instance::lean` and `Instance::tilt`,
-/// two half floats each).
-pub const FAR_INSTANCE_ATTRIBUTES: [wgpu::VertexAttribute; 8] = {
-    let mut all = [attr!(Instance, lean, Float16x2, 11); 8];
+/// two half floats each), and how much wider the impostor is drawn (`Instance::spread`).
+pub const FAR_INSTANCE_ATTRIBUTES: [wgpu::VertexAttribute; 9] = {
+    let mut all = [attr!(Instance, lean, Float16x2, 11); 9];
     all[7] = attr!(Instance, tilt, Float16x2, 12);
+    all[8] = attr!(Instance, spread, Float32, 13);
     let mut i = 0;
     while i < INSTANCE_ATTRIBUTES.len() {
         all[i] = INSTANCE_ATTRIBUTES[i];

@@ -179,7 +179,7 @@ fn instance_fields_read_together_are_adjacent() {
     // `base` = position then yaw; `leaf` = phase then amplitude (one attribute each).
     assert_eq!(offset_of!(Instance, yaw), offset_of!(Instance, position) + 12);
     assert_eq!(offset_of!(Instance, leaf_amplitude), offset_of!(Instance, leaf_phase) + 4);
-    assert_eq!(size_of::<Instance>(), 56);
+    assert_eq!(size_of::<Instance>(), 60);
 }
 
 #[test]

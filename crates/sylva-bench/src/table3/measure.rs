@@ -132,6 +132,10 @@ pub(super) fn configure(
         anyhow::ensure!((0.0..=64.0).contains(&px), "--lod-error {px}: must be 0 … 64 pixels");
         spec.lod.error_px = px;
     }
+    if let Some(px) = a.thin_px {
+        anyhow::ensure!((0.0..=256.0).contains(&px), "--thin-px {px}: must be 0 … 256 pixels");
+        spec.lod.thin_px = px;
+    }
     spec.lod.occlusion |= a.occlusion;
     sylva_frames::render::apply_max_memory(&mut spec, a.max_memory)?;
     Ok(spec)
@@ -158,6 +162,9 @@ pub(super) fn command_line(a: &Table3Bench, (w, h): (u32, u32)) -> String {
     }
     if let Some(px) = a.lod_error {
         let _ = write!(c, " --lod-error {px}");
+    }
+    if let Some(px) = a.thin_px {
+        let _ = write!(c, " --thin-px {px}");
     }
     if let Some(m) = a.max_memory {
         let _ = write!(c, " --max-memory {m}");

@@ -85,6 +85,49 @@ pub(super) fn still_error(
     }))
 }
 
+/// The thinning of far impostors' own image error (with `--thin-px` or the scene's `[lod]
+/// thin_px`): all LODs with the thinning against all LODs without it (every far tree its own
+/// impostor), both before any step, seen from the last timed frame's camera; and, for
+/// scale, the frame without thinning against itself a quarter pixel aside. `None` with the
+/// thinning off or a frame over `--max-image-triangles`.
+pub(super) fn thinning_error(
+    spec: &SceneSpec,
+    gpu: &mut Headless,
+    a: &Table3Bench,
+    (w, h): (u32, u32),
+) -> anyhow::Result<Option<Still>> {
+    let thinned = configure(spec, a, (true, true, true))?;
+    if thinned.lod.thin_px <= 0.0 {
+        return Ok(None);
+    }
+    let mut whole = thinned.clone();
+    whole.lod.thin_px = 0.0;
+    let mut images = Vec::new();
+    for spec in [&whole, &thinned] {
+        let Ok(mut forest) = Forest::new(spec) else { return Ok(None) };
+        let last = if a.warmup + a.frames > 1 { forest.path_duration() } else { 0.0 };
+        let camera = forest.camera_at(last);
+        let mut frame = FrameData::with_rows(h);
+        forest.frame(&camera, w as f32 / h as f32, &mut frame);
+        if frame.stats.triangles as f64 > a.max_image_triangles {
+            return Ok(None);
+        }
+        images.push(gpu.render(&frame, &camera)?);
+        if spec.lod.thin_px <= 0.0 {
+            let aside = quarter_pixel_aside(&camera, h);
+            forest.frame(&aside, w as f32 / h as f32, &mut frame);
+            images.push(gpu.render(&frame, &aside)?);
+        }
+    }
+    let [whole, aside, thin] = &images[..] else { return Ok(None) };
+    write_png(&a.out.join(format!("{}-still-thinned.png", spec.name)), w, h, thin)?;
+    write_png(&a.out.join(format!("{}-still-every-impostor.png", spec.name)), w, h, whole)?;
+    Ok(Some(Still {
+        lod: (flip(thin, whole, w, h), ssim(thin, whole, w, h)?),
+        sampling: (flip(aside, whole, w, h), ssim(aside, whole, w, h)?),
+    }))
+}
+
 /// What to read a scene's image error against: one frame of motion at full detail, the
 /// geometry LOD alone with nothing moving, and sampling alone.
 pub(super) struct Floor {
@@ -93,6 +136,9 @@ pub(super) struct Floor {
     pub(super) motion: Option<f64>,
     /// The geometry LOD's error and the sampling floor, rest pose ([`still_error`]).
     pub(super) still: Option<Still>,
+    /// The thinning's error against every far tree drawn, and its sampling floor
+    /// ([`thinning_error`]).
+    pub(super) thinning: Option<Still>,
 }
 
 /// The lowest and highest of the rounds' CPU speed-ups (`off[r] / on[r]`, round by round);

@@ -214,6 +214,17 @@ fn floors_text(md: &mut String, floors: &[Floor]) {
         "\nSampling alone — full detail in the rest pose against itself with the camera turned a quarter pixel aside (how much per-pixel metrics move where foliage is finer than a pixel): {}",
         per_scene(floors, |f| f.still.map(|s| flip_ssim(s.sampling)))
     );
+    if floors.iter().any(|f| f.thinning.is_some()) {
+        let _ = writeln!(
+            md,
+            "\nThinning of far impostors alone — all LODs with `thin_px` against all LODs with every far tree drawn, rest pose, the last timed frame's camera (FLIP / SSIM; then the unthinned frame against itself a quarter pixel aside): {}",
+            per_scene(floors, |f| f.thinning.map(|t| format!(
+                "{} (floor {})",
+                flip_ssim(t.lod),
+                flip_ssim(t.sampling)
+            )))
+        );
+    }
 }
 
 /// Speed-up of each LOD: with all LODs against that one off, in frames per second, in CPU

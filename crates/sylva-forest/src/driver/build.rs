@@ -165,6 +165,7 @@ impl Forest {
                 far_level: spec.lod.far_level,
                 error_budget: spec.lod.error_px,
                 occlusion: spec.lod.occlusion,
+                thin_px: spec.lod.thin_px,
                 ..LodSettings::default()
             },
             lane_groups: lane_base,

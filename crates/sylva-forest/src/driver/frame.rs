@@ -55,6 +55,8 @@ struct View {
     thresholds: Vec<Vec<f32>>,
     /// The side of a texel of the shadow map's near cascade, m.
     shadow_texel: f32,
+    /// The image-height fraction below which far impostors are thinned (0: off).
+    thin: f32,
     /// Per species, with levels by error: the coarsest mesh level whose error on its
     /// largest tree spans at most `shadow_texel`, the level its trees cast their shadows
     /// with (or the level drawn, if coarser). Scratch of the `FrameData`.
@@ -152,6 +154,7 @@ impl Forest {
             far_box,
             box_margin,
             shadow_texel,
+            thin: 0.0,
             cast_floor: Vec::new(),
             n_species,
             n_keys,
@@ -206,6 +209,7 @@ impl Forest {
             }));
         }
         view.cast_floor = cast_floor;
+        view.thin = if lod.geometry && lod.thin_px > 0.0 { lod.thin_px / rows as f32 } else { 0.0 };
         thresholds.resize_with(self.species.len(), Vec::new);
         for (sp, f) in self.species.iter().zip(thresholds.iter_mut()) {
             let chain_far = lod.far_level.min(sp.model.lods.len() as u32);
@@ -235,6 +239,25 @@ impl Forest {
     /// Whether a tree of `species` at `level` is drawn as its impostor.
     fn impostor(&self, view: &View, species: u32, level: u32) -> bool {
         view.lod.geometry && level >= view.far[species as usize]
+    }
+
+    /// Thinning of tree `i` (crown centre `c`, height `h`) drawn from level `level` on:
+    /// `None` where it is left out, else the share of its dither range it keeps and how
+    /// much wider it is drawn ([`thinning`]; (1, 1) where it is not a far impostor).
+    fn thinned(
+        &self,
+        view: &View,
+        i: usize,
+        c: [f32; 3],
+        h: f32,
+        level: u32,
+        species: u32,
+    ) -> Option<(f32, f32)> {
+        if view.thin <= 0.0 || !self.impostor(view, species, level) {
+            return Some((1.0, 1.0));
+        }
+        let s = view.cone.screen_fraction(c, h) / view.thin;
+        thinning(s, thin_draw(i, self.spec.seed))
     }
 
     /// Pass 1: the trees in runs of [`TREE_RUN`], the runs in parallel. Each fills its own
@@ -449,6 +472,11 @@ impl Forest {
         } else {
             (0, 0, 0, f32::NAN)
         };
+        // A far impostor the thinning leaves out is not drawn, as if out of view.
+        if !shadow_only && self.thinned(view, i, c, h, a, p.species).is_none() {
+            to.run.stats.thinned += 1;
+            return;
+        }
         // Joints to simulate: the geometry's choice half a level ahead, or coarser by
         // projected size (the joints it draws beyond are held, shown at rest on their
         // parents).
@@ -641,7 +669,7 @@ impl Forest {
                             *bucket.insert(KeyOf { key, species, level, sp, last, far })
                         }
                     };
-                    *instance = self.instance(&view.lod, &of, tagged, states, slots);
+                    *instance = self.instance(view, &of, tagged, states, slots);
                 }
             },
         );
@@ -651,13 +679,14 @@ impl Forest {
     /// The instance of one draw: tree `tagged` in bucket `of`.
     fn instance(
         &self,
-        lod: &LodSettings,
+        view: &View,
         of: &KeyOf<'_>,
         tagged: u32,
         states: &[f32],
         slots: &[PaletteSlot],
     ) -> Instance {
         let KeyOf { species, level, sp, last, far, .. } = *of;
+        let lod = &view.lod;
         let i = (tagged & TREE_BITS) as usize;
         let (p, now) = self.trees[i];
         // Share of the dither range this draw's group keeps: after a regroup the old group's
@@ -690,6 +719,18 @@ impl Forest {
             Some((true, w)) => (lo, lo + (1.0 - w) * (hi - lo)),
             Some((false, w)) => (lo + (1.0 - w) * (hi - lo), hi),
         };
+        // A far impostor kept by the thinning: fading out over the last of its range, and
+        // wider. Only a tree drawn at its impostor alone (as pass 1 thinned it).
+        let (keep, spread) = match (far, w) {
+            (true, None) if view.thin > 0.0 => {
+                let cr = &self.crowns;
+                let h = cr.h[i];
+                let c = [cr.x[i], cr.y[i], cr.z[i] + 0.5 * h];
+                self.thinned(view, i, c, h, level, species).unwrap_or((1.0, 1.0))
+            }
+            _ => (1.0, 1.0),
+        };
+        let hi = if keep < 1.0 { lo + keep * (hi - lo) } else { hi };
         let fade = [lo, if hi >= 1.0 { 2.0 } else { hi }];
         Instance {
             position: p.position,
@@ -701,6 +742,7 @@ impl Forest {
             fade,
             lean: group.lean.map(|v| half::f16::from_f32(v).to_bits()),
             tilt: group.tilt.map(|v| half::f16::from_f32(v).to_bits()),
+            spread,
             tag: if far { 15 } else { level.min(14) } | (species.min(15) << 4) | (g << 8),
         }
     }
@@ -746,6 +788,7 @@ impl FrameData {
             stats.regrouping += r.regrouping;
             stats.fading += r.fading;
             stats.impostors += r.impostors;
+            stats.thinned += r.thinned;
         }
         for k in 0..all_keys {
             for run in &self.runs[..runs] {

@@ -9,10 +9,11 @@ use sylva_sway::PaletteSlot;
 use super::SpeciesRuntime;
 use super::palettes::PaletteCopy;
 
-/// One tree drawn this frame, as the vertex shaders read it (56 bytes; sylva-render maps
-/// each field to a vertex attribute by its offset).
+/// One tree drawn this frame, as the vertex shaders read it (60 bytes; sylva-render maps
+/// each field to a vertex attribute by its offset). The default is an upright tree of
+/// scale 1 drawn whole, its palette at 0.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, Default, PartialEq, Pod, Zeroable)]
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
 pub struct Instance {
     /// Trunk base, world m.
     pub position: [f32; 3],
@@ -51,6 +52,27 @@ pub struct Instance {
     /// (the mean cosine of the leaves' tilt); zero in still air. The impostor turns its
     /// baked leaf normals by it, so a crown bent in the wind darkens as full detail does.
     pub tilt: [u16; 2],
+    /// How much wider than its tree an impostor is drawn, across the line of sight (1; more
+    /// for the far trees thinning keeps, `LodSettings::thin_px`). Mesh levels do not read it.
+    pub spread: f32,
+}
+
+impl Default for Instance {
+    fn default() -> Instance {
+        Instance {
+            position: [0.0; 3],
+            yaw: 0.0,
+            scale: 1.0,
+            palette: PaletteSlot::default(),
+            leaf_phase: 0.0,
+            leaf_amplitude: 0.0,
+            fade: [0.0, 2.0],
+            tag: 0,
+            lean: [0; 2],
+            tilt: [0; 2],
+            spread: 1.0,
+        }
+    }
 }
 
 /// A run of instances of one species at one LOD: one instanced draw.
@@ -102,6 +124,8 @@ pub struct FrameStats {
     pub state_capped: usize,
     /// Trees drawn as impostors (fully or fading in).
     pub impostors: usize,
+    /// Trees in view left out by the thinning of far impostors (`LodSettings::thin_px`).
+    pub thinned: usize,
     /// Trees drawn at two levels (cross-fading).
     pub fading: usize,
     /// Trees drawn with two instance groups (cross-fading after a regroup).

@@ -32,6 +32,53 @@ pub struct LodSettings {
     /// the shadow map and step their trunks only. Default off
     /// (docs/decisions/0014-occlusion-culling.md).
     pub occlusion: bool,
+    /// Thinning of far impostors, pixels (0 … 256; 0: off): a tree drawn as its impostor
+    /// and shorter in the image than this is kept with probability about p = (its height /
+    /// this)² (a fixed draw per tree; p at least [`THIN_MIN_KEEP`]), and the trees kept are drawn
+    /// with `spread` times their area (wider across the line of sight; taller too as the view
+    /// steepens), spread the inverse of the share kept, so that the far canopy covers the
+    /// image as all its trees did (Cook, Halstead, Planck & Ryu 2007, "Stochastic
+    /// simplification of aggregate detail", applied to whole trees). A tree fades out by
+    /// dither as p falls past its draw (over [`THIN_BAND`] of the draws), so nothing pops.
+    /// Default 0.
+    pub thin_px: f32,
+}
+
+/// How far past its draw a thinned tree fades out, in draws ([`LodSettings::thin_px`]).
+pub const THIN_BAND: f32 = 0.25;
+
+/// The least p thinning takes ([`LodSettings::thin_px`]): about that share of far trees is
+/// kept, each with at most about 8 times its area.
+pub const THIN_MIN_KEEP: f32 = 1.0 / 8.0;
+
+/// A tree's fixed draw for thinning, uniform in [0, 1): from its index and the scene's seed.
+pub(super) fn thin_draw(tree: usize, seed: u64) -> f32 {
+    let h = sylva_core::rng::mix64(
+        seed ^ 0x7468_696e ^ (tree as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15),
+    );
+    (h >> 40) as f32 / (1u64 << 24) as f32
+}
+
+/// Thinning of a far tree whose image height is `s` times the threshold and whose draw is
+/// `u`: `None` where it is not drawn; else the share of its dither range it keeps (1, or
+/// less as it fades out) and how much wider it is drawn.
+pub fn thinning(s: f32, u: f32) -> Option<(f32, f32)> {
+    // At or above the threshold (or not a number): untouched.
+    if s.is_nan() || s >= 1.0 {
+        return Some((1.0, 1.0));
+    }
+    // Kept in full below q − THIN_BAND, fading out up to q = p (1 + THIN_BAND): at the
+    // threshold (p = 1) every tree is kept in full, so nothing fades or widens at once.
+    let p = (s * s).max(THIN_MIN_KEEP);
+    let q = p * (1.0 + THIN_BAND);
+    if u >= q {
+        return None;
+    }
+    let keep = ((q - u) / THIN_BAND).min(1.0);
+    // The share of the canopy's cover kept, averaged over the draws: ∫ keep du on [0, 1).
+    let (lo, hi) = ((q - THIN_BAND).clamp(0.0, 1.0), q.min(1.0));
+    let cover = lo + (q * (hi - lo) - 0.5 * (hi * hi - lo * lo)) / THIN_BAND;
+    Some((keep, 1.0 / cover))
 }
 
 /// Pyramid level the wind of far groups is read from: averages of 4 × 4 grid points.
@@ -78,6 +125,7 @@ impl Default for LodSettings {
             animation: true,
             error_budget: 0.0,
             occlusion: false,
+            thin_px: 0.0,
         }
     }
 }
@@ -209,4 +257,62 @@ pub fn error_coordinate(frac: f32, f: &[f32]) -> f32 {
 pub fn past_cap_error_fraction(f: &[f32], cap: f32, half_width: f32) -> f32 {
     let last = f.last().copied().unwrap_or(0.0);
     last * 3f32.powf(f.len() as f32 - cap - half_width) * (1.0 - 1e-3)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Averaged over the trees' draws, thinning keeps the far canopy's cover: the share of
+    /// trees kept times their dither share times their spread is 1 at every size; a tree
+    /// at or above the threshold is untouched; and a tree's cover changes by little between
+    /// nearby sizes (no pop), falling to nothing as it is thinned out.
+    #[test]
+    fn thinning_keeps_the_cover_and_changes_it_gradually() {
+        let draws = 20_000;
+        for s in [1.5f32, 1.0, 0.9, 0.6, 0.4, 0.2, 0.05] {
+            let cover: f64 = (0..draws)
+                .map(|k| (k as f32 + 0.5) / draws as f32)
+                .filter_map(|u| thinning(s, u))
+                .map(|(keep, spread)| (keep * spread) as f64)
+                .sum::<f64>()
+                / draws as f64;
+            assert!((cover - 1.0).abs() < 2e-3, "cover {cover} at {s} of the threshold");
+            if s >= 1.0 {
+                assert!((0..100).all(|k| thinning(s, k as f32 / 100.0) == Some((1.0, 1.0))));
+            }
+        }
+        // One tree's cover (keep · spread) as it shrinks in the image, by steps of 1/1000
+        // of the threshold: it moves by at most 2 % of the tree's widened cover per step.
+        for u in [0.01f32, 0.2, 0.5, 0.7, 0.93, 0.999] {
+            let cover = |s: f32| thinning(s, u).map_or((0.0, 1.0), |(k, w)| (k * w, w));
+            let mut worst = 0.0f32;
+            for k in 0..1200 {
+                let s = 1.2 - k as f32 * 1e-3;
+                let ((a, wa), (b, wb)) = (cover(s), cover(s - 1e-3));
+                worst = worst.max((a - b).abs() / wa.max(wb));
+            }
+            assert!(worst < 0.02, "draw {u}: the cover jumps by {worst} of itself");
+        }
+        // Fewer trees, each wider: at a tenth of the threshold p is THIN_MIN_KEEP, and the
+        // trees drawn (some fading) are those whose draw is below p (1 + THIN_BAND).
+        let kept = (0..draws).filter(|&k| thinning(0.1, k as f32 / draws as f32).is_some());
+        let share = kept.count() as f32 / draws as f32;
+        assert!((share - THIN_MIN_KEEP * (1.0 + THIN_BAND)).abs() < 0.01, "kept {share}");
+    }
+
+    /// A tree's draw is uniform in [0, 1), fixed by its index and seed.
+    #[test]
+    fn thinning_draws_are_uniform_and_fixed() {
+        let n = 100_000;
+        let mut bins = [0usize; 10];
+        for t in 0..n {
+            let u = thin_draw(t, 7);
+            assert!((0.0..1.0).contains(&u));
+            bins[(u * 10.0) as usize] += 1;
+        }
+        assert!(bins.iter().all(|&b| (b as f64 / n as f64 - 0.1).abs() < 0.005), "{bins:?}");
+        assert_eq!(thin_draw(12, 7), thin_draw(12, 7));
+        assert_ne!(thin_draw(12, 7), thin_draw(12, 8));
+    }
 }

@@ -78,6 +78,7 @@ impl Forest {
             animation: lod.animation,
             error_budget: finite(lod.error_budget, d.error_budget).clamp(0.0, 64.0),
             occlusion: lod.occlusion,
+            thin_px: finite(lod.thin_px, d.thin_px).clamp(0.0, 256.0),
         };
     }
 

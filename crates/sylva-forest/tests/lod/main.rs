@@ -12,6 +12,7 @@ use sylva_sway::{LANES, STATE_BYTES, SwayBatch};
 mod error;
 mod groups;
 mod joints;
+mod thinning;
 
 #[test]
 fn level_is_monotone_in_projected_size_with_hysteresis_and_fades_sum_to_one() {

@@ -175,6 +175,9 @@ fn band(s: f32) -> f32 {
 struct LeanIn {
     @location(11) shear: vec2<f32>,
     @location(12) tilt: vec2<f32>,
+    // How much wider than its tree the impostor is drawn, across the line of sight (1; more
+    // for the far trees the forest's thinning keeps).
+    @location(13) spread: f32,
 };
 
 @vertex
@@ -230,7 +233,12 @@ fn vs_main(@builtin(vertex_index) vi: u32, inst: InstanceIn, lean: LeanIn) -> Fa
     let square = half / far.extent;
     let cell_at = clamp(vec2<f32>(select(across.x, across.y, corner.x > 0.5), y), 0.5 - square, 0.5 + square);
     let q = vec2<f32>(cell_at.x - 0.5, 0.5 - cell_at.y) * far.extent;
-    let offset = (right * q.x + up * q.y) * inst.scale;
+    // A far tree kept by the thinning is drawn `spread` times its area: wider across the
+    // line of sight, and, as the view steepens, taller too (√spread each seen from straight
+    // above), so the canopy's gaps close in depth as well; at a grazing view its top stays
+    // where it is.
+    let taller = pow(max(lean.spread, 1.0), 0.5 * sin(elevation));
+    let offset = (right * (q.x * lean.spread / taller) + up * (q.y * taller)) * inst.scale;
     // Sway: the trunk top's displacement and the crown's lean, sheared in with height above
     // the ground: in proportion to it, the trunk top's height moving by the shift (at most
     // 1.5 times it at the quad's top, for a tree whose trunk ends low in its crown). The
