@@ -231,6 +231,14 @@ impl ViewCone {
         size * self.inv_height / depth
     }
 
+    /// Fraction of the image height that an object of `size` m at `p` would cover facing the
+    /// eye at its distance: [`screen_fraction`](Self::screen_fraction) by distance instead
+    /// of depth (no larger, and large for an object beside or behind the eye).
+    pub fn size_fraction(&self, p: [f32; 3], size: f32) -> f32 {
+        let d = sub(p, self.eye);
+        size * self.inv_height / dot(d, d).sqrt().max(1e-6)
+    }
+
     /// Whether the shadow of a sphere of `radius` at `c` may fall in view: the sphere
     /// swept `length` m along the unit direction `away` (away from the sun, downwards) may
     /// meet the cone. The swept sphere (a capsule) is covered by spheres of radius

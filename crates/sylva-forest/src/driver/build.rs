@@ -266,8 +266,8 @@ fn new_species(
             sample: [0.0; 3],
             yaw,
             leaf: LeafSway::default(),
-            lean: [0.0; 2],
-            tilt: [0.0; 2],
+            lean: [0; 2],
+            tilt: [0; 2],
         });
     }
     let slots: Vec<u32> = (0..runs.len() as u32).collect();

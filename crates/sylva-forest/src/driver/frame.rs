@@ -256,7 +256,8 @@ impl Forest {
         if view.thin <= 0.0 || !self.impostor(view, species, level) {
             return Some((1.0, 1.0));
         }
-        let s = view.cone.screen_fraction(c, h) / view.thin;
+        // By distance: a tree beside or behind the eye (its depth small) is near, not far.
+        let s = view.cone.size_fraction(c, h) / view.thin;
         thinning(s, thin_draw(i, self.spec.seed))
     }
 
@@ -431,6 +432,18 @@ impl Forest {
             {
                 return;
             }
+        }
+        // A far tree in view, surely at its impostor alone, that the thinning leaves out:
+        // not drawn, and nothing more of it computed (its LOD state, like an unseen tree's,
+        // waits; a tree this small goes to its impostor whatever the state was).
+        if !shadow_only
+            && view.thin > 0.0
+            && lod.geometry
+            && cone.fraction_below(c, h, past_cap[p.species as usize])
+            && self.thinned(view, i, c, h, view.far[p.species as usize], p.species).is_none()
+        {
+            to.run.stats.thinned += 1;
+            return;
         }
         let key_base = if shadow_only { view.n_keys as u32 } else { 0 };
         let far = view.far[p.species as usize];
@@ -720,9 +733,10 @@ impl Forest {
             Some((false, w)) => (lo + (1.0 - w) * (hi - lo), hi),
         };
         // A far impostor kept by the thinning: fading out over the last of its range, and
-        // wider. Only a tree drawn at its impostor alone (as pass 1 thinned it).
+        // wider. Only a tree in view drawn at its impostor alone (as pass 1 thinned it).
+        let shadow_only = of.key as usize >= view.n_keys;
         let (keep, spread) = match (far, w) {
-            (true, None) if view.thin > 0.0 => {
+            (true, None) if view.thin > 0.0 && !shadow_only => {
                 let cr = &self.crowns;
                 let h = cr.h[i];
                 let c = [cr.x[i], cr.y[i], cr.z[i] + 0.5 * h];
@@ -740,8 +754,8 @@ impl Forest {
             leaf_phase: group.leaf.phase,
             leaf_amplitude: group.leaf.amplitude,
             fade,
-            lean: group.lean.map(|v| half::f16::from_f32(v).to_bits()),
-            tilt: group.tilt.map(|v| half::f16::from_f32(v).to_bits()),
+            lean: group.lean,
+            tilt: group.tilt,
             spread,
             tag: if far { 15 } else { level.min(14) } | (species.min(15) << 4) | (g << 8),
         }

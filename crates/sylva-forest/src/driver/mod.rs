@@ -233,9 +233,9 @@ struct Group {
     leaf: LeafSway,
     /// The crown's static lean in the group's wind, as an impostor's shear at the trunk
     /// top (tree space, m; see [`Instance::lean`]), and how it turns the leaves (see
-    /// [`Instance::tilt`]).
-    lean: [f32; 2],
-    tilt: [f32; 2],
+    /// [`Instance::tilt`]): half-precision bits, as every instance of the group takes them.
+    lean: [u16; 2],
+    tilt: [u16; 2],
 }
 
 /// A forest in wind.

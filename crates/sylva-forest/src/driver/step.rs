@@ -208,8 +208,8 @@ fn sample_wind(s: &mut SpeciesRuntime, k: &StepInputs<'_>) {
             s.batch.set_mean_wind(lane, [cs * m[0] + sn * m[1], -sn * m[0] + cs * m[1], m[2]]);
         }
         let (shear, tilt) = s.lean.shear_and_tilt(s.winds[lane]);
-        g.lean = shear;
-        g.tilt = tilt_along(shear, tilt);
+        g.lean = shear.map(|v| half::f16::from_f32(v).to_bits());
+        g.tilt = tilt_along(shear, tilt).map(|v| half::f16::from_f32(v).to_bits());
         let speed = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
         k.leaf.step(&mut g.leaf, speed, k.dt);
     }
