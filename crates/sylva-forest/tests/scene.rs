@@ -172,6 +172,7 @@ fn frames_draw_every_visible_tree_once_with_valid_palettes_and_trees_move() {
 fn scene_e_is_a_million_trees_to_the_horizon_with_a_high_flight() {
     let spec = SceneSpec::builtin("E").expect("built-in");
     assert_eq!(spec.trees, 1_000_000);
+    assert!(spec.lod.thin_px > 0.0, "its far impostors thinned");
     let t = Terrain::new(&spec);
     let a = layout(&spec, &t);
     assert_eq!(a.len(), 1_000_000);

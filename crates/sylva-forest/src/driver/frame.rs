@@ -434,14 +434,20 @@ impl Forest {
             }
         }
         // A far tree in view, surely at its impostor alone, that the thinning leaves out:
-        // not drawn, and nothing more of it computed (its LOD state, like an unseen tree's,
-        // waits; a tree this small goes to its impostor whatever the state was).
+        // its LOD state goes to the cap as below (so the levels are those without the
+        // thinning), and nothing more of it is computed.
+        let far_level = view.far[p.species as usize];
         if !shadow_only
             && view.thin > 0.0
             && lod.geometry
             && cone.fraction_below(c, h, past_cap[p.species as usize])
-            && self.thinned(view, i, c, h, view.far[p.species as usize], p.species).is_none()
+            && self.thinned(view, i, c, h, far_level, p.species).is_none()
         {
+            let x = lod_cap(far_level);
+            if !state.is_nan() && *state as u32 != x as u32 {
+                to.run.stats.level_changes += 1;
+            }
+            *state = x;
             to.run.stats.thinned += 1;
             return;
         }
