@@ -57,25 +57,9 @@ pub(super) fn still_error(
     (w, h): (u32, u32),
 ) -> anyhow::Result<Option<Still>> {
     // Full detail first: where it is over the image limit, nothing is rendered.
-    let mut images = Vec::new();
-    for lods in [(false, false, true), (true, true, true)] {
-        let spec = configure(spec, a, lods)?;
-        let Ok(mut forest) = Forest::new(&spec) else { return Ok(None) };
-        // The last timed frame's camera: the path's end (its start when one frame is run).
-        let last = if a.warmup + a.frames > 1 { forest.path_duration() } else { 0.0 };
-        let camera = forest.camera_at(last);
-        let mut frame = FrameData::with_rows(h);
-        forest.frame(&camera, w as f32 / h as f32, &mut frame);
-        if frame.stats.triangles as f64 > a.max_image_triangles {
-            return Ok(None);
-        }
-        images.push(gpu.render(&frame, &camera)?);
-        if !lods.0 {
-            let aside = quarter_pixel_aside(&camera, h);
-            forest.frame(&aside, w as f32 / h as f32, &mut frame);
-            images.push(gpu.render(&frame, &aside)?);
-        }
-    }
+    let specs =
+        [configure(spec, a, (false, false, true))?, configure(spec, a, (true, true, true))?];
+    let Some(images) = rest_frames(&specs, gpu, a, (w, h))? else { return Ok(None) };
     let [full, aside, lod] = &images[..] else { return Ok(None) };
     write_png(&a.out.join(format!("{}-still-all-LODs.png", spec.name)), w, h, lod)?;
     write_png(&a.out.join(format!("{}-still-full-detail.png", spec.name)), w, h, full)?;
@@ -102,9 +86,29 @@ pub(super) fn thinning_error(
     }
     let mut whole = thinned.clone();
     whole.lod.thin_px = 0.0;
+    let Some(images) = rest_frames(&[whole, thinned], gpu, a, (w, h))? else { return Ok(None) };
+    let [whole, aside, thin] = &images[..] else { return Ok(None) };
+    write_png(&a.out.join(format!("{}-still-thinned.png", spec.name)), w, h, thin)?;
+    write_png(&a.out.join(format!("{}-still-every-impostor.png", spec.name)), w, h, whole)?;
+    Ok(Some(Still {
+        lod: (flip(thin, whole, w, h), ssim(thin, whole, w, h)?),
+        sampling: (flip(aside, whole, w, h), ssim(aside, whole, w, h)?),
+    }))
+}
+
+/// The frames of `specs` before any step (every tree in its rest pose), each from the last
+/// timed frame's camera, the first also turned a quarter pixel aside (after it): `None`
+/// where a forest cannot be built or a frame is over `--max-image-triangles`.
+fn rest_frames(
+    specs: &[SceneSpec],
+    gpu: &mut Headless,
+    a: &Table3Bench,
+    (w, h): (u32, u32),
+) -> anyhow::Result<Option<Vec<Vec<u8>>>> {
     let mut images = Vec::new();
-    for spec in [&whole, &thinned] {
+    for (k, spec) in specs.iter().enumerate() {
         let Ok(mut forest) = Forest::new(spec) else { return Ok(None) };
+        // The last timed frame's camera: the path's end (its start when one frame is run).
         let last = if a.warmup + a.frames > 1 { forest.path_duration() } else { 0.0 };
         let camera = forest.camera_at(last);
         let mut frame = FrameData::with_rows(h);
@@ -113,19 +117,13 @@ pub(super) fn thinning_error(
             return Ok(None);
         }
         images.push(gpu.render(&frame, &camera)?);
-        if spec.lod.thin_px <= 0.0 {
+        if k == 0 {
             let aside = quarter_pixel_aside(&camera, h);
             forest.frame(&aside, w as f32 / h as f32, &mut frame);
             images.push(gpu.render(&frame, &aside)?);
         }
     }
-    let [whole, aside, thin] = &images[..] else { return Ok(None) };
-    write_png(&a.out.join(format!("{}-still-thinned.png", spec.name)), w, h, thin)?;
-    write_png(&a.out.join(format!("{}-still-every-impostor.png", spec.name)), w, h, whole)?;
-    Ok(Some(Still {
-        lod: (flip(thin, whole, w, h), ssim(thin, whole, w, h)?),
-        sampling: (flip(aside, whole, w, h), ssim(aside, whole, w, h)?),
-    }))
+    Ok(Some(images))
 }
 
 /// What to read a scene's image error against: one frame of motion at full detail, the

@@ -92,9 +92,9 @@ use build::Crowns;
 pub use frame_data::{Bucket, FrameData, FrameStats, Instance};
 pub use lod::{
     ANIMATION_FRACTION, DEFAULT_FAR_LEVEL, DEFAULT_IMAGE_ROWS, DEFAULT_LOD_FRACTION,
-    FAR_WIND_LEVEL, LodSettings, SHADOW_COARSER, SIM_MARGIN, blend_levels, error_coordinate,
-    hysteresis, level_thresholds, lod_cap, lod_coordinate, next_lod_state, past_cap_error_fraction,
-    past_cap_fraction, shadow_level,
+    FAR_WIND_LEVEL, LodSettings, SHADOW_COARSER, SIM_MARGIN, THIN_BAND, THIN_MIN_KEEP,
+    blend_levels, error_coordinate, hysteresis, level_thresholds, lod_cap, lod_coordinate,
+    next_lod_state, past_cap_error_fraction, past_cap_fraction, shadow_level, thinning,
 };
 use regroup::Switch;
 pub use regroup::{REGROUP_FADE, REGROUP_TRAVEL};
