@@ -731,7 +731,8 @@ pub fn synthesize_columns(
     check_columns(params, grid, synth, &columns)?;
     let (np, w) = (grid.nz() * grid.ny(), columns.len());
     let mut out = vec![0.0f32; grid.frames * 3 * np * w];
-    // The embedding's coefficient block, kept from one component to the next.
+    // The embedding's coefficient block: unused here (`check_columns` admits the separable
+    // method only).
     let mut spare = Vec::new();
     for comp in Component::ALL {
         let add = mean_added(params, grid, comp);
@@ -790,7 +791,8 @@ fn stream_columns(
     progress: &(dyn Fn(f64) + Sync),
 ) -> Result<(), WindError> {
     check_columns(params, grid, synth, &columns)?;
-    // The embedding's coefficient block, kept from one component to the next.
+    // The embedding's coefficient block: unused here (`check_columns` admits the separable
+    // method only).
     let mut spare = Vec::new();
     for comp in Component::ALL {
         let add = mean_added(params, grid, comp);

@@ -437,12 +437,11 @@ impl Forest {
         // its LOD state goes to the cap as below (so the levels are those without the
         // thinning), and nothing more of it is computed.
         let far_level = view.far[p.species as usize];
-        if !shadow_only
+        // (`view.thin` is 0 without the geometry LOD.)
+        let surely_far = !shadow_only
             && view.thin > 0.0
-            && lod.geometry
-            && cone.fraction_below(c, h, past_cap[p.species as usize])
-            && self.thinned(view, i, c, h, far_level, p.species).is_none()
-        {
+            && cone.fraction_below(c, h, past_cap[p.species as usize]);
+        if surely_far && self.thinned(view, i, c, h, far_level, p.species).is_none() {
             let x = lod_cap(far_level);
             if !state.is_nan() && *state as u32 != x as u32 {
                 to.run.stats.level_changes += 1;
@@ -491,8 +490,9 @@ impl Forest {
         } else {
             (0, 0, 0, f32::NAN)
         };
-        // A far impostor the thinning leaves out is not drawn, as if out of view.
-        if !shadow_only && self.thinned(view, i, c, h, a, p.species).is_none() {
+        // A far impostor the thinning leaves out is not drawn, as if out of view (a tree
+        // surely far was decided above: it is at the cap, level `far_level`, and kept).
+        if !shadow_only && !surely_far && self.thinned(view, i, c, h, a, p.species).is_none() {
             to.run.stats.thinned += 1;
             return;
         }
