@@ -5,9 +5,10 @@
 //! for bit: the check behind changes meant to change only speed.
 //!
 //! ```text
-//! cargo run --release -p sylva-forest --example frame_checksum -- D 300 [all|no-geometry|no-animation|no-wind] [time-only]
+//! cargo run --release -p sylva-forest --example frame_checksum -- D[:PATH] 300 [all|no-geometry|no-animation|no-wind] [time-only]
 //! ```
-//! (scene name or file, frames along the path, the configuration; the checksum is Rust's
+//! (scene name or file, and after a colon one of its camera paths, e.g. `E:walk` (default:
+//! the fly-in); frames along the path; the configuration; the checksum is Rust's
 //! default hasher, the same for builds of one toolchain. Hashing a frame takes as long as
 //! building it, or longer, and the idle threads meanwhile fall asleep: `time-only` leaves
 //! it out, for timings as a frame loop that does nothing else would see them.)
@@ -20,7 +21,10 @@ use sylva_forest::{Forest, FrameData, SceneSpec};
 
 fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let name = args.first().map_or("D", String::as_str);
+    let (name, path) = match args.first().map_or("D", String::as_str).split_once(':') {
+        Some((name, path)) => (name, Some(path)),
+        None => (args.first().map_or("D", String::as_str), None),
+    };
     let frames: usize = match args.get(1) {
         Some(n) => n.parse().with_context(|| format!("frames: {n:?} is not a count"))?,
         None => 300,
@@ -29,6 +33,9 @@ fn main() -> Result<()> {
         bail!("frames: at least 2");
     }
     let mut spec = SceneSpec::load(name)?;
+    if let Some(path) = path {
+        spec.path = path.to_string();
+    }
     match args.get(2).map_or("all", String::as_str) {
         "all" => {}
         "no-geometry" => spec.lod.geometry = false,
@@ -70,9 +77,12 @@ fn main() -> Result<()> {
     let sum =
         if checksum { format!("checksum {:016x}", hasher.finish()) } else { "no checksum".into() };
     println!(
-        "{name}: simulation {:.3} ms, frame {:.3} ms (medians of {frames}), {sum}",
+        "{name}{}: simulation {:.3} ms, frame {:.3} ms (medians of {frames}; slowest frame \
+         {:.3} ms), {sum}",
+        path.map_or(String::new(), |p| format!(" {p}")),
         sim[frames / 2],
         build[frames / 2],
+        build[frames - 1],
     );
     Ok(())
 }

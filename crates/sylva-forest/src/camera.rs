@@ -258,6 +258,32 @@ impl ViewCone {
         })
     }
 
+    /// Whether the sphere of `radius` at `c` lies wholly inside the cone and nearer than its
+    /// far end, the eye outside it: then [`may_see`](Self::may_see) keeps every sphere
+    /// inside it. Returns the sphere's nearest distance and nearest depth from the eye.
+    pub fn holds(&self, c: [f32; 3], radius: f32) -> Option<(f32, f32)> {
+        let d = sub(c, self.eye);
+        let dist = dot(d, d).sqrt();
+        if !(dist > radius && dist + radius < self.far && self.cos_h > 0.0) {
+            return None;
+        }
+        // The angle φ from the axis to the centre plus the sphere's angular radius β at most
+        // the half-angle h: cos(φ + β) ≥ cos h (φ + β < 3π/2 and h < π/2).
+        let cos_phi = (dot(d, self.forward) / dist).clamp(-1.0, 1.0);
+        let sin_phi = (1.0 - cos_phi * cos_phi).max(0.0).sqrt();
+        let sin_b = radius / dist;
+        let cos_b = (1.0 - sin_b * sin_b).max(0.0).sqrt();
+        if cos_phi * cos_b - sin_phi * sin_b < self.cos_h {
+            return None;
+        }
+        Some((dist - radius, dot(d, self.forward) - radius))
+    }
+
+    /// Fraction of the image height an object of `size` m covers at `depth` m.
+    pub fn fraction_at(&self, size: f32, depth: f32) -> f32 {
+        size * self.inv_height / depth
+    }
+
     /// Whether an object of `size` m at `p`, in front of the eye, covers less than `bound` of
     /// the image height: [`screen_fraction`](Self::screen_fraction) without its division.
     /// Behind the eye it answers false, as it may where the fraction is within rounding of

@@ -26,6 +26,7 @@
 
 pub mod camera;
 pub mod canopy;
+pub mod cells;
 pub mod clip;
 pub mod clock;
 pub mod driver;

@@ -18,10 +18,20 @@ fn stand_scene(canopy: bool, trees: usize) -> SceneSpec {
     .expect("scene")
 }
 
+/// Trees `a` and `b` of `forest` by fetch, equal fetches by distance from the forest's
+/// centre (as its layout lists them): the order does not depend on how trees are numbered.
+fn by_fetch(forest: &Forest, a: usize, b: usize) -> std::cmp::Ordering {
+    let fetch = |t: usize| forest.fetch_of(t).expect("canopy wind on");
+    let centre = |t: usize| {
+        let p = forest.placement(t).expect("tree").position;
+        p[0] * p[0] + p[1] * p[1]
+    };
+    fetch(a).total_cmp(&fetch(b)).then(centre(a).total_cmp(&centre(b)))
+}
+
 /// The trees of least and of most fetch.
 fn edge_and_interior(forest: &Forest) -> (usize, usize) {
-    let fetch = |t: &usize| forest.fetch_of(*t).expect("canopy wind on");
-    let by = |a: &usize, b: &usize| fetch(a).total_cmp(&fetch(b));
+    let by = |a: &usize, b: &usize| by_fetch(forest, *a, *b);
     let edge = (0..forest.trees()).min_by(by).expect("trees");
     let interior = (0..forest.trees()).max_by(by).expect("trees");
     (edge, interior)
@@ -91,8 +101,7 @@ fn an_edge_tree_sways_further_downwind_than_an_interior_one_of_the_same_size() {
     // each tenth stands): the canopy wind raises the edge's share by over a tenth.
     let probe = Forest::new(&stand_scene(true, 300)).expect("forest");
     let mut order: Vec<usize> = (0..probe.trees()).collect();
-    let fetch = |t: &usize| probe.fetch_of(*t).expect("canopy wind on");
-    order.sort_by(|a, b| fetch(a).total_cmp(&fetch(b)));
+    order.sort_by(|a, b| by_fetch(&probe, *a, *b));
     let profile = probe.stand().expect("stand").profile();
     let mut ratios = Vec::new();
     for canopy in [true, false] {

@@ -181,7 +181,8 @@ fn scene_e_is_a_million_trees_to_the_horizon_with_a_high_flight() {
     let relief = a.iter().map(|p| p.position[2]).fold(f32::MIN, f32::max)
         - a.iter().map(|p| p.position[2]).fold(f32::MAX, f32::min);
     assert!(relief > 40.0, "hills of {relief} m");
-    assert_eq!(a[..1000], layout(&spec, &Terrain::new(&spec))[..1000], "same seed, same layout");
+    // (Same seed, same layout: `table3_scenes_and_camera_paths_are_deterministic`, whose
+    // scenes take the same path through `layout`.)
     let keys = spec.paths.get("high-flight").expect("scene E's high flight");
     for k in keys {
         let over = k.eye[2] - t.height(k.eye[0], k.eye[1]);

@@ -76,7 +76,8 @@ pub fn run(cmd: ForestCommand) -> anyhow::Result<()> {
     // Every joint of every simulated tree is stepped: nothing here is out of view.
     spec.lod.animation = false;
     let mut forest = Forest::new(&spec)?;
-    let trees = forest.trees().min(a.max_trees);
+    let chosen = forest.nearest_centre(a.max_trees);
+    let trees = chosen.len();
     let joints: Vec<Vec<usize>> =
         forest.species.iter().map(|s| s.model.exported_joints(0, a.max_joints)).collect();
     let samples = (a.seconds * a.fps).round().max(1.0) as usize;
@@ -94,7 +95,7 @@ pub fn run(cmd: ForestCommand) -> anyhow::Result<()> {
                 forest.step(dt / sub as f32);
             }
         }
-        for (t, (rot, leaves)) in rotations.iter_mut().zip(&mut flutter).enumerate() {
+        for (&t, (rot, leaves)) in chosen.iter().zip(rotations.iter_mut().zip(&mut flutter)) {
             let s = forest.placement(t).map_or(0, |p| p.species as usize);
             let pose = forest.tree_palettes(t, &joints[s]);
             rot.push(pose.iter().map(sylva_sway::rotation_of).collect());
@@ -107,8 +108,8 @@ pub fn run(cmd: ForestCommand) -> anyhow::Result<()> {
     let list: Vec<ForestTree> = rotations
         .into_iter()
         .zip(flutter)
-        .enumerate()
-        .filter_map(|(t, (rotations, flutter))| {
+        .zip(&chosen)
+        .filter_map(|((rotations, flutter), &t)| {
             let p = forest.placement(t)?;
             Some(ForestTree {
                 species: p.species as usize,

@@ -11,6 +11,7 @@ use super::lod::LodSettings;
 use super::regroup::{REGROUP_FADE, Switch, regroup_species};
 use super::{Forest, ForestError, Group, SpeciesRuntime};
 use crate::camera::Camera;
+use crate::cells::Cells;
 use crate::groups::{morton, partition};
 use crate::lanes;
 use crate::scene::{
@@ -140,14 +141,31 @@ impl Forest {
         let stand = canopy_wind.as_ref().map(|c| c.0);
         let SceneWind { field, near } = wind_field_over(spec, radius, stand)?;
         let wind = OwnedPyramid::new(field);
+        // The trees in the cells' order (tree 0 stays the centre tree): everything above was
+        // made in layout order and is the same whatever order the trees are kept in.
+        let order = crate::cells::order(&placements, spec.spacing);
+        let mut renamed = vec![0usize; order.len()];
+        for (k, &o) in order.iter().enumerate() {
+            renamed[o as usize] = k;
+        }
+        let trees: Vec<(Placement, u32)> = order.iter().map(|&o| trees[o as usize]).collect();
+        for s in &mut species {
+            // The same trees in the same (Morton) order, renamed.
+            s.members.iter_mut().for_each(|t| *t = renamed[*t]);
+        }
         let n_trees = trees.len();
         let crowns = Crowns::new(&trees, |s| species[s as usize].model.tree.stats.height);
+        let feet: Vec<Placement> = trees.iter().map(|t| t.0).collect();
+        let mut cells = Cells::new(&feet, &crowns.h, spec.spacing);
+        cells.order_by_draw(|t| super::lod::thin_draw(t, spec.seed));
         let mut forest = Forest {
             spec: spec.clone(),
             terrain,
             species,
             trees,
             crowns,
+            cells,
+            leaf_shortcut: true,
             wind,
             near,
             leaf_params: spec.leaves,

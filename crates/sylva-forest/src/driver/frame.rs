@@ -3,9 +3,11 @@
 //!
 //! 0. [`Forest::fill_occlusion`]: the trees in view near enough write their occluders into
 //!    the frame's depth buffer, near to far (`crate::occlusion`).
-//! 1. [`Forest::classify`]: per tree, in runs in parallel, whether it is in view (or casts
-//!    into it), its level and cross-fade, the joints its simulation must show and step;
-//!    the draws go to per-run lists by bucket key.
+//! 1. [`Forest::classify`]: per tree of the cells' leaves in view (`crate::cells`; a leaf
+//!    the view cannot see, nor its trees' shadows, is skipped whole), a leaf at a time in
+//!    parallel, whether it is in view (or casts into it), its level and cross-fade, the
+//!    joints its simulation must show and step; the draws go to per-leaf lists by bucket
+//!    key.
 //! 2. [`FrameData::gather`]: the runs' draws into key order and their counts into the
 //!    frame's figures.
 //! 3. [`Forest::bucket`]: runs of equal keys into buckets, mesh buckets near to far.
@@ -23,6 +25,7 @@ use super::lod::*;
 use super::palettes::{Layout, copy_palettes, lay_out};
 use super::{Forest, SpeciesRuntime};
 use crate::camera::{Camera, ShadowBox, ShadowSweep, ViewCone, may_see_trees, may_shade_trees};
+use crate::cells::Cell;
 use crate::scene::Placement;
 use sylva_core::v3::{dot, sub};
 
@@ -57,6 +60,8 @@ struct View {
     shadow_texel: f32,
     /// The image-height fraction below which far impostors are thinned (0: off).
     thin: f32,
+    /// The least of the species' `past_cap` fractions.
+    least_past_cap: f32,
     /// Per species, with levels by error: the coarsest mesh level whose error on its
     /// largest tree spans at most `shadow_texel`, the level its trees cast their shadows
     /// with (or the level drawn, if coarser). Scratch of the `FrameData`.
@@ -89,7 +94,8 @@ impl Forest {
         let previous = out.time;
         out.time = self.time;
         out.keys.clear();
-        if out.lod_state.len() != self.trees.len() {
+        let fresh = out.lod_state.len() != self.trees.len();
+        if fresh {
             out.lod_state.clear();
             out.lod_state.resize(self.trees.len(), f32::NAN);
         }
@@ -101,8 +107,25 @@ impl Forest {
         out.seen_max.reset(sims);
         let mut view = self.view(camera, aspect, previous);
         self.plan_levels(&mut view, out);
+        // What is known of each leaf's states holds for these levels and this view's states.
+        if fresh || out.settled.len() != self.cells.leaves.len() || out.settled_far != view.far {
+            let cells = &self.cells.cells;
+            out.settled.clear();
+            out.settled.extend(self.cells.leaves.iter().map(|&c| cells[c as usize].end));
+            out.settled.iter_mut().zip(&self.cells.leaves).for_each(|(s, &c)| {
+                *s -= cells[c as usize].first;
+            });
+            out.settled_far.clone_from(&view.far);
+        }
+        // The leaves whose trees or their shadows the view may see: the only trees visited.
+        self.cells.visit(&view.cone, view.sweep.as_ref(), &mut out.visit);
         self.fill_occlusion(&view, camera, aspect, out);
-        let mut stats = FrameStats { trees: self.trees.len(), ..FrameStats::default() };
+        let mut stats = FrameStats {
+            trees: self.trees.len(),
+            cells_visited: out.visit.cells_tested,
+            trees_visited: out.visit.trees,
+            ..FrameStats::default()
+        };
         let runs = self.classify(&view, out);
         out.gather(runs, view.all_keys, &mut stats);
         self.bucket(&view, camera, out, &mut stats);
@@ -155,6 +178,7 @@ impl Forest {
             box_margin,
             shadow_texel,
             thin: 0.0,
+            least_past_cap: 0.0,
             cast_floor: Vec::new(),
             n_species,
             n_keys,
@@ -233,6 +257,7 @@ impl Forest {
                 past_cap.push(past_cap_fraction(lod.fraction, lod_cap(chain_far), lod.hysteresis));
             }
         }
+        view.least_past_cap = past_cap.iter().copied().fold(f32::INFINITY, f32::min);
         (view.far, view.past_cap, view.thresholds) = (far, past_cap, thresholds);
     }
 
@@ -261,66 +286,129 @@ impl Forest {
         thinning(s, thin_draw(i, self.spec.seed))
     }
 
-    /// Pass 1: the trees in runs of [`TREE_RUN`], the runs in parallel. Each fills its own
-    /// keys, merged afterwards in run order, and raises the per-simulation maxima (which do
-    /// not depend on order), so the frame is the same for any number of threads. Returns the
-    /// number of runs.
+    /// For a leaf wholly in view whose every tree is surely past its LOD cap and thinned
+    /// by the same rule (`View::thin`): how many of its trees in draw order
+    /// ([`crate::cells::Cells::by_draw`]) the thinning may keep; the rest it surely leaves
+    /// out (their draws are at least the largest keep any of them may have: the one of the
+    /// leaf's tallest tree at the leaf's nearest point). `None` where the leaf is to be
+    /// classified tree by tree. Margins of a thousandth keep it within the per-tree tests'
+    /// rounding.
+    fn thinned_out(&self, view: &View, cell: &Cell) -> Option<usize> {
+        if view.thin <= 0.0 || view.lod.occlusion || !self.leaf_shortcut {
+            return None;
+        }
+        let (dist, depth) = view.cone.holds(cell.centre, 1.001 * cell.radius + 0.01)?;
+        let fraction = view.cone.fraction_at(cell.tallest, depth);
+        if !(depth > 0.0 && fraction < 0.999 * view.least_past_cap) {
+            return None;
+        }
+        // (At or above the threshold, or not a number, thinning keeps every tree.)
+        let s = view.cone.fraction_at(cell.tallest, dist) / view.thin;
+        if s.is_nan() || s >= 1.0 {
+            return None;
+        }
+        let keep = 1.001 * (s * s).max(THIN_MIN_KEEP) * (1.0 + THIN_BAND);
+        Some(self.cells.draws[cell.trees()].partition_point(|&u| u < keep))
+    }
+
+    /// Pass 1: the trees of the leaves in view, a leaf at a time, the leaves in parallel.
+    /// Each fills its own keys, merged afterwards in leaf order (so in tree order), and
+    /// raises the per-simulation maxima (which do not depend on order), so the frame is the
+    /// same for any number of threads. Returns the number of leaves (runs) visited.
     fn classify(&self, view: &View, out: &mut FrameData) -> usize {
-        let runs = self.trees.len().div_ceil(TREE_RUN);
+        let runs = out.visit.leaves.len();
         if out.runs.len() < runs {
             out.runs.resize_with(runs, TreeRun::default);
         }
         let (past_cap, thresholds) = (&view.past_cap, &view.thresholds);
         let (need_max, want_max, seen_max) = (&out.need_max, &out.want_max, &out.seen_max);
         let occlusion = &out.occlusion;
-        out.runs[..runs]
-            .par_iter_mut()
-            .zip(out.lod_state.par_chunks_mut(TREE_RUN))
-            .zip(self.trees.par_chunks(TREE_RUN))
-            .enumerate()
-            .for_each(|(r, ((run, states), trees))| {
-                if run.by_key.len() < view.all_keys {
-                    run.by_key.resize_with(view.all_keys, Vec::new);
+        let cells: &[Cell] = &self.cells.cells;
+        let one_leaf = |run: &mut TreeRun, states: &mut [f32], settled: &mut u32, cell: &Cell| {
+            let (first, n) = (cell.first as usize, states.len());
+            let trees = &self.trees[first..first + n];
+            if run.by_key.len() < view.all_keys {
+                run.by_key.resize_with(view.all_keys, Vec::new);
+            }
+            run.by_key.iter_mut().for_each(Vec::clear);
+            run.seen.resize(n, false);
+            run.shade.resize(n, false);
+            let (cr, span) = (&self.crowns, first..first + n);
+            let (cx, cy) = (&cr.x[span.clone()], &cr.y[span.clone()]);
+            let (cz, ch) = (&cr.z[span.clone()], &cr.h[span]);
+            // A leaf wholly in view and far: the trees past the thinning's last keep are
+            // decided at once (`Forest::thinned_out`), the others classified alone.
+            if let Some(kept) = self.thinned_out(view, cell) {
+                let order = &self.cells.by_draw[cell.trees()];
+                let thinned = n - kept;
+                run.stats =
+                    FrameStats { thinned, thinned_by_leaf: thinned, ..FrameStats::default() };
+                // Those not yet at their cap in this view go there, as a tree the thinning
+                // leaves out does (`classify_tree`).
+                for &t in &order[kept..(*settled as usize).max(kept)] {
+                    let (k, species) = (t as usize - first, trees[t as usize - first].0.species);
+                    let x = lod_cap(view.far[species as usize]);
+                    if !states[k].is_nan() && states[k] as u32 != x as u32 {
+                        run.stats.level_changes += 1;
+                    }
+                    states[k] = x;
                 }
-                run.by_key.iter_mut().for_each(Vec::clear);
-                let (first, n) = (r * TREE_RUN, trees.len());
-                run.seen.resize(n, false);
-                let (cr, span) = (&self.crowns, first..first + n);
-                let (cx, cy) = (&cr.x[span.clone()], &cr.y[span.clone()]);
-                let (cz, ch) = (&cr.z[span.clone()], &cr.h[span]);
-                // With occlusion culling on, pass 0 has culled this run already.
-                if !view.lod.occlusion {
-                    may_see_trees(&view.cone, cx, cy, cz, ch, &mut run.seen[..n]);
-                }
-                let occluded = if view.lod.occlusion {
-                    self.hide_occluded(occlusion, trees, cz, ch, &mut run.seen[..n])
-                } else {
-                    0
-                };
-                run.shade.resize(n, false);
-                match &view.sweep {
-                    Some(sw) => may_shade_trees(
-                        &view.cone,
-                        sw,
-                        cx,
-                        cy,
-                        cz,
-                        ch,
-                        &run.seen[..n],
-                        &mut run.shade[..n],
-                    ),
-                    None => run.shade[..n].fill(false),
-                }
-                run.stats = FrameStats { occluded, ..FrameStats::default() };
+                *settled = kept as u32;
                 let mut to = RunOut { run, need_max, want_max, seen_max };
-                for (k, ((p, g), state)) in trees.iter().zip(states).enumerate() {
-                    // The crown's height and centre, as the culling took them.
+                for &t in &order[..kept] {
+                    let k = t as usize - first;
+                    to.run.seen[k] = true;
+                    let (p, g) = &trees[k];
                     let h = ch[k];
                     let c = [cx[k], cy[k], cz[k] + 0.5 * h];
-                    let tree = Tree { i: first + k, p, group: *g, c, h };
-                    self.classify_tree(view, (past_cap, thresholds), &tree, k, state, &mut to);
+                    let tree = Tree { i: t as usize, p, group: *g, c, h };
+                    self.classify_tree(
+                        view,
+                        (past_cap, thresholds),
+                        &tree,
+                        k,
+                        &mut states[k],
+                        &mut to,
+                    );
                 }
-            });
+                return;
+            }
+            *settled = n as u32;
+            // With occlusion culling on, pass 0 has culled this leaf already.
+            if !view.lod.occlusion {
+                may_see_trees(&view.cone, cx, cy, cz, ch, &mut run.seen[..n]);
+            }
+            let occluded = if view.lod.occlusion {
+                self.hide_occluded(occlusion, trees, cz, ch, &mut run.seen[..n])
+            } else {
+                0
+            };
+            match &view.sweep {
+                Some(sw) => may_shade_trees(
+                    &view.cone,
+                    sw,
+                    cx,
+                    cy,
+                    cz,
+                    ch,
+                    &run.seen[..n],
+                    &mut run.shade[..n],
+                ),
+                None => run.shade[..n].fill(false),
+            }
+            run.stats = FrameStats { occluded, ..FrameStats::default() };
+            let mut to = RunOut { run, need_max, want_max, seen_max };
+            for (k, ((p, g), state)) in trees.iter().zip(states).enumerate() {
+                // The crown's height and centre, as the culling took them.
+                let h = ch[k];
+                let c = [cx[k], cy[k], cz[k] + 0.5 * h];
+                let tree = Tree { i: first + k, p, group: *g, c, h };
+                self.classify_tree(view, (past_cap, thresholds), &tree, k, state, &mut to);
+            }
+        };
+        let leaves = (&out.visit.leaves[..], cells);
+        let slices = (&mut out.runs[..runs], &mut out.lod_state[..], &mut out.settled[..]);
+        each_leaf(slices, (0, 0), leaves, &one_leaf);
         runs
     }
 
@@ -333,15 +421,17 @@ impl Forest {
             return;
         }
         out.occlusion.reset(camera, aspect);
-        let runs = self.trees.len().div_ceil(TREE_RUN);
+        let runs = out.visit.leaves.len();
         if out.runs.len() < runs {
             out.runs.resize_with(runs, TreeRun::default);
         }
         let cot = 1.0 / (0.5 * camera.fov_deg.to_radians()).tan();
         let (buffer, forward) = (&out.occlusion, camera.forward());
-        out.runs[..runs].par_iter_mut().zip(self.trees.par_chunks(TREE_RUN)).enumerate().for_each(
-            |(r, (run, trees))| {
-                let (first, n) = (r * TREE_RUN, trees.len());
+        out.runs[..runs].par_iter_mut().zip(out.visit.leaves.par_iter()).for_each(
+            |(run, &leaf)| {
+                let span = self.cells.cells[leaf as usize].trees();
+                let (first, n) = (span.start, span.len());
+                let trees = &self.trees[span];
                 run.occluders.clear();
                 run.seen.resize(n, false);
                 let (cr, span) = (&self.crowns, first..first + n);
@@ -809,11 +899,47 @@ impl FrameData {
             stats.fading += r.fading;
             stats.impostors += r.impostors;
             stats.thinned += r.thinned;
+            stats.thinned_by_leaf += r.thinned_by_leaf;
         }
         for k in 0..all_keys {
             for run in &self.runs[..runs] {
                 self.keys.extend(run.by_key[k].iter().map(|&tagged| (k as u32, tagged)));
             }
+        }
+    }
+}
+
+/// `f(run, states, settled, cell)` for each leaf of `leaves` (cell indices into `cells`,
+/// ascending) with its own run, its trees' slice of `states` and its entry of `settled`
+/// (per leaf), the slices starting at tree and leaf `offset`: the leaves split in halves,
+/// the halves in parallel.
+fn each_leaf<F>(
+    (runs, states, settled): (&mut [TreeRun], &mut [f32], &mut [u32]),
+    offset: (usize, usize),
+    (leaves, cells): (&[u32], &[Cell]),
+    f: &F,
+) where
+    F: Fn(&mut TreeRun, &mut [f32], &mut u32, &Cell) + Sync,
+{
+    match leaves {
+        [] => {}
+        [leaf] => {
+            let cell = &cells[*leaf as usize];
+            let span = cell.trees();
+            let states = &mut states[span.start - offset.0..span.end - offset.0];
+            f(&mut runs[0], states, &mut settled[cell.leaf as usize - offset.1], cell)
+        }
+        _ => {
+            let mid = leaves.len() / 2;
+            let cell = &cells[leaves[mid] as usize];
+            let at = (cell.first as usize, cell.leaf as usize);
+            let (sa, sb) = states.split_at_mut(at.0 - offset.0);
+            let (la, lb) = settled.split_at_mut(at.1 - offset.1);
+            let (ra, rb) = runs.split_at_mut(mid);
+            rayon::join(
+                || each_leaf((ra, sa, la), offset, (&leaves[..mid], cells), f),
+                || each_leaf((rb, sb, lb), at, (&leaves[mid..], cells), f),
+            );
         }
     }
 }

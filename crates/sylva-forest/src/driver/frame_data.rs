@@ -99,6 +99,12 @@ pub struct Bucket {
 pub struct FrameStats {
     /// Trees in the scene.
     pub trees: usize,
+    /// Cells of the forest's hierarchy tested against the view (`crate::cells`): those in
+    /// view and the ones beside them, not the whole forest's.
+    pub cells_visited: usize,
+    /// Trees in the cells in view, each tested and classified by the frame: the frame's
+    /// per-tree work, which grows with what is in view, not with the forest.
+    pub trees_visited: usize,
     /// Trees drawn (not culled).
     pub drawn: usize,
     /// Trees outside the view drawn into the shadow map only, as their shadow may fall in
@@ -126,6 +132,9 @@ pub struct FrameStats {
     pub impostors: usize,
     /// Trees in view left out by the thinning of far impostors (`LodSettings::thin_px`).
     pub thinned: usize,
+    /// Of `thinned`, those left out with the rest of their leaf of the cells, which the
+    /// frame did not visit one by one (the leaf wholly in view, and far).
+    pub thinned_by_leaf: usize,
     /// Trees drawn at two levels (cross-fading).
     pub fading: usize,
     /// Trees drawn with two instance groups (cross-fading after a regroup).
@@ -190,8 +199,14 @@ pub struct FrameData {
     pub(super) slots: Vec<PaletteSlot>,
     /// Per simulation (as `need`): joints the next step is to simulate for it.
     pub(super) want: Vec<u32>,
-    /// The pass over the trees, a run of them at a time.
+    /// The pass over the trees, a run (a leaf of the cells in view) at a time.
     pub(super) runs: Vec<TreeRun>,
+    /// The cells this view visited in its last frame.
+    pub(super) visit: crate::cells::Visit,
+    /// Per leaf of the cells: from which of its trees in draw order on every state is at
+    /// its cap (the leaf's size where that is not known), for the levels `settled_far`.
+    pub(super) settled: Vec<u32>,
+    pub(super) settled_far: Vec<u32>,
     /// Per species, the image fraction below which a tree goes to its LOD cap
     /// ([`past_cap_fraction`]).
     pub(super) past_cap: Vec<f32>,
@@ -212,9 +227,6 @@ pub struct FrameData {
     pub(super) want_max: Maxima,
     pub(super) seen_max: Maxima,
 }
-
-/// Trees a frame's pass takes at a time (the runs go in parallel).
-pub(super) const TREE_RUN: usize = 4096;
 
 /// A draw's tree, tagged: the tree's index in the low bits (a scene holds at most a million
 /// trees), whether the tree is cross-fading between two instance groups, and whether the
@@ -252,7 +264,6 @@ pub(super) struct TreeRun {
     pub(super) occluders: Vec<u32>,
 }
 
-/// The trees' feet and heights as separate arrays (what culling reads, in the layout that
 /// Per-simulation maxima that the runs of trees raise together.
 #[derive(Debug, Default)]
 pub(super) struct Maxima(pub(super) Vec<AtomicU32>);

@@ -69,6 +69,7 @@ use sylva_tree::mesh::TreeModel;
 use sylva_wind::{NearField, OwnedPyramid};
 use thiserror::Error;
 
+use crate::cells::Cells;
 use crate::lanes;
 use crate::scene::{CameraKey, Placement, SceneSpec, Terrain};
 pub use crate::wind::{
@@ -251,6 +252,11 @@ pub struct Forest {
     trees: Vec<(Placement, u32)>,
     /// The trees' feet and heights, one array each, for culling many at a time.
     crowns: Crowns,
+    /// The cell hierarchy the trees are ordered by (`crate::cells`).
+    cells: Cells,
+    /// Whether a leaf wholly in view and far has its thinned-out trees decided at once
+    /// (always, but in the test that compares it with deciding tree by tree).
+    leaf_shortcut: bool,
     /// The wind field and its mip pyramid (the wind-field LOD).
     wind: OwnedPyramid,
     /// The fine tile read near the camera, where the field is coarser than the trees.

@@ -152,6 +152,27 @@ impl Forest {
         self.species.iter().map(|s| super::build::crown_radius(&s.model)).collect()
     }
 
+    /// The `n` trees nearest the forest's centre (the origin, over the ground), nearest
+    /// first: the first `n` of the scene's layout. (Tree indices follow the forest's cells,
+    /// `crate::cells`: tree 0 is the nearest, the others go square by square.)
+    pub fn nearest_centre(&self, n: usize) -> Vec<usize> {
+        let key = |t: usize| {
+            let p = self.trees[t].0.position;
+            (p[0] * p[0] + p[1] * p[1], t)
+        };
+        let mut all: Vec<usize> = (0..self.trees.len()).collect();
+        let by = |a: &usize, b: &usize| {
+            let (ka, kb) = (key(*a), key(*b));
+            ka.0.total_cmp(&kb.0).then(ka.1.cmp(&kb.1))
+        };
+        if n < all.len() {
+            all.select_nth_unstable_by(n, by);
+            all.truncate(n);
+        }
+        all.sort_unstable_by(by);
+        all
+    }
+
     /// Placement of tree `t` (species, trunk base, yaw, scale), if there is such a tree.
     pub fn placement(&self, t: usize) -> Option<Placement> {
         self.trees.get(t).map(|&(p, _)| p)

@@ -9,6 +9,7 @@ use sylva_forest::driver::{
 use sylva_forest::{Camera, Forest, FrameData, LodSettings, SceneSpec, ShadowBox};
 use sylva_sway::{LANES, STATE_BYTES, SwayBatch};
 
+mod cells;
 mod error;
 mod groups;
 mod joints;
