@@ -23,6 +23,7 @@ use sylva_sway::{LANES, PaletteSlot};
 use super::frame_data::*;
 use super::lod::*;
 use super::palettes::{Layout, copy_palettes, lay_out};
+use super::regroup::Switch;
 use super::{Forest, SpeciesRuntime};
 use crate::camera::{Camera, ShadowBox, ShadowSweep, ViewCone, may_see_trees, may_shade_trees};
 use crate::cells::Cell;
@@ -62,6 +63,9 @@ struct View {
     thin: f32,
     /// The least of the species' `past_cap` fractions.
     least_past_cap: f32,
+    /// Whether a tree may have changed group since the frame before or still be fading
+    /// between groups: the last regroup (when every switch was made) is that recent.
+    regrouped: bool,
     /// Per species, with levels by error: the coarsest mesh level whose error on its
     /// largest tree spans at most `shadow_texel`, the level its trees cast their shadows
     /// with (or the level drawn, if coarser). Scratch of the `FrameData`.
@@ -179,6 +183,11 @@ impl Forest {
             shadow_texel,
             thin: 0.0,
             least_past_cap: 0.0,
+            regrouped: {
+                let last = self.grouped.1;
+                let fade = self.regroup_fade as f64;
+                last > previous || (fade > 0.0 && self.time - last < fade)
+            },
             cast_floor: Vec::new(),
             n_species,
             n_keys,
@@ -354,8 +363,14 @@ impl Forest {
                     states[k] = x;
                 }
                 *settled = kept as u32;
+                // The ones it may keep in tree order, as the trees of a leaf are classified
+                // (their draws listed in the same order as tree by tree; memory in order).
+                let mut kept_trees = std::mem::take(&mut run.kept);
+                kept_trees.clear();
+                kept_trees.extend_from_slice(&order[..kept]);
+                kept_trees.sort_unstable();
                 let mut to = RunOut { run, need_max, want_max, seen_max };
-                for &t in &order[..kept] {
+                for &t in &kept_trees {
                     let k = t as usize - first;
                     to.run.seen[k] = true;
                     let (p, g) = &trees[k];
@@ -371,6 +386,7 @@ impl Forest {
                         &mut to,
                     );
                 }
+                to.run.kept = kept_trees;
                 return;
             }
             *settled = n as u32;
@@ -602,9 +618,10 @@ impl Forest {
             let level = sim.max(by_size.max(0.0) as u32) as usize;
             sp.order.prefix[level.min(sp.order.prefix.len() - 1)]
         };
-        // The tree's group, and the one it is fading out of after a regroup.
-        let switch = self.switches[i].fading(self.time, self.regroup_fade);
-        let sw = self.switches[i];
+        // The tree's group, and the one it is fading out of after a regroup (none long after
+        // the last regroup: its switch is not read then).
+        let sw = if view.regrouped { self.switches[i] } else { Switch::NONE };
+        let switch = sw.fading(self.time, self.regroup_fade);
         to.run.stats.group_changes +=
             (!shadow_only && sw.from != u32::MAX && sw.at > view.previous && sw.at <= self.time)
                 as usize;

@@ -262,6 +262,8 @@ pub(super) struct TreeRun {
     pub(super) shade: Vec<bool>,
     /// Trees of the run (indices in the forest) that write their occluders.
     pub(super) occluders: Vec<u32>,
+    /// Scratch: the trees of a far leaf its thinning may keep (`Forest::thinned_out`).
+    pub(super) kept: Vec<u32>,
 }
 
 /// Per-simulation maxima that the runs of trees raise together.

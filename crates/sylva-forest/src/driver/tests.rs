@@ -79,8 +79,8 @@ fn simulations_that_need_the_same_joints_are_stepped_together() {
 fn far_leaves_thin_at_once_exactly_as_tree_by_tree() {
     // Scene C with far impostors thinned under 30 px, along its fly-in: a leaf wholly in
     // view and far decides the trees its thinning surely leaves out at once. The frames
-    // draw the same instances (in another order within a bucket), count the same figures
-    // and leave every tree at the same level as a forest that decides tree by tree.
+    // draw the same instances in the same order, count the same figures and leave every
+    // tree at the same level as a forest that decides tree by tree, bit for bit.
     let mut spec = SceneSpec::builtin("C").expect("C");
     spec.lod.thin_px = 30.0;
     let mut shortcut = Forest::new(&spec).expect("forest");
@@ -88,15 +88,6 @@ fn far_leaves_thin_at_once_exactly_as_tree_by_tree() {
     tree_by_tree.leaf_shortcut = false;
     let (mut a, mut b) = (FrameData::with_rows(768), FrameData::with_rows(768));
     let duration = shortcut.path_duration();
-    let sorted = |f: &FrameData| {
-        let mut v: Vec<(u32, Vec<u8>)> = Vec::new();
-        for (k, bucket) in f.buckets.iter().enumerate() {
-            let drawn = &f.instances[bucket.first as usize..][..bucket.count as usize];
-            v.extend(drawn.iter().map(|i| (k as u32, bytemuck::bytes_of(i).to_vec())));
-        }
-        v.sort();
-        v
-    };
     let mut thinned = 0;
     // Out along the path and back again, so leaves change from tree by tree to at once
     // and back.
@@ -107,8 +98,10 @@ fn far_leaves_thin_at_once_exactly_as_tree_by_tree() {
         }
         shortcut.frame(&camera, 4.0 / 3.0, &mut a);
         tree_by_tree.frame(&camera, 4.0 / 3.0, &mut b);
-        let (da, db) = (sorted(&a), sorted(&b));
-        assert!(da == db, "instances at {k}: {} against {} tree by tree", da.len(), db.len());
+        let bytes = |f: &FrameData| bytemuck::cast_slice::<_, u8>(&f.instances).to_vec();
+        let (n, m) = (a.instances.len(), b.instances.len());
+        assert!(bytes(&a) == bytes(&b), "instances at {k}: {n} against {m} tree by tree");
+        assert!(a.palettes == b.palettes, "palettes at {k}");
         assert_eq!(a.buckets, b.buckets, "buckets at {k}");
         let figures = |f: &FrameData| FrameStats { sim_ms: 0.0, thinned_by_leaf: 0, ..f.stats };
         assert_eq!(figures(&a), figures(&b), "figures at {k}");
