@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 use sylva_forest::{Camera, Forest, FrameData, SceneSpec};
 use sylva_render::Headless;
 
+mod farfield;
 mod foliage;
 mod host;
 mod impostors;
