@@ -113,12 +113,10 @@ impl Forest {
         self.plan_levels(&mut view, out);
         // What is known of each leaf's states holds for these levels and this view's states.
         if fresh || out.settled.len() != self.cells.leaves.len() || out.settled_far != view.far {
-            let cells = &self.cells.cells;
+            // (Nothing known: each leaf's size.)
+            let size = |c: &u32| self.cells.cells[*c as usize].trees().len() as u32;
             out.settled.clear();
-            out.settled.extend(self.cells.leaves.iter().map(|&c| cells[c as usize].end));
-            out.settled.iter_mut().zip(&self.cells.leaves).for_each(|(s, &c)| {
-                *s -= cells[c as usize].first;
-            });
+            out.settled.extend(self.cells.leaves.iter().map(size));
             out.settled_far.clone_from(&view.far);
         }
         // The leaves whose trees or their shadows the view may see: the only trees visited.

@@ -102,8 +102,9 @@ pub struct FrameStats {
     /// Cells of the forest's hierarchy tested against the view (`crate::cells`): those in
     /// view and the ones beside them, not the whole forest's.
     pub cells_visited: usize,
-    /// Trees in the cells in view, each tested and classified by the frame: the frame's
-    /// per-tree work, which grows with what is in view, not with the forest.
+    /// Trees in the cells in view: the frame's per-tree work, which grows with what is in
+    /// view, not with the forest (less those of a far leaf the thinning leaves out at once,
+    /// `thinned_by_leaf`, which are not visited one by one).
     pub trees_visited: usize,
     /// Trees drawn (not culled).
     pub drawn: usize,
