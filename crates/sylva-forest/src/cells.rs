@@ -130,8 +130,8 @@ fn digit(key: u64, levels: u32, depth: u32) -> u64 {
     key / 9u64.pow(levels - 1 - depth) % 9
 }
 
-/// The leaves' keys of `trees` for leaves of `spacing`-based side centred on the first tree,
-/// and the number of levels above the leaves.
+/// Each tree's leaf key (leaves [`leaf_side`]`(spacing)` a side on a grid centred on the first
+/// tree), and the number of levels above the leaves.
 fn keys(trees: &[Placement], spacing: f32) -> (Vec<u64>, u32) {
     let Some(first) = trees.first() else { return (Vec::new(), 0) };
     let side = leaf_side(spacing);
