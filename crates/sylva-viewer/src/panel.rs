@@ -116,6 +116,11 @@ fn figures(ui: &mut Ui, v: &Viewer) {
         row("draw calls", s.draw_calls.to_string());
         row("trees drawn", format!("{} of {} ({} impostors)", s.drawn, s.trees, s.impostors));
         row("shadow only", format!("{} trees out of view", s.shadow_only));
+        // The frame's per-tree work: the trees of the forest's squares in view.
+        row("trees visited", format!("{} (squares tested: {})", s.trees_visited, s.cells_visited));
+        if s.thinned > 0 {
+            row("thinned", format!("{} far trees left out", s.thinned));
+        }
         row(
             "occluded",
             if v.forest.lod().occlusion {
