@@ -141,8 +141,8 @@ impl Forest {
         let stand = canopy_wind.as_ref().map(|c| c.0);
         let SceneWind { field, near } = wind_field_over(spec, radius, stand)?;
         let wind = OwnedPyramid::new(field);
-        // The trees in the cells' order (tree 0 stays the centre tree): everything above was
-        // made in layout order and is the same whatever order the trees are kept in.
+        // The trees renumbered in the cells' order (tree 0 stays the centre tree). What is
+        // made above from the trees in layout order does not depend on their numbers after.
         let order = crate::cells::order(&placements, spec.spacing);
         let mut renamed = vec![0usize; order.len()];
         for (k, &o) in order.iter().enumerate() {
