@@ -21,9 +21,10 @@ use sylva_forest::{Forest, FrameData, SceneSpec};
 
 fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let (name, path) = match args.first().map_or("D", String::as_str).split_once(':') {
+    let scene = args.first().map_or("D", String::as_str);
+    let (name, path) = match scene.split_once(':') {
         Some((name, path)) => (name, Some(path)),
-        None => (args.first().map_or("D", String::as_str), None),
+        None => (scene, None),
     };
     let frames: usize = match args.get(1) {
         Some(n) => n.parse().with_context(|| format!("frames: {n:?} is not a count"))?,

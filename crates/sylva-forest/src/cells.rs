@@ -8,7 +8,7 @@
 //! square's middle child is centred where it is, so the first tree stays in the middle leaf
 //! of every level.
 //!
-//! **The trees' order.** [`order`] gives the trees in the order of a walk down the squares
+//! **The trees' order.** [`Cells::new`] gives the trees in the order of a walk down the squares
 //! (at each square its middle child first, then the four beside it, then the corners), and
 //! within a leaf in their layout order. Every square's trees are then a contiguous range
 //! of tree indices, the first tree stays tree 0, and trees near each other in the forest
@@ -62,7 +62,7 @@ impl Cell {
     }
 }
 
-/// The cell hierarchy of a forest whose trees are in [`order`].
+/// The cell hierarchy of a forest whose trees are in the order [`Cells::new`] gives.
 #[derive(Debug, Clone, Default)]
 pub struct Cells {
     /// Every square that holds a tree, in pre-order (the root first).
@@ -144,33 +144,30 @@ fn keys(trees: &[Placement], spacing: f32) -> (Vec<u64>, u32) {
     (leaves.iter().map(|&l| walk_key(l, levels)).collect(), levels)
 }
 
-/// The cell hierarchy's order of `trees` (placements in layout order, tree 0 the one
-/// nearest the forest's centre) for a layout of `spacing` m: `order[k]` is the layout index
-/// of the tree that goes `k`-th. Tree 0 stays first. Deterministic: ties go by layout index.
-pub fn order(trees: &[Placement], spacing: f32) -> Vec<u32> {
-    let (keys, _) = keys(trees, spacing);
-    let mut order: Vec<u32> = (0..trees.len() as u32).collect();
-    order.sort_unstable_by_key(|&a| (keys[a as usize], a));
-    order
-}
-
 /// Side of a leaf square for a layout of `spacing` m, m.
 pub fn leaf_side(spacing: f32) -> f32 {
     (LEAF_SPACINGS * spacing).max(1.0)
 }
 
 impl Cells {
-    /// The hierarchy of `trees` (placements already in [`order`] for `spacing`), each tree's
-    /// crown sphere centred `h[i] / 2` above its foot with radius `0.75 h[i]`.
-    pub fn new(trees: &[Placement], h: &[f32], spacing: f32) -> Cells {
+    /// The hierarchy of `trees` (placements in layout order, tree 0 the one nearest the
+    /// forest's centre, for a layout of `spacing` m; each tree's crown sphere centred
+    /// `h[i] / 2` above its foot with radius `0.75 h[i]`), and the order it puts the trees
+    /// in: `order[k]` is the layout index of the tree that goes `k`-th, tree 0 first, ties
+    /// by layout index. The cells' tree ranges are in that order.
+    pub fn new(trees: &[Placement], h: &[f32], spacing: f32) -> (Cells, Vec<u32>) {
         let mut cells = Cells::default();
-        if trees.is_empty() {
-            return cells;
-        }
         let (keys, levels) = keys(trees, spacing);
-        debug_assert!(keys.windows(2).all(|w| w[0] <= w[1]), "trees not in the cells' order");
-        cells.add(trees, h, (&keys, levels), 0..trees.len(), 0);
-        cells
+        let mut order: Vec<u32> = (0..trees.len() as u32).collect();
+        order.sort_unstable_by_key(|&a| (keys[a as usize], a));
+        if !trees.is_empty() {
+            let pick = |k: &u32| *k as usize;
+            let trees: Vec<Placement> = order.iter().map(|k| trees[pick(k)]).collect();
+            let h: Vec<f32> = order.iter().map(|k| h[pick(k)]).collect();
+            let keys: Vec<u64> = order.iter().map(|k| keys[pick(k)]).collect();
+            cells.add(&trees, &h, (&keys, levels), 0..trees.len(), 0);
+        }
+        (cells, order)
     }
 
     /// The cell of `range` (trees whose keys agree on their first `depth` digits) and,
@@ -314,14 +311,13 @@ mod tests {
             let d = |p: &Placement| p.position[0].powi(2) + p.position[1].powi(2);
             d(a).total_cmp(&d(b))
         });
-        let order = order(&trees, 7.0);
+        let h = vec![20.0; trees.len()];
+        let (cells, order) = Cells::new(&trees, &h, 7.0);
         assert_eq!(order[0], 0, "the centre tree stays tree 0");
         let mut seen = vec![false; trees.len()];
         order.iter().for_each(|&i| seen[i as usize] = true);
         assert!(seen.iter().all(|&s| s), "a permutation");
         let ordered: Vec<Placement> = order.iter().map(|&i| trees[i as usize]).collect();
-        let h = vec![20.0; ordered.len()];
-        let cells = Cells::new(&ordered, &h, 7.0);
         // Leaves tile the trees in order; every tree lies in its leaf's square and within
         // every enclosing cell's sphere.
         let side = leaf_side(7.0);

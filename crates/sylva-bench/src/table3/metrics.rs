@@ -32,6 +32,22 @@ pub(super) struct Still {
     pub(super) sampling: (f64, f64),
 }
 
+impl Still {
+    /// FLIP and SSIM of `image`, and of `aside` (the reference a quarter pixel aside),
+    /// against `reference`.
+    fn of(
+        image: &[u8],
+        aside: &[u8],
+        reference: &[u8],
+        (w, h): (u32, u32),
+    ) -> anyhow::Result<Still> {
+        Ok(Still {
+            lod: (flip(image, reference, w, h), ssim(image, reference, w, h)?),
+            sampling: (flip(aside, reference, w, h), ssim(aside, reference, w, h)?),
+        })
+    }
+}
+
 /// `camera` turned about its eye by a quarter of a pixel's angle (image `h` pixels tall),
 /// to the right.
 pub(super) fn quarter_pixel_aside(camera: &Camera, h: u32) -> Camera {
@@ -63,10 +79,7 @@ pub(super) fn still_error(
     let [full, aside, lod] = &images[..] else { return Ok(None) };
     write_png(&a.out.join(format!("{}-still-all-LODs.png", spec.name)), w, h, lod)?;
     write_png(&a.out.join(format!("{}-still-full-detail.png", spec.name)), w, h, full)?;
-    Ok(Some(Still {
-        lod: (flip(lod, full, w, h), ssim(lod, full, w, h)?),
-        sampling: (flip(aside, full, w, h), ssim(aside, full, w, h)?),
-    }))
+    Ok(Some(Still::of(lod, aside, full, (w, h))?))
 }
 
 /// The thinning of far impostors' own image error (with `--thin-px` or the scene's `[lod]
@@ -90,10 +103,7 @@ pub(super) fn thinning_error(
     let [whole, aside, thin] = &images[..] else { return Ok(None) };
     write_png(&a.out.join(format!("{}-still-thinned.png", spec.name)), w, h, thin)?;
     write_png(&a.out.join(format!("{}-still-every-impostor.png", spec.name)), w, h, whole)?;
-    Ok(Some(Still {
-        lod: (flip(thin, whole, w, h), ssim(thin, whole, w, h)?),
-        sampling: (flip(aside, whole, w, h), ssim(aside, whole, w, h)?),
-    }))
+    Ok(Some(Still::of(thin, aside, whole, (w, h))?))
 }
 
 /// The frames of `specs` before any step (every tree in its rest pose), each from the last

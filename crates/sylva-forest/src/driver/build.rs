@@ -66,10 +66,12 @@ impl Forest {
         let mut species = Vec::with_capacity(models.len());
         let mut trees: Vec<(Placement, u32)> = placements.iter().map(|&p| (p, 0)).collect();
         let total = trees.len().max(1);
-        let canopy = placements
+        // Each tree's height, m (in layout order).
+        let heights: Vec<f32> = placements
             .iter()
             .map(|p| models[p.species as usize].tree.stats.height * p.scale)
-            .fold(0.0, f32::max);
+            .collect();
+        let canopy = heights.iter().copied().fold(0.0, f32::max);
         // Groups are first formed for where the camera starts.
         let path = super::path_keys(spec, &terrain, radius, canopy);
         let eye = start_camera(spec, &path, radius).eye;
@@ -143,7 +145,7 @@ impl Forest {
         let wind = OwnedPyramid::new(field);
         // The trees renumbered in the cells' order (tree 0 stays the centre tree). What is
         // made above from the trees in layout order does not depend on their numbers after.
-        let order = crate::cells::order(&placements, spec.spacing);
+        let (mut cells, order) = Cells::new(&placements, &heights, spec.spacing);
         let mut renamed = vec![0usize; order.len()];
         for (k, &o) in order.iter().enumerate() {
             renamed[o as usize] = k;
@@ -155,8 +157,6 @@ impl Forest {
         }
         let n_trees = trees.len();
         let crowns = Crowns::new(&trees, |s| species[s as usize].model.tree.stats.height);
-        let feet: Vec<Placement> = trees.iter().map(|t| t.0).collect();
-        let mut cells = Cells::new(&feet, &crowns.h, spec.spacing);
         cells.order_by_draw(|t| super::lod::thin_draw(t, spec.seed));
         let mut forest = Forest {
             spec: spec.clone(),

@@ -15,6 +15,9 @@
 //!    copies.
 //! 5. [`Forest::write_instances`]: one instance per draw, in runs in parallel.
 
+mod leaves;
+mod occluded;
+
 use std::sync::atomic::Ordering;
 
 use rayon::prelude::*;
@@ -28,7 +31,7 @@ use super::{Forest, SpeciesRuntime};
 use crate::camera::{Camera, ShadowBox, ShadowSweep, ViewCone, may_see_trees, may_shade_trees};
 use crate::cells::Cell;
 use crate::scene::Placement;
-use sylva_core::v3::{dot, sub};
+use leaves::each_leaf;
 
 /// What stays fixed over one frame's passes: the view, the shadow's reach, the layout of
 /// bucket keys and the LOD settings.
@@ -293,31 +296,6 @@ impl Forest {
         thinning(s, thin_draw(i, self.spec.seed))
     }
 
-    /// For a leaf wholly in view whose every tree is surely past its LOD cap and thinned
-    /// by the same rule (`View::thin`): how many of its trees in draw order
-    /// ([`crate::cells::Cells::by_draw`]) the thinning may keep; the rest it surely leaves
-    /// out (their draws are at least the largest keep any of them may have: the one of the
-    /// leaf's tallest tree at the leaf's nearest point). `None` where the leaf is to be
-    /// classified tree by tree. Margins of a thousandth keep it within the per-tree tests'
-    /// rounding.
-    fn thinned_out(&self, view: &View, cell: &Cell) -> Option<usize> {
-        if view.thin <= 0.0 || view.lod.occlusion || !self.leaf_shortcut {
-            return None;
-        }
-        let (dist, depth) = view.cone.holds(cell.centre, 1.001 * cell.radius + 0.01)?;
-        let fraction = view.cone.fraction_at(cell.tallest, depth);
-        if !(depth > 0.0 && fraction < 0.999 * view.least_past_cap) {
-            return None;
-        }
-        // (At or above the threshold, or not a number, thinning keeps every tree.)
-        let s = view.cone.fraction_at(cell.tallest, dist) / view.thin;
-        if s.is_nan() || s >= 1.0 {
-            return None;
-        }
-        let keep = 1.001 * (s * s).max(THIN_MIN_KEEP) * (1.0 + THIN_BAND);
-        Some(self.cells.draws[cell.trees()].partition_point(|&u| u < keep))
-    }
-
     /// Pass 1: the trees of the leaves in view, a leaf at a time, the leaves in parallel.
     /// Each fills its own keys, merged afterwards in leaf order (so in tree order), and
     /// raises the per-simulation maxima (which do not depend on order), so the frame is the
@@ -343,46 +321,24 @@ impl Forest {
             let (cr, span) = (&self.crowns, first..first + n);
             let (cx, cy) = (&cr.x[span.clone()], &cr.y[span.clone()]);
             let (cz, ch) = (&cr.z[span.clone()], &cr.h[span]);
+            // One tree of the leaf, `k` its index in it: the crown's height and centre, as the
+            // culling took them.
+            let classify_at = |k: usize, state: &mut f32, to: &mut RunOut<'_>| {
+                let (p, g) = &trees[k];
+                let h = ch[k];
+                let c = [cx[k], cy[k], cz[k] + 0.5 * h];
+                let tree = Tree { i: first + k, p, group: *g, c, h };
+                self.classify_tree(view, (past_cap, thresholds), &tree, k, state, to);
+            };
             // A leaf wholly in view and far: the trees past the thinning's last keep are
-            // decided at once (`Forest::thinned_out`), the others classified alone.
+            // decided at once, the others classified alone, in tree order.
             if let Some(kept) = self.thinned_out(view, cell) {
-                let order = &self.cells.by_draw[cell.trees()];
-                let thinned = n - kept;
-                run.stats =
-                    FrameStats { thinned, thinned_by_leaf: thinned, ..FrameStats::default() };
-                // Those not yet at their cap in this view go there, as a tree the thinning
-                // leaves out does (`classify_tree`).
-                for &t in &order[kept..(*settled as usize).max(kept)] {
-                    let (k, species) = (t as usize - first, trees[t as usize - first].0.species);
-                    let x = lod_cap(view.far[species as usize]);
-                    if !states[k].is_nan() && states[k] as u32 != x as u32 {
-                        run.stats.level_changes += 1;
-                    }
-                    states[k] = x;
-                }
-                *settled = kept as u32;
-                // The ones it may keep in tree order, as the trees of a leaf are classified
-                // (their draws listed in the same order as tree by tree; memory in order).
-                let mut kept_trees = std::mem::take(&mut run.kept);
-                kept_trees.clear();
-                kept_trees.extend_from_slice(&order[..kept]);
-                kept_trees.sort_unstable();
+                self.settle_far_leaf(view, cell, kept, (states, settled), run);
+                let kept_trees = std::mem::take(&mut run.kept);
                 let mut to = RunOut { run, need_max, want_max, seen_max };
                 for &t in &kept_trees {
                     let k = t as usize - first;
-                    to.run.seen[k] = true;
-                    let (p, g) = &trees[k];
-                    let h = ch[k];
-                    let c = [cx[k], cy[k], cz[k] + 0.5 * h];
-                    let tree = Tree { i: t as usize, p, group: *g, c, h };
-                    self.classify_tree(
-                        view,
-                        (past_cap, thresholds),
-                        &tree,
-                        k,
-                        &mut states[k],
-                        &mut to,
-                    );
+                    classify_at(k, &mut states[k], &mut to);
                 }
                 to.run.kept = kept_trees;
                 return;
@@ -412,103 +368,14 @@ impl Forest {
             }
             run.stats = FrameStats { occluded, ..FrameStats::default() };
             let mut to = RunOut { run, need_max, want_max, seen_max };
-            for (k, ((p, g), state)) in trees.iter().zip(states).enumerate() {
-                // The crown's height and centre, as the culling took them.
-                let h = ch[k];
-                let c = [cx[k], cy[k], cz[k] + 0.5 * h];
-                let tree = Tree { i: first + k, p, group: *g, c, h };
-                self.classify_tree(view, (past_cap, thresholds), &tree, k, state, &mut to);
+            for (k, state) in states.iter_mut().enumerate() {
+                classify_at(k, state, &mut to);
             }
         };
         let leaves = (&out.visit.leaves[..], cells);
         let slices = (&mut out.runs[..runs], &mut out.lod_state[..], &mut out.settled[..]);
         each_leaf(slices, (0, 0), leaves, &one_leaf);
         runs
-    }
-
-    /// Pass 0, with occlusion culling on: the trees in view that cover enough of the image
-    /// (a run at a time, in parallel) write their occluders into the frame's depth buffer,
-    /// near to far.
-    fn fill_occlusion(&self, view: &View, camera: &Camera, aspect: f32, out: &mut FrameData) {
-        // Off, the buffer is neither filled nor read.
-        if !view.lod.occlusion {
-            return;
-        }
-        out.occlusion.reset(camera, aspect);
-        let runs = out.visit.leaves.len();
-        if out.runs.len() < runs {
-            out.runs.resize_with(runs, TreeRun::default);
-        }
-        let cot = 1.0 / (0.5 * camera.fov_deg.to_radians()).tan();
-        let (buffer, forward) = (&out.occlusion, camera.forward());
-        out.runs[..runs].par_iter_mut().zip(out.visit.leaves.par_iter()).for_each(
-            |(run, &leaf)| {
-                let span = self.cells.cells[leaf as usize].trees();
-                let (first, n) = (span.start, span.len());
-                let trees = &self.trees[span];
-                run.occluders.clear();
-                run.seen.resize(n, false);
-                let (cr, span) = (&self.crowns, first..first + n);
-                let (cx, cy) = (&cr.x[span.clone()], &cr.y[span.clone()]);
-                let (cz, ch) = (&cr.z[span.clone()], &cr.h[span]);
-                may_see_trees(&view.cone, cx, cy, cz, ch, &mut run.seen[..n]);
-                for (k, (p, _)) in trees.iter().enumerate() {
-                    let side = self.species[p.species as usize].occluder.smallest_side();
-                    if !run.seen[k] || side <= 0.0 {
-                        continue;
-                    }
-                    let w = dot(sub(p.position, camera.eye), forward);
-                    if buffer.worth_writing(side * p.scale, w, cot) {
-                        run.occluders.push((first + k) as u32);
-                    }
-                }
-            },
-        );
-        // Near to far (ties by tree), so each pixel's light falls in depth order.
-        let order = &mut out.occluder_order;
-        order.clear();
-        for run in &out.runs[..runs] {
-            order.extend(run.occluders.iter().map(|&i| {
-                let p = &self.trees[i as usize].0;
-                let o = &self.species[p.species as usize].occluder;
-                (out.occlusion.tree_depth(o, p.position, p.scale), i)
-            }));
-        }
-        order.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        for &(depth, i) in order.iter() {
-            let p = &self.trees[i as usize].0;
-            let o = &self.species[p.species as usize].occluder;
-            out.occlusion.add_tree(o, p.position, p.scale, depth);
-        }
-    }
-
-    /// Of a run's trees in view (`seen`), those whose bounds `buffer` hides are marked out
-    /// of view; returns how many.
-    fn hide_occluded(
-        &self,
-        buffer: &crate::occlusion::DepthBuffer,
-        trees: &[(Placement, u32)],
-        z: &[f32],
-        h: &[f32],
-        seen: &mut [bool],
-    ) -> usize {
-        let mut hidden = 0;
-        for (k, (p, _)) in trees.iter().enumerate() {
-            if !seen[k] {
-                continue;
-            }
-            let o = &self.species[p.species as usize].occluder;
-            // The tree's bounds at rest, widened by a tenth of its height for its sway.
-            let r = o.bound_radius * p.scale + 0.1 * h[k];
-            let (x, y) = (p.position[0], p.position[1]);
-            let lo = [x - r, y - r, z[k] + o.bound_bottom * p.scale - 0.1];
-            let hi = [x + r, y + r, z[k] + o.bound_top * p.scale + 0.1 * h[k]];
-            if buffer.hides_box(lo, hi) {
-                seen[k] = false;
-                hidden += 1;
-            }
-        }
-        hidden
     }
 
     /// One tree of pass 1 (`k` its index in its run): culled, or its level, cross-fade and
@@ -920,41 +787,6 @@ impl FrameData {
             for run in &self.runs[..runs] {
                 self.keys.extend(run.by_key[k].iter().map(|&tagged| (k as u32, tagged)));
             }
-        }
-    }
-}
-
-/// `f(run, states, settled, cell)` for each leaf of `leaves` (cell indices into `cells`,
-/// ascending) with its own run, its trees' slice of `states` and its entry of `settled`
-/// (per leaf), the slices starting at tree and leaf `offset`: the leaves split in halves,
-/// the halves in parallel.
-fn each_leaf<F>(
-    (runs, states, settled): (&mut [TreeRun], &mut [f32], &mut [u32]),
-    offset: (usize, usize),
-    (leaves, cells): (&[u32], &[Cell]),
-    f: &F,
-) where
-    F: Fn(&mut TreeRun, &mut [f32], &mut u32, &Cell) + Sync,
-{
-    match leaves {
-        [] => {}
-        [leaf] => {
-            let cell = &cells[*leaf as usize];
-            let span = cell.trees();
-            let states = &mut states[span.start - offset.0..span.end - offset.0];
-            f(&mut runs[0], states, &mut settled[cell.leaf as usize - offset.1], cell)
-        }
-        _ => {
-            let mid = leaves.len() / 2;
-            let cell = &cells[leaves[mid] as usize];
-            let at = (cell.first as usize, cell.leaf as usize);
-            let (sa, sb) = states.split_at_mut(at.0 - offset.0);
-            let (la, lb) = settled.split_at_mut(at.1 - offset.1);
-            let (ra, rb) = runs.split_at_mut(mid);
-            rayon::join(
-                || each_leaf((ra, sa, la), offset, (&leaves[..mid], cells), f),
-                || each_leaf((rb, sb, lb), at, (&leaves[mid..], cells), f),
-            );
         }
     }
 }

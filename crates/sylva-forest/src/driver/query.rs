@@ -156,15 +156,12 @@ impl Forest {
     /// first: the first `n` of the scene's layout. (Tree indices follow the forest's cells,
     /// `crate::cells`: tree 0 is the nearest, the others go square by square.)
     pub fn nearest_centre(&self, n: usize) -> Vec<usize> {
-        let key = |t: usize| {
+        let d2 = |t: usize| {
             let p = self.trees[t].0.position;
-            (p[0] * p[0] + p[1] * p[1], t)
+            p[0] * p[0] + p[1] * p[1]
         };
         let mut all: Vec<usize> = (0..self.trees.len()).collect();
-        let by = |a: &usize, b: &usize| {
-            let (ka, kb) = (key(*a), key(*b));
-            ka.0.total_cmp(&kb.0).then(ka.1.cmp(&kb.1))
-        };
+        let by = |a: &usize, b: &usize| d2(*a).total_cmp(&d2(*b)).then(a.cmp(b));
         if n < all.len() {
             all.select_nth_unstable_by(n, by);
             all.truncate(n);
