@@ -165,14 +165,17 @@ fn frames_draw_every_visible_tree_once_with_valid_palettes_and_trees_move() {
     assert!(f.palettes.iter().all(|v| v.is_finite()));
 }
 
-/// Scene E: a million trees at D's spacing, about 10 km across, on hills with relief, laid out the same
-/// for the same seed; its high flight stays hundreds of metres over the ground and looks
-/// across the forest to its far side.
+/// Scene E: a million trees at D's spacing, about 10 km across, on hills with relief, laid
+/// out the same for the same seed, its far trees thinned and its near ones levelled by their
+/// error; its high flight stays hundreds of metres over the ground and looks across the
+/// forest to its far side.
 #[test]
 fn scene_e_is_a_million_trees_to_the_horizon_with_a_high_flight() {
     let spec = SceneSpec::builtin("E").expect("built-in");
     assert_eq!(spec.trees, 1_000_000);
     assert!(spec.lod.thin_px > 0.0, "its far impostors thinned");
+    // Its near trees by screen-space error, over every mesh level (its walk's triangles).
+    assert!(spec.lod.error_px > 0.0 && spec.lod.far_level > 1, "{:?}", spec.lod);
     let t = Terrain::new(&spec);
     let a = layout(&spec, &t);
     assert_eq!(a.len(), 1_000_000);
