@@ -304,9 +304,8 @@ fn new_species(
     prefixes.push(order.trunk);
     batch.set_prefixes(&prefixes);
     let level_error = level_errors(&model);
-    let occluder = crate::occlusion::Occluder::of(&model);
     Ok(SpeciesRuntime {
-        occluder,
+        occluder: std::sync::OnceLock::new(),
         name: spec.species[si].name.clone(),
         level_error,
         model,

@@ -195,8 +195,9 @@ pub struct SpeciesRuntime {
     packer: lanes::Packer,
     /// The skeleton's LOD order: joints each level uses, joints of the trunk.
     pub order: LodOrder,
-    /// What of its tree surely stops the eye (occlusion culling), and its bounds.
-    pub occluder: crate::occlusion::Occluder,
+    /// What of its tree surely stops the eye (occlusion culling), and its bounds: measured
+    /// the first time occlusion culling asks for it ([`SpeciesRuntime::occluder`]).
+    occluder: std::sync::OnceLock<crate::occlusion::Occluder>,
     /// Simulated instances that read the coarse wind in the last step.
     coarse_wind: usize,
     /// Simulated instances that read the near field in the last step.
@@ -207,6 +208,13 @@ pub struct SpeciesRuntime {
 }
 
 impl SpeciesRuntime {
+    /// What of its tree surely stops the eye, for occlusion culling, and its bounds: its
+    /// full detail's bole and crown core (`Occluder::of`), measured on the first call (a
+    /// few tenths of a second a species; forests that never cull do not pay it).
+    pub fn occluder(&self) -> &crate::occlusion::Occluder {
+        self.occluder.get_or_init(|| crate::occlusion::Occluder::of(&self.model))
+    }
+
     /// The crown's static lean in wind that its impostors are sheared with.
     pub fn lean(&self) -> &CrownLean {
         &self.lean

@@ -62,18 +62,26 @@ pub struct Placement {
 }
 
 /// Bridson's Poisson-disk sampling in the square [−side/2, side/2]², minimum distance `r`.
+///
+/// The background grid's cells are r/√2 wide, so each holds at most one point (the last one
+/// placed in it, should rounding ever put two there), and it holds that point's coordinates
+/// (NaN where empty): a candidate's test reads the 5 × 5 cells around it in place, its own
+/// cell first (the likeliest to reject it).
 fn poisson_disk(rng: &mut Rng, side: f32, r: f32) -> Vec<[f32; 2]> {
     let cell = r / std::f32::consts::SQRT_2;
     let n = (side / cell).ceil() as usize;
-    let mut grid = vec![u32::MAX; n * n];
+    let mut grid = vec![[f32::NAN; 2]; n * n];
     let idx = |p: [f32; 2]| {
         let gx = (((p[0] + side / 2.0) / cell) as usize).min(n - 1);
         let gy = (((p[1] + side / 2.0) / cell) as usize).min(n - 1);
         (gx, gy)
     };
+    // Whether `o` (a cell's content) is a point nearer `p` than r (false where empty: NaN
+    // compares false).
+    let near = |o: [f32; 2], p: [f32; 2]| (o[0] - p[0]).powi(2) + (o[1] - p[1]).powi(2) < r * r;
     let mut pts: Vec<[f32; 2]> = vec![[0.0, 0.0]];
     let (gx, gy) = idx(pts[0]);
-    grid[gy * n + gx] = 0;
+    grid[gy * n + gx] = pts[0];
     let mut active = vec![0usize];
     while !active.is_empty() {
         let k = (rng.unit() * active.len() as f32) as usize % active.len();
@@ -87,21 +95,14 @@ fn poisson_disk(rng: &mut Rng, side: f32, r: f32) -> Vec<[f32; 2]> {
                 continue;
             }
             let (gx, gy) = idx(p);
-            let mut ok = true;
-            'near: for y in gy.saturating_sub(2)..(gy + 3).min(n) {
-                for x in gx.saturating_sub(2)..(gx + 3).min(n) {
-                    let q = grid[y * n + x];
-                    if q != u32::MAX {
-                        let o = pts[q as usize];
-                        if (o[0] - p[0]).powi(2) + (o[1] - p[1]).powi(2) < r * r {
-                            ok = false;
-                            break 'near;
-                        }
-                    }
-                }
+            if near(grid[gy * n + gx], p) {
+                continue;
             }
-            if ok {
-                grid[gy * n + gx] = pts.len() as u32;
+            let (x0, x1) = (gx.saturating_sub(2), (gx + 3).min(n));
+            let clear = (gy.saturating_sub(2)..(gy + 3).min(n))
+                .all(|y| grid[y * n + x0..y * n + x1].iter().all(|&o| !near(o, p)));
+            if clear {
+                grid[gy * n + gx] = p;
                 active.push(pts.len());
                 pts.push(p);
                 found = true;

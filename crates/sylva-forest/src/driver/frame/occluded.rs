@@ -26,6 +26,11 @@ impl Forest {
             return;
         }
         out.occlusion.reset(camera, aspect);
+        // Each species' occluder measured once, on the first frame that culls (one species
+        // after the other, each measurement parallel in itself), before the passes read it.
+        for s in &self.species {
+            s.occluder();
+        }
         let runs = out.visit.leaves.len();
         if out.runs.len() < runs {
             out.runs.resize_with(runs, TreeRun::default);
@@ -44,7 +49,7 @@ impl Forest {
                 let (cz, ch) = (&cr.z[span.clone()], &cr.h[span]);
                 may_see_trees(&view.cone, cx, cy, cz, ch, &mut run.seen[..n]);
                 for (k, (p, _)) in trees.iter().enumerate() {
-                    let side = self.species[p.species as usize].occluder.smallest_side();
+                    let side = self.species[p.species as usize].occluder().smallest_side();
                     if !run.seen[k] || side <= 0.0 {
                         continue;
                     }
@@ -61,14 +66,14 @@ impl Forest {
         for run in &out.runs[..runs] {
             order.extend(run.occluders.iter().map(|&i| {
                 let p = &self.trees[i as usize].0;
-                let o = &self.species[p.species as usize].occluder;
+                let o = self.species[p.species as usize].occluder();
                 (out.occlusion.tree_depth(o, p.position, p.scale), i)
             }));
         }
         order.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
         for &(depth, i) in order.iter() {
             let p = &self.trees[i as usize].0;
-            let o = &self.species[p.species as usize].occluder;
+            let o = self.species[p.species as usize].occluder();
             out.occlusion.add_tree(o, p.position, p.scale, depth);
         }
     }
@@ -88,7 +93,7 @@ impl Forest {
             if !seen[k] {
                 continue;
             }
-            let o = &self.species[p.species as usize].occluder;
+            let o = self.species[p.species as usize].occluder();
             // The tree's bounds at rest, widened by a tenth of its height for its sway.
             let r = o.bound_radius * p.scale + 0.1 * h[k];
             let (x, y) = (p.position[0], p.position[1]);
