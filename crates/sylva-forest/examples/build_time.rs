@@ -20,7 +20,11 @@ fn main() -> anyhow::Result<()> {
         let t = Instant::now();
         let forest = Forest::new(&spec)?;
         let secs = t.elapsed().as_secs_f64();
-        println!("{name}: {} trees, {} species, built in {secs:.3} s", spec.trees, forest.species.len());
+        println!(
+            "{name}: {} trees, {} species, built in {secs:.3} s",
+            spec.trees,
+            forest.species.len()
+        );
     }
     Ok(())
 }
