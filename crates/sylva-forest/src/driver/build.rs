@@ -124,19 +124,27 @@ impl Forest {
             let most = (full[si] - floor[si]) as f64 + full[si] as f64 / 4.0;
             floor[si] + ((limit - all_floor) as f64 * share).min(most) as usize
         };
-        for (si, (original, order)) in models.into_iter().zip(orders).enumerate() {
-            let model = original.reordered(&order.order).map_err(|e| ForestError::Species {
-                name: spec.species[si].name.clone(),
-                message: e.to_string(),
-            })?;
-            let joints = model.tree.skeleton.len();
-            let planted = trees.iter().filter(|t| t.0.species == si as u32).count();
-            let n_groups = simulations(planted, joints);
+        // What each species makes of its model alone (its simulations' batch, its lean,
+        // its levels' errors), the species in parallel; then, in species order, its trees'
+        // groups and lanes.
+        let n_groups: Vec<usize> = models
+            .iter()
+            .enumerate()
+            .map(|(si, m)| simulations(members_of(si), m.tree.skeleton.len()))
+            .collect();
+        let made: Vec<Result<Made, ForestError>> = models
+            .into_par_iter()
+            .zip(orders.par_iter())
+            .zip(n_groups.par_iter())
+            .enumerate()
+            .map(|(si, ((original, order), &n))| make_species(spec, si, original, order, n))
+            .collect();
+        for (si, (made, order)) in made.into_iter().zip(orders).enumerate() {
+            let n_groups = n_groups[si];
             let first = FirstGroups { side, eye, n_groups };
             let state_cap = allowance(si);
-            species.push(new_species(
-                spec, si, model, order, &mut trees, first, lane_base, state_cap,
-            )?);
+            species
+                .push(new_species(spec, si, made?, order, &mut trees, first, lane_base, state_cap));
             lane_base += n_groups.div_ceil(LANES);
         }
         let canopy_wind = super::shelter::canopy_of(spec, &trees, &species);
@@ -248,19 +256,20 @@ struct FirstGroups {
     n_groups: usize,
 }
 
-/// Species `si` of `spec` with its `model` in LOD `order`: its trees (Morton order) put in
-/// their first instance groups, its batch, lanes starting at lane group `lane_base`, and a
-/// cap of `state_cap` bytes of animation state.
+/// Species `si` of `spec` with what it `made` of its model (in LOD `order`): its trees
+/// (Morton order) put in their first instance groups, lanes starting at lane group
+/// `lane_base`, and a cap of `state_cap` bytes of animation state.
 fn new_species(
     spec: &SceneSpec,
     si: usize,
-    model: TreeModel,
+    made: Made,
     order: LodOrder,
     trees: &mut [(Placement, u32)],
     first: FirstGroups,
     lane_base: usize,
     state_cap: usize,
-) -> Result<SpeciesRuntime, ForestError> {
+) -> SpeciesRuntime {
+    let Made { model, lean, batch, level_error } = made;
     let FirstGroups { side, eye, n_groups } = first;
     let mut members: Vec<usize> =
         (0..trees.len()).filter(|&t| trees[t].0.species == si as u32).collect();
@@ -290,21 +299,7 @@ fn new_species(
     }
     let slots: Vec<u32> = (0..runs.len() as u32).collect();
     regroup_species(trees, &mut groups, &members, &runs, &slots, height, |_, _| {});
-    let sway = SwaySpecies::new(
-        &model.tree.skeleton,
-        spec.sway.apply(SwayParams::for_leaves(model.leaves.needles)),
-    )
-    .map_err(|e| ForestError::Species {
-        name: spec.species[si].name.clone(),
-        message: e.to_string(),
-    })?;
-    let lean = CrownLean::new(&sway, &model.tree.skeleton);
-    let mut batch = SwayBatch::new(sway, n_groups);
-    let mut prefixes = order.prefix.clone();
-    prefixes.push(order.trunk);
-    batch.set_prefixes(&prefixes);
-    let level_error = level_errors(&model);
-    Ok(SpeciesRuntime {
+    SpeciesRuntime {
         occluder: std::sync::OnceLock::new(),
         name: spec.species[si].name.clone(),
         level_error,
@@ -328,7 +323,43 @@ fn new_species(
         coarse_wind: 0,
         near_wind: 0,
         mean_speed: 0.0,
-    })
+    }
+}
+
+/// What a species makes of its model alone, before its trees are grouped.
+struct Made {
+    /// The model, its joints in LOD order.
+    model: TreeModel,
+    lean: CrownLean,
+    /// The simulations' batch, `n_groups` of them, with the LOD order's prefixes.
+    batch: SwayBatch,
+    level_error: Vec<f32>,
+}
+
+/// [`Made`] for species `si` of `spec`: `original` reordered by `order`, `n_groups`
+/// simulations.
+fn make_species(
+    spec: &SceneSpec,
+    si: usize,
+    original: TreeModel,
+    order: &LodOrder,
+    n_groups: usize,
+) -> Result<Made, ForestError> {
+    let failed =
+        |e: String| ForestError::Species { name: spec.species[si].name.clone(), message: e };
+    let model = original.reordered(&order.order).map_err(|e| failed(e.to_string()))?;
+    let sway = SwaySpecies::new(
+        &model.tree.skeleton,
+        spec.sway.apply(SwayParams::for_leaves(model.leaves.needles)),
+    )
+    .map_err(|e| failed(e.to_string()))?;
+    let lean = CrownLean::new(&sway, &model.tree.skeleton);
+    let mut batch = SwayBatch::new(sway, n_groups);
+    let mut prefixes = order.prefix.clone();
+    prefixes.push(order.trunk);
+    batch.set_prefixes(&prefixes);
+    let level_error = level_errors(&model);
+    Ok(Made { model, lean, batch, level_error })
 }
 
 /// A species' mesh levels' errors as shares of its tree's height
