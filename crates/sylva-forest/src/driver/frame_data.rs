@@ -34,7 +34,9 @@ pub struct Instance {
     /// `[fade[0], fade[1])`. A tree between two levels is drawn twice with complementary
     /// ranges `[0, 1 − w)` and `[1 − w, 1)`; a tree at one level has `[0, 2)`. A tree that
     /// changed instance group is also drawn with its old group over `[0, 1 − v)` and its new
-    /// one over `[1 − v, 1)`, each range split between two levels the same way.
+    /// one over `[1 − v, 1)`, each range split between two levels the same way. A far tree
+    /// fading out by thinning ([`LodSettings::thin_px`](super::LodSettings::thin_px)) keeps
+    /// a narrower range, at a place in [0, 1) fixed per tree.
     pub fade: [f32; 2],
     /// What the renderer's colour overlay shows: bits 0–3 the geometry level of this draw
     /// (15: an impostor), bits 4–7 the species, bits 8–31 the instance group within the

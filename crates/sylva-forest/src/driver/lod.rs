@@ -59,6 +59,18 @@ pub(super) fn thin_draw(tree: usize, seed: u64) -> f32 {
     (h >> 40) as f32 / (1u64 << 24) as f32
 }
 
+/// Where in the dither range a far tree fading out by thinning keeps its share, as a
+/// fraction of the room left (uniform in [0, 1), fixed per tree, independent of
+/// [`thin_draw`]): the dither is the screen's, so trees fading at the same place would
+/// otherwise all drop the same pixels, and the ground would show through the far canopy in
+/// the dither's pattern.
+pub(super) fn thin_shift(tree: usize, seed: u64) -> f32 {
+    let h = sylva_core::rng::mix64(
+        seed ^ 0x7368_6966_7400 ^ (tree as u64).wrapping_mul(0xc2b2_ae3d_27d4_eb4f),
+    );
+    (h >> 40) as f32 / (1u64 << 24) as f32
+}
+
 /// Thinning of a far tree whose image height is `s` times the threshold and whose draw is
 /// `u`: `None` where it is not drawn; else the share of its dither range it keeps (1, or
 /// less as it fades out) and how much wider it is drawn.

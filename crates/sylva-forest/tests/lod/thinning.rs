@@ -70,3 +70,39 @@ fn thinning_draws_fewer_far_trees_wider_and_keeps_their_cover() {
     let again = frame_with(&mut forest, 0.0);
     assert_eq!(again.instances, whole.instances);
 }
+
+#[test]
+fn far_trees_fading_out_keep_their_shares_at_different_places_in_the_dither_range() {
+    // The dither is the screen's: far trees fading out at the same place in the picture,
+    // all keeping the range's start, would all drop the same pixels, and the ground would
+    // show through the far canopy in the dither's pattern. Each keeps its share at its
+    // own place instead: the starts, as fractions of the room a share leaves, are spread
+    // evenly over [0, 1).
+    let spec = stand();
+    let mut forest = Forest::new(&spec).expect("forest");
+    forest.set_lod(LodSettings { thin_px: 64.0, ..forest.lod() });
+    let camera = Camera {
+        eye: [-forest.radius - 20.0, 0.0, 60.0],
+        target: [0.0, 0.0, 0.0],
+        fov_deg: 60.0,
+        near: 0.5,
+        far: 20_000.0,
+    };
+    let mut frame = FrameData::with_rows(768);
+    forest.frame(&camera, 4.0 / 3.0, &mut frame);
+    forest.frame(&camera, 4.0 / 3.0, &mut frame);
+    let places: Vec<f32> = frame
+        .instances
+        .iter()
+        .filter(|i| i.tag & 15 == 15 && i.fade[1] < 1.0)
+        .map(|i| i.fade[0] / (1.0 - (i.fade[1] - i.fade[0])))
+        .collect();
+    assert!(places.len() > 100, "{} trees fading", places.len());
+    assert!(places.iter().all(|p| (0.0..1.0).contains(p)), "places in [0, 1)");
+    // Evenly spread: each quarter of [0, 1) holds about a quarter of them.
+    for q in 0..4 {
+        let share = places.iter().filter(|&&p| (p * 4.0) as usize == q).count() as f32
+            / places.len() as f32;
+        assert!((share - 0.25).abs() < 0.06, "quarter {q} holds {share} of the places");
+    }
+}
