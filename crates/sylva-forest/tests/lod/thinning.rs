@@ -23,18 +23,23 @@ fn cover(frame: &FrameData, far: bool) -> f64 {
         .sum()
 }
 
-#[test]
-fn thinning_draws_fewer_far_trees_wider_and_keeps_their_cover() {
-    let spec = stand();
-    let mut forest = Forest::new(&spec).expect("forest");
-    // High over one edge, looking across the stand: near trees large, far ones a few pixels.
-    let camera = Camera {
+/// High over one edge of `forest`, looking across it: near trees large, far ones a few
+/// pixels.
+fn across(forest: &Forest) -> Camera {
+    Camera {
         eye: [-forest.radius - 20.0, 0.0, 60.0],
         target: [0.0, 0.0, 0.0],
         fov_deg: 60.0,
         near: 0.5,
         far: 20_000.0,
-    };
+    }
+}
+
+#[test]
+fn thinning_draws_fewer_far_trees_wider_and_keeps_their_cover() {
+    let spec = stand();
+    let mut forest = Forest::new(&spec).expect("forest");
+    let camera = across(&forest);
     let frame_with = |forest: &mut Forest, px: f32| {
         forest.set_lod(LodSettings { thin_px: px, ..forest.lod() });
         let mut f = FrameData::with_rows(768);
@@ -81,13 +86,7 @@ fn far_trees_fading_out_keep_their_shares_at_different_places_in_the_dither_rang
     let spec = stand();
     let mut forest = Forest::new(&spec).expect("forest");
     forest.set_lod(LodSettings { thin_px: 64.0, ..forest.lod() });
-    let camera = Camera {
-        eye: [-forest.radius - 20.0, 0.0, 60.0],
-        target: [0.0, 0.0, 0.0],
-        fov_deg: 60.0,
-        near: 0.5,
-        far: 20_000.0,
-    };
+    let camera = across(&forest);
     let mut frame = FrameData::with_rows(768);
     forest.frame(&camera, 4.0 / 3.0, &mut frame);
     forest.frame(&camera, 4.0 / 3.0, &mut frame);
