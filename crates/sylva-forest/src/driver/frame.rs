@@ -722,15 +722,15 @@ impl Forest {
             }
             _ => (1.0, 1.0),
         };
-        let (lo, hi) = match (keep < 1.0, fading) {
-            (false, _) => (lo, hi),
-            // Alone in its range (no regroup's fade), it keeps its share at its own place
-            // in it (`thin_shift`), so fading trees drop different pixels.
-            (true, None) => {
-                let s = thin_shift(i, self.spec.seed) * (1.0 - keep);
-                (s, s + keep)
-            }
-            (true, Some(_)) => (lo, lo + keep * (hi - lo)),
+        let (lo, hi) = if keep < 1.0 {
+            let kept = keep * (hi - lo);
+            // Alone in its range [0, 1) (no regroup's fade), it keeps its share at its own
+            // place in it (`thin_shift`), so fading trees drop different pixels.
+            let lo =
+                if fading.is_none() { thin_shift(i, self.spec.seed) * (1.0 - kept) } else { lo };
+            (lo, lo + kept)
+        } else {
+            (lo, hi)
         };
         let fade = [lo, if hi >= 1.0 { 2.0 } else { hi }];
         Instance {

@@ -53,10 +53,7 @@ pub const THIN_MIN_KEEP: f32 = 1.0 / 8.0;
 
 /// A tree's fixed draw for thinning, uniform in [0, 1): from its index and the scene's seed.
 pub(super) fn thin_draw(tree: usize, seed: u64) -> f32 {
-    let h = sylva_core::rng::mix64(
-        seed ^ 0x7468_696e ^ (tree as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15),
-    );
-    (h >> 40) as f32 / (1u64 << 24) as f32
+    tree_uniform(tree, seed ^ 0x7468_696e, 0x9e37_79b9_7f4a_7c15)
 }
 
 /// Where in the dither range a far tree fading out by thinning keeps its share, as a
@@ -65,9 +62,13 @@ pub(super) fn thin_draw(tree: usize, seed: u64) -> f32 {
 /// otherwise all drop the same pixels, and the ground would show through the far canopy in
 /// the dither's pattern.
 pub(super) fn thin_shift(tree: usize, seed: u64) -> f32 {
-    let h = sylva_core::rng::mix64(
-        seed ^ 0x7368_6966_7400 ^ (tree as u64).wrapping_mul(0xc2b2_ae3d_27d4_eb4f),
-    );
+    tree_uniform(tree, seed ^ 0x7368_6966_7400, 0xc2b2_ae3d_27d4_eb4f)
+}
+
+/// A value uniform in [0, 1) fixed by a tree's index, a salted seed and an odd multiplier
+/// (24 bits of one hash).
+fn tree_uniform(tree: usize, salted: u64, multiplier: u64) -> f32 {
+    let h = sylva_core::rng::mix64(salted ^ (tree as u64).wrapping_mul(multiplier));
     (h >> 40) as f32 / (1u64 << 24) as f32
 }
 
