@@ -124,12 +124,31 @@ pub struct SynthParams {
 pub const CHOLESKY_MAX_POINTS: usize = 4096;
 
 /// A number type the synthesis can write (f32 for fields, f64 for reference checks). The
-/// coefficients are computed in f64; the final inverse FFT runs in this type.
+/// coefficients are computed in f64, except the embedding's spatial FFTs, which run in this
+/// type (an f32 field keeps f32's precision, and its FFTs run twice as many lanes); the
+/// final inverse FFT runs in this type.
 pub trait Sample: realfft::FftNum + Default {
     /// Convert from the f64 the synthesis computes in.
     fn from_f64_sample(x: f64) -> Self;
     /// out = v ⊙ sc, narrowed to this type.
     fn scale_into(v: &[C64], sc: &[C64], out: &mut [Complex<Self>]);
+    /// out = v ⊙ sc for coefficients already in this type (the product taken in f64).
+    fn scale_own_into(v: &[Complex<Self>], sc: &[C64], out: &mut [Complex<Self>]);
+    /// Widen to f64.
+    fn to_f64_sample(self) -> f64;
+    /// out = v narrowed to this type.
+    fn narrow_reals(v: &[f64], out: &mut [Self]);
+    /// The embedding's phasors k0, k0 + 1, … of the line with key `key` in this type (f32:
+    /// the f64 phasors' values before widening).
+    fn phasors(key: u64, k0: u64, out: &mut [Complex<Self>]);
+    /// Row h of the embedding's factored blocks applied to the phasors, in this type.
+    fn apply_factor_row(
+        lanes: &[Self],
+        xi: &[Complex<Self>],
+        h: usize,
+        w: usize,
+        out: &mut [Complex<Self>],
+    );
 }
 impl Sample for f32 {
     fn from_f64_sample(x: f64) -> Self {
@@ -138,6 +157,27 @@ impl Sample for f32 {
     fn scale_into(v: &[C64], sc: &[C64], out: &mut [Complex<f32>]) {
         scale_f32(v, sc, out)
     }
+    fn scale_own_into(v: &[Complex<f32>], sc: &[C64], out: &mut [Complex<f32>]) {
+        scale_f32_own(v, sc, out)
+    }
+    fn to_f64_sample(self) -> f64 {
+        f64::from(self)
+    }
+    fn narrow_reals(v: &[f64], out: &mut [f32]) {
+        narrow_reals_f32(v, out)
+    }
+    fn phasors(key: u64, k0: u64, out: &mut [Complex<f32>]) {
+        phasor_span_f32(key, k0, out)
+    }
+    fn apply_factor_row(
+        lanes: &[f32],
+        xi: &[Complex<f32>],
+        h: usize,
+        w: usize,
+        out: &mut [Complex<f32>],
+    ) {
+        embed::apply_factor_row_f32(lanes, xi, h, w, out)
+    }
 }
 impl Sample for f64 {
     fn from_f64_sample(x: f64) -> Self {
@@ -145,6 +185,27 @@ impl Sample for f64 {
     }
     fn scale_into(v: &[C64], sc: &[C64], out: &mut [Complex<f64>]) {
         scale_f64(v, sc, out)
+    }
+    fn scale_own_into(v: &[Complex<f64>], sc: &[C64], out: &mut [Complex<f64>]) {
+        scale_f64(v, sc, out)
+    }
+    fn to_f64_sample(self) -> f64 {
+        self
+    }
+    fn narrow_reals(v: &[f64], out: &mut [f64]) {
+        out.copy_from_slice(&v[..out.len()]);
+    }
+    fn phasors(key: u64, k0: u64, out: &mut [Complex<f64>]) {
+        phasor_span(key, k0, out)
+    }
+    fn apply_factor_row(
+        lanes: &[f64],
+        xi: &[Complex<f64>],
+        h: usize,
+        w: usize,
+        out: &mut [Complex<f64>],
+    ) {
+        embed::apply_factor_row(lanes, xi, h, w, out)
     }
 }
 
@@ -169,7 +230,7 @@ fn phasor(key: u64, k: u64) -> C64 {
     let u53 = (h >> 11) as i64;
     let q = (u53 + (1 << 50)) >> 51;
     quarter_turns(
-        q as u64,
+        q as u32,
         (u53 - (q << 51)) as f32 * (std::f32::consts::FRAC_PI_2 / 2_251_799_813_685_248.0),
     )
 }
@@ -179,39 +240,53 @@ fn phasor(key: u64, k: u64) -> C64 {
 /// steps of 1.5e-9 rad, finer than the f32 remainder's 1e-7; otherwise as [`phasor`].
 #[inline(always)]
 fn phasor32(h32: u32) -> C64 {
-    let v = i64::from(h32);
-    let q = (v + (1 << 29)) >> 30;
-    quarter_turns(
-        q as u64,
-        (v - (q << 30)) as f32 * (std::f32::consts::FRAC_PI_2 / 1_073_741_824.0),
-    )
+    widen(phasor32_f32(h32))
+}
+
+/// [`phasor32`] before widening: the same values in f32.
+#[inline(always)]
+fn phasor32_f32(h32: u32) -> Complex<f32> {
+    // q = round(h32 / 2^30) mod 4 and the remainder h32 − q·2^30 ∈ [−2^29, 2^29), in
+    // wrapping 32-bit arithmetic (16 lanes to a vector).
+    let q = h32.wrapping_add(1 << 29) >> 30;
+    let r = h32.wrapping_sub(q << 30) as i32;
+    quarter_turns32(q, r as f32 * (std::f32::consts::FRAC_PI_2 / 1_073_741_824.0))
+}
+
+/// An f32 complex widened to f64 (exactly).
+#[inline(always)]
+fn widen(c: Complex<f32>) -> C64 {
+    C64::new(f64::from(c.re), f64::from(c.im))
+}
+
+/// e^{i(qπ/2 + r)} for r ∈ [−π/4, π/4], widened (exactly) to f64: see [`quarter_turns32`].
+#[inline(always)]
+fn quarter_turns(q: u32, r: f32) -> C64 {
+    widen(quarter_turns32(q, r))
 }
 
 /// e^{i(qπ/2 + r)} for r ∈ [−π/4, π/4]: cos r and sin r by polynomials in f32, then q
-/// quarter turns by bit selects.
+/// quarter turns (q mod 4) by bit selects on the f32s.
 #[inline(always)]
-fn quarter_turns(q: u64, r: f32) -> C64 {
+fn quarter_turns32(q: u32, r: f32) -> Complex<f32> {
     // The remainder in f32: Taylor to r⁸ (cos) and r⁹ (sin) is exact to f32 precision on
     // [−π/4, π/4] (truncation < 3e-8), and twice as many f32 lanes fit a vector.
     let r2 = r * r;
-    let c = (1.0
-        + r2 * (-1.0 / 2.0 + r2 * (1.0 / 24.0 + r2 * (-1.0 / 720.0 + r2 * (1.0 / 40_320.0)))))
-        as f64;
-    let sn = (r
+    let c =
+        1.0 + r2 * (-1.0 / 2.0 + r2 * (1.0 / 24.0 + r2 * (-1.0 / 720.0 + r2 * (1.0 / 40_320.0))));
+    let sn = r
         * (1.0
             + r2 * (-1.0 / 6.0
-                + r2 * (1.0 / 120.0 + r2 * (-1.0 / 5040.0 + r2 * (1.0 / 362_880.0))))))
-        as f64;
+                + r2 * (1.0 / 120.0 + r2 * (-1.0 / 5040.0 + r2 * (1.0 / 362_880.0)))));
     // Rotate by q quarter turns: (re, im) = (c, s), (−s, c), (−c, −s), (s, −c) for q = 0…3,
     // as bit selects: swap c and s when q is odd, then flip signs.
-    let swap = 0u64.wrapping_sub(q & 1);
+    let swap = 0u32.wrapping_sub(q & 1);
     let (cb, sb) = (c.to_bits(), sn.to_bits());
     let a = (cb & !swap) | (sb & swap);
     let b = (sb & !swap) | (cb & swap);
-    const SIGN: u64 = 1 << 63;
-    let neg_re = ((q ^ (q >> 1)) & 1) << 63;
-    let neg_im = ((q >> 1) & 1) << 63;
-    C64::new(f64::from_bits(a ^ (neg_re & SIGN)), f64::from_bits(b ^ (neg_im & SIGN)))
+    let neg_re = ((q ^ (q >> 1)) & 1) << 31;
+    let neg_im = ((q >> 1) & 1) << 31;
+    Complex::new(f32::from_bits(a ^ neg_re), f32::from_bits(b ^ neg_im))
 }
 
 simd_kernel! {
@@ -236,32 +311,68 @@ simd_kernel! {
 
 /// The phasor of index `k` on the line with key `key` in the embedding's stream: the low
 /// (even `k`) or high (odd `k`) half of the hash of k/2.
+#[cfg(test)]
 #[inline(always)]
 fn paired_phasor(key: u64, k: u64) -> C64 {
+    phasor32(paired_hash(key, k))
+}
+
+/// The 32 bits of phase of [`paired_phasor`].
+#[inline(always)]
+fn paired_hash(key: u64, k: u64) -> u32 {
     let h = mix64(key.wrapping_add((k >> 1).wrapping_mul(GOLDEN)));
-    phasor32((h >> (32 * (k & 1))) as u32)
+    (h >> (32 * (k & 1))) as u32
+}
+
+/// out[i] = make(the 32 phase bits of index k0 + i): one hash for each pair; the hashes of
+/// 16 pairs are taken first, then their 32 phasors, so each step runs in full vector lanes.
+#[inline(always)]
+fn span_with<C>(key: u64, k0: u64, out: &mut [C], make: impl Fn(u32) -> C) {
+    const PAIRS: usize = 16;
+    let (head, rest) = out.split_at_mut(usize::from(k0 % 2 == 1).min(out.len()));
+    if let Some(o) = head.first_mut() {
+        *o = make(paired_hash(key, k0));
+    }
+    let k1 = k0 + head.len() as u64;
+    let last = k1 + rest.len() as u64 - 1;
+    let mut blocks = rest.chunks_exact_mut(2 * PAIRS);
+    let mut h32 = [0u32; 2 * PAIRS];
+    for (b, o) in (&mut blocks).enumerate() {
+        let first = k1 / 2 + (b * PAIRS) as u64;
+        for (i, h) in h32.chunks_exact_mut(2).enumerate() {
+            let v = mix64(key.wrapping_add((first + i as u64).wrapping_mul(GOLDEN)));
+            h[0] = v as u32;
+            h[1] = (v >> 32) as u32;
+        }
+        for (o, &h) in o.iter_mut().zip(&h32) {
+            *o = make(h);
+        }
+    }
+    let rest = blocks.into_remainder();
+    let k2 = last + 1 - rest.len() as u64;
+    let mut pairs = rest.chunks_exact_mut(2);
+    for (i, o) in (&mut pairs).enumerate() {
+        let h = mix64(key.wrapping_add((k2 / 2 + i as u64).wrapping_mul(GOLDEN)));
+        o[0] = make(h as u32);
+        o[1] = make((h >> 32) as u32);
+    }
+    let tail = pairs.into_remainder();
+    if let Some(o) = tail.first_mut() {
+        *o = make(paired_hash(key, last));
+    }
 }
 
 simd_kernel! {
-    /// Consecutive phasors of the embedding's stream: out[i] = paired_phasor(key, k0 + i),
-    /// one hash for each pair.
+    /// Consecutive phasors of the embedding's stream: out[i] = paired_phasor(key, k0 + i).
     fn phasor_span(key: u64, k0: u64, out: &mut [C64]) {
-        let (head, rest) = out.split_at_mut(usize::from(k0 % 2 == 1).min(out.len()));
-        if let Some(o) = head.first_mut() {
-            *o = paired_phasor(key, k0);
-        }
-        let k1 = k0 + head.len() as u64;
-        let last = k1 + rest.len() as u64 - 1;
-        let mut pairs = rest.chunks_exact_mut(2);
-        for (i, o) in (&mut pairs).enumerate() {
-            let h = mix64(key.wrapping_add((k1 / 2 + i as u64).wrapping_mul(GOLDEN)));
-            o[0] = phasor32(h as u32);
-            o[1] = phasor32((h >> 32) as u32);
-        }
-        let tail = pairs.into_remainder();
-        if let Some(o) = tail.first_mut() {
-            *o = paired_phasor(key, last);
-        }
+        span_with(key, k0, out, phasor32)
+    }
+}
+
+simd_kernel! {
+    /// [`phasor_span`] in f32: the same phasors before widening.
+    fn phasor_span_f32(key: u64, k0: u64, out: &mut [Complex<f32>]) {
+        span_with(key, k0, out, phasor32_f32)
     }
 }
 
@@ -293,6 +404,25 @@ simd_kernel! {
     fn scale_f32(v: &[C64], sc: &[C64], out: &mut [Complex<f32>]) {
         for ((o, c), s) in out.iter_mut().zip(v).zip(sc) {
             *o = Complex::new((c.re * s.re - c.im * s.im) as f32, (c.re * s.im + c.im * s.re) as f32);
+        }
+    }
+}
+
+simd_kernel! {
+    /// Reals narrowed to f32.
+    fn narrow_reals_f32(v: &[f64], out: &mut [f32]) {
+        for (o, &x) in out.iter_mut().zip(v) {
+            *o = x as f32;
+        }
+    }
+}
+
+simd_kernel! {
+    /// Multiply f32 coefficients by a complex factor per line, in f64, and narrow them back.
+    fn scale_f32_own(v: &[Complex<f32>], sc: &[C64], out: &mut [Complex<f32>]) {
+        for ((o, c), s) in out.iter_mut().zip(v).zip(sc) {
+            let (re, im) = (f64::from(c.re), f64::from(c.im));
+            *o = Complex::new((re * s.re - im * s.im) as f32, (re * s.im + im * s.re) as f32);
         }
     }
 }
@@ -460,6 +590,13 @@ struct Emitter<'a, T> {
     end: usize,
 }
 
+/// One column's coefficients for [`Emitter::push`]: in f64, or already in the output's type.
+#[derive(Clone, Copy)]
+enum Col<'a, T> {
+    Wide(&'a [C64]),
+    Own(&'a [Complex<T>]),
+}
+
 /// Where emitted records go: a frame-major buffer, or a callback that takes each block of
 /// staged columns as it is ready (streaming).
 enum Sink<'a, T> {
@@ -489,7 +626,7 @@ impl<'a, T: Sample> Emitter<'a, T> {
     /// Emit column `ix`: coefficients `col` (point-major, nc lines each) times the factor
     /// `scale[iz·nc + j]` of the point's height (√Δω·√S0 and the column's advection), then
     /// one inverse FFT per point.
-    fn push(&mut self, ix: usize, col: &[C64], scale: &[C64]) -> Result<(), WindError> {
+    fn push(&mut self, ix: usize, col: Col<'_, T>, scale: &[C64]) -> Result<(), WindError> {
         let (ny, m) = (self.grid.ny(), self.grid.frames);
         let nc = m / 2 + 1;
         let np = self.grid.nz() * ny;
@@ -500,7 +637,11 @@ impl<'a, T: Sample> Emitter<'a, T> {
             || (c2r.make_input_vec(), c2r.make_scratch_vec()),
             |(spec, scratch), (p, dst)| {
                 let iz = p / ny;
-                T::scale_into(&col[p * nc..(p + 1) * nc], &scale[iz * nc..(iz + 1) * nc], spec);
+                let sc = &scale[iz * nc..(iz + 1) * nc];
+                match col {
+                    Col::Wide(c) => T::scale_into(&c[p * nc..(p + 1) * nc], sc, spec),
+                    Col::Own(c) => T::scale_own_into(&c[p * nc..(p + 1) * nc], sc, spec),
+                }
                 // DC and Nyquist are exactly zero, as the real inverse FFT requires.
                 spec[0] = Complex::default();
                 spec[nc - 1] = Complex::default();
@@ -565,7 +706,7 @@ fn synth_component<'a, T: Sample>(
     out: Sink<'a, T>,
     layout: &'a OutLayout,
     columns: std::ops::Range<usize>,
-    spare: &mut Vec<C64>,
+    spare: &mut Vec<Complex<T>>,
     progress: &(dyn Fn(f64) + Sync),
 ) -> Result<f64, WindError> {
     let lines = Lines::new(params, grid, comp, synth.seed);

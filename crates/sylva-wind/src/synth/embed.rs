@@ -30,6 +30,12 @@
 //!
 //! Cost per line: nz² (P_x + P_y) for the kernels, P_x P_y nz³/6 for the blocks and
 //! nz P_x P_y log(P_x P_y) for the FFTs; lines are independent and run in parallel.
+//!
+//! Precision: the kernels and the blocks' factors are computed in f64; the phasors, the
+//! factors' products with them and the spatial FFTs run in the output's type `T`. For the
+//! f32 fields the engine stores, the covariance is then exact to f32's precision (1e-7 on
+//! the test grid, against 1e-15 in f64), and the FFTs, the largest part of the cost, run
+//! twice as many vector lanes.
 
 use std::f64::consts::PI;
 use std::sync::Arc;
@@ -38,12 +44,13 @@ use rustfft::{Fft, FftPlanner};
 
 use sylva_core::simd_kernel;
 
-use super::C64;
 #[cfg(test)]
 use super::cholesky_lower;
+use super::{C64, Sample};
 use crate::error::WindError;
 use crate::grid::Grid;
 use crate::params::{CoherenceSpeed, Component, WindParams};
+use realfft::num_complex::Complex;
 
 /// Smallest even period P = 2m with m ≥ n − 1 whose factors are 2, 3 and 5 (fast FFTs);
 /// 1 for a single point.
@@ -91,8 +98,8 @@ fn folded_spectrum(a: f64, out: &mut [f64]) {
     }
 }
 
-/// Precomputed geometry and FFT plans of one component.
-pub(super) struct Embedding {
+/// Precomputed geometry and FFT plans of one component; the spatial FFTs run in `T`.
+pub(super) struct Embedding<T: Sample> {
     nx: usize,
     ny: usize,
     nz: usize,
@@ -107,8 +114,8 @@ pub(super) struct Embedding {
     cx: f64,
     cy: f64,
     cz: f64,
-    fft_x: Arc<dyn Fft<f64>>,
-    fft_y: Arc<dyn Fft<f64>>,
+    fft_x: Arc<dyn Fft<T>>,
+    fft_y: Arc<dyn Fft<T>>,
 }
 
 /// Index of the pair (h, k), k ≤ h, in a packed lower triangle.
@@ -117,35 +124,43 @@ fn pair(h: usize, k: usize) -> usize {
     h * (h + 1) / 2 + k
 }
 
+/// Fills its slice with the phasors of a height column from a wavenumber on (see
+/// [`Embedding::line`]).
+pub(super) type Phasors<'a, T> = dyn Fn(usize, usize, &mut [Complex<T>]) + 'a;
+
 /// Per-thread work buffers of [`Embedding::line`].
-pub(super) struct Scratch {
+pub(super) struct Scratch<T> {
     kx: Vec<f64>,
     ky: Vec<f64>,
     z: Vec<f64>,
     m: Vec<f64>,
     e: Vec<f64>,
-    v: Vec<C64>,
-    t: Vec<C64>,
-    fft: Vec<C64>,
+    /// The coefficients on the torus, (height, κy, κx), then their x transforms.
+    v: Vec<Complex<T>>,
+    /// The columns the grid keeps, (x, κy), then their y transforms.
+    t: Vec<Complex<T>>,
+    fft: Vec<Complex<T>>,
     /// One row κy of blocks, pair by pair across κx, and which of them failed.
     lanes: Vec<f64>,
     fail: Vec<f64>,
-    /// The factored lanes of a row mirrored over all κx.
-    full: Vec<f64>,
+    /// The factored lanes of a row mirrored over all κx, in `T`.
+    full: Vec<T>,
+    /// `full` in f64, before narrowing.
+    full64: Vec<f64>,
     /// The factor's per-lane scale and running sum.
     work: Vec<f64>,
     /// The phasors of one row κy, height column by height column.
-    xi: Vec<C64>,
+    xi: Vec<Complex<T>>,
 }
 
-impl Embedding {
+impl<T: Sample> Embedding<T> {
     /// Set up the embedding of `comp` on `grid`; x and y must be regularly spaced.
     pub(super) fn new(
         params: &WindParams,
         grid: &Grid,
         comp: Component,
         u_ref: f64,
-    ) -> Result<Embedding, WindError> {
+    ) -> Result<Embedding<T>, WindError> {
         let (Some(gx), Some(gy)) =
             (Grid::regular_spacing(&grid.xs), Grid::regular_spacing(&grid.ys))
         else {
@@ -167,7 +182,7 @@ impl Embedding {
             }
         }
         let (px, py) = (period(nx), period(ny));
-        let mut planner = FftPlanner::new();
+        let mut planner = FftPlanner::<T>::new();
         let c = params.coherence[comp.index()];
         Ok(Embedding {
             nx,
@@ -193,7 +208,7 @@ impl Embedding {
     }
 
     /// Work buffers for one thread.
-    pub(super) fn scratch(&self) -> Scratch {
+    pub(super) fn scratch(&self) -> Scratch<T> {
         let np = self.nz * (self.nz + 1) / 2;
         let fft_len =
             self.fft_x.get_inplace_scratch_len().max(self.fft_y.get_inplace_scratch_len());
@@ -203,20 +218,22 @@ impl Embedding {
             z: vec![0.0; np],
             m: vec![0.0; self.nz * self.nz],
             e: vec![0.0; self.nz * self.nz],
-            v: vec![C64::default(); self.nz * self.wavenumbers()],
-            t: vec![C64::default(); self.nx * self.py],
-            fft: vec![C64::default(); fft_len],
+            v: vec![Complex::default(); self.nz * self.wavenumbers()],
+            t: vec![Complex::default(); self.nx * self.py],
+            fft: vec![Complex::default(); fft_len],
             lanes: vec![0.0; np * (self.px / 2 + 1)],
             fail: vec![0.0; self.px / 2 + 1],
-            full: vec![0.0; np * self.px],
+            full: vec![T::default(); np * self.px],
+            full64: vec![0.0; np * self.px],
             work: vec![0.0; 2 * (self.px / 2 + 1)],
-            xi: vec![C64::default(); self.nz * self.px],
+            xi: vec![Complex::default(); self.nz * self.px],
         }
     }
 
     /// The unit-variance coherence field of the line at frequency `f` (Hz) into `w`, laid
-    /// out (z, y, x). `xi(m, κ0, out)` fills `out` with the phasors of height column `m` at
-    /// the wavenumbers `κ0 …`, where `κ = κy·P_x + κx`. Returns the bound on the coherence
+    /// out (x, z, y), the order of the synthesis' coefficient columns. `xi(m, κ0, out)`
+    /// fills `out` with the phasors of height column `m` at the wavenumbers `κ0 …`, where
+    /// `κ = κy·P_x + κx`. Returns the bound on the coherence
     /// error from blocks that had to be projected onto semidefinite ones (0 when the model
     /// is a valid covariance).
     ///
@@ -227,9 +244,9 @@ impl Embedding {
     pub(super) fn line(
         &self,
         f: f64,
-        xi: &dyn Fn(usize, usize, &mut [C64]),
-        s: &mut Scratch,
-        w: &mut [C64],
+        xi: &Phasors<'_, T>,
+        s: &mut Scratch<T>,
+        w: &mut [Complex<T>],
     ) -> f64 {
         let (nz, px, py) = (self.nz, self.px, self.py);
         for h in 0..nz {
@@ -249,7 +266,9 @@ impl Embedding {
         for ky in 0..=py / 2 {
             block_row(&s.z, &s.kx, &s.ky[..], ky, py, norm, &mut s.lanes, &mut s.fail);
             lower_factor_lanes(&mut s.lanes, nz, &mut s.fail, &mut s.work);
-            mirror_lanes(&s.lanes, wh, &mut s.full);
+            mirror_lanes(&s.lanes, wh, &mut s.full64);
+            T::narrow_reals(&s.full64, &mut s.full);
+            let any_fail = s.fail.iter().any(|&f| f != 0.0);
             for ky in [ky, py - ky] {
                 if ky == py {
                     continue; // κy = 0 has no mirror
@@ -260,9 +279,10 @@ impl Embedding {
                 }
                 for h in 0..nz {
                     let out = &mut s.v[h * px * py + row..h * px * py + row + px];
-                    apply_factor_row(&s.full, &s.xi, h, px, out);
+                    T::apply_factor_row(&s.full, &s.xi, h, px, out);
                 }
-                for kx in (0..px).filter(|&kx| s.fail[kx.min(px - kx)] != 0.0) {
+                let failed = (0..px).filter(|&kx| any_fail && s.fail[kx.min(px - kx)] != 0.0);
+                for kx in failed {
                     // This block is not semidefinite: the square root of its nearest
                     // semidefinite matrix (full) instead.
                     for h in 0..nz {
@@ -279,10 +299,12 @@ impl Embedding {
                         for m in 0..nz {
                             let l = s.m[h * nz + m];
                             if l != 0.0 {
-                                acc += s.xi[m * px + kx] * l;
+                                let x = s.xi[m * px + kx];
+                                acc += C64::new(x.re.to_f64_sample(), x.im.to_f64_sample()) * l;
                             }
                         }
-                        s.v[h * px * py + row + kx] = acc;
+                        s.v[h * px * py + row + kx] =
+                            Complex::new(T::from_f64_sample(acc.re), T::from_f64_sample(acc.im));
                     }
                 }
                 if py - ky == ky {
@@ -297,18 +319,22 @@ impl Embedding {
             if px > 1 {
                 self.fft_x.process_with_scratch(plane, &mut s.fft);
             }
-            for ix in 0..nx {
+            // Transposed in strips of 8 columns: each row's read is one cache line of f32s.
+            for ix0 in (0..nx).step_by(8) {
+                let ix1 = (ix0 + 8).min(nx);
                 for ky in 0..py {
-                    s.t[ix * py + ky] = plane[ky * px + ix];
+                    let src = &plane[ky * px + ix0..ky * px + ix1];
+                    for (d, &v) in src.iter().enumerate() {
+                        s.t[(ix0 + d) * py + ky] = v;
+                    }
                 }
             }
             if py > 1 {
                 self.fft_y.process_with_scratch(&mut s.t, &mut s.fft);
             }
-            for iy in 0..ny {
-                for ix in 0..nx {
-                    w[(h * ny + iy) * nx + ix] = s.t[ix * py + iy];
-                }
+            for ix in 0..nx {
+                let at = (ix * nz + h) * ny;
+                w[at..at + ny].copy_from_slice(&s.t[ix * py..ix * py + ny]);
             }
         }
         clipped
@@ -400,17 +426,42 @@ fn mirror_lanes(half: &[f64], w: usize, full: &mut [f64]) {
     }
 }
 
-simd_kernel! {
-    /// Row h of the factored blocks applied to the phasors, lane by lane:
-    /// out[κx] = Σ_{m ≤ h} L_hm(κx) ξ_m(κx), summed in the order of m.
-    fn apply_factor_row(lanes: &[f64], xi: &[C64], h: usize, w: usize, out: &mut [C64]) {
-        out.fill(C64::default());
-        for m in 0..=h {
-            let (l, x) = (&lanes[pair(h, m) * w..(pair(h, m) + 1) * w], &xi[m * w..(m + 1) * w]);
-            for ((o, &l), x) in out.iter_mut().zip(l).zip(x) {
-                *o += x * l;
-            }
+/// Row h of the factored blocks applied to the phasors, lane by lane:
+/// out[κx] = Σ_{m ≤ h} L_hm(κx) ξ_m(κx), summed in the order of m, in `F`.
+#[inline(always)]
+fn apply_row_in<F: Sample>(
+    lanes: &[F],
+    xi: &[Complex<F>],
+    h: usize,
+    w: usize,
+    out: &mut [Complex<F>],
+) {
+    out.fill(Complex::default());
+    for m in 0..=h {
+        let (l, x) = (&lanes[pair(h, m) * w..(pair(h, m) + 1) * w], &xi[m * w..(m + 1) * w]);
+        for ((o, &l), x) in out.iter_mut().zip(l).zip(x) {
+            *o = Complex::new(o.re + x.re * l, o.im + x.im * l);
         }
+    }
+}
+
+simd_kernel! {
+    /// [`apply_row_in`] in f64.
+    pub(super) fn apply_factor_row(lanes: &[f64], xi: &[C64], h: usize, w: usize, out: &mut [C64]) {
+        apply_row_in(lanes, xi, h, w, out)
+    }
+}
+
+simd_kernel! {
+    /// [`apply_row_in`] in f32.
+    pub(super) fn apply_factor_row_f32(
+        lanes: &[f32],
+        xi: &[Complex<f32>],
+        h: usize,
+        w: usize,
+        out: &mut [Complex<f32>],
+    ) {
+        apply_row_in(lanes, xi, h, w, out)
     }
 }
 
@@ -506,41 +557,47 @@ mod tests {
         assert_eq!(period(100), 200); // 2·99 = 198 = 2·3²·11 is not 5-smooth; 200 is
     }
 
-    /// The covariance the method produces, built column by column from unit phasors, equals
-    /// the dense eq.-5 matrix with the pair-mean speed at every pair of points.
-    #[test]
-    fn covariance_equals_the_dense_pair_mean_cpsdm() {
+    /// The largest difference between the covariance the method produces in `T`, built
+    /// column by column from unit phasors, and the dense eq.-5 matrix with the pair-mean
+    /// speed, over every pair of points, component and a few frequencies.
+    fn covariance_error<T: Sample>() -> f64 {
         let params =
             WindParams { coherence_speed: CoherenceSpeed::PairMean, ..WindParams::default() };
         let grid = Grid::regular(5, 4, 3.0, &[13.0, 20.0, 38.0], 64, 0.1);
         let n = grid.points();
         let speeds: Vec<f64> = grid.zs.iter().map(|&z| params.mean_speed(z)).collect();
+        let mut worst: f64 = 0.0;
         for comp in Component::ALL {
-            let emb = Embedding::new(&params, &grid, comp, 0.0).expect("regular grid");
+            let emb = Embedding::<T>::new(&params, &grid, comp, 0.0).expect("regular grid");
             let mut s = emb.scratch();
-            let mut w = vec![C64::default(); n];
+            let mut w = vec![Complex::<T>::default(); n];
             for f in [0.002, 0.05, 0.4, 2.5] {
                 let mut cov = vec![C64::default(); n * n];
                 for col in 0..grid.nz() * emb.wavenumbers() {
-                    let unit = |m: usize, k0: usize, out: &mut [C64]| {
+                    let unit = |m: usize, k0: usize, out: &mut [Complex<T>]| {
                         for (i, o) in out.iter_mut().enumerate() {
                             let hit = m * emb.wavenumbers() + k0 + i == col;
-                            *o = C64::new(if hit { 1.0 } else { 0.0 }, 0.0);
+                            let one = T::from_f64_sample(if hit { 1.0 } else { 0.0 });
+                            *o = Complex::new(one, T::default());
                         }
                     };
                     let clipped = emb.line(f, &unit, &mut s, &mut w);
                     assert_eq!(clipped, 0.0, "pair-mean blocks are PSD on this grid");
+                    let w: Vec<C64> = w
+                        .iter()
+                        .map(|c| C64::new(c.re.to_f64_sample(), c.im.to_f64_sample()))
+                        .collect();
                     for a in 0..n {
                         for b in 0..n {
                             cov[a * n + b] += w[a] * w[b].conj();
                         }
                     }
                 }
+                // Points in the order (x, z, y).
                 let pos = |p: usize| {
-                    let (ix, iy, iz) = (p % 5, (p / 5) % 4, p / 20);
+                    let (iy, iz, ix) = (p % 4, (p / 4) % 3, p / 12);
                     ([grid.xs[ix], grid.ys[iy], grid.zs[iz]], speeds[iz])
                 };
-                let mut worst: f64 = 0.0;
                 for a in 0..n {
                     for b in 0..n {
                         let ((pa, ua), (pb, ub)) = (pos(a), pos(b));
@@ -550,9 +607,22 @@ mod tests {
                         worst = worst.max((got.re - want).abs()).max(got.im.abs());
                     }
                 }
-                assert!(worst < 1e-9, "{comp:?} f {f}: largest covariance error {worst:e}");
             }
         }
+        worst
+    }
+
+    /// The covariance of the field equals the dense eq.-5 matrix with the pair-mean speed at
+    /// every pair of points: to rounding in f64, and to f32's precision where the spatial
+    /// FFTs run in f32 (the fields the engine stores).
+    #[test]
+    fn covariance_equals_the_dense_pair_mean_cpsdm() {
+        let e64 = covariance_error::<f64>();
+        assert!(e64 < 1e-9, "f64: largest covariance error {e64:e}");
+        let e32 = covariance_error::<f32>();
+        assert!(e32 < 1e-6, "f32: largest covariance error {e32:e}");
+        assert!(e32 > e64, "the f32 path must really run in f32 ({e32:e} against {e64:e})");
+        println!("largest covariance error: f64 {e64:.2e}, f32 {e32:.2e}");
     }
 
     #[test]
@@ -609,10 +679,11 @@ mod tests {
             let mut worst: f64 = 0.0;
             for a in 0..n {
                 for b in 0..n {
-                    let (ia, ib) = (a / 81, b / 81);
+                    // (x, z, y) order: 9 heights-and-rows of 27 per x.
+                    let (ia, ib) = ((a / 9) % 3, (b / 9) % 3);
                     let d = [
-                        grid.xs[a % 9] - grid.xs[b % 9],
-                        grid.ys[(a / 9) % 9] - grid.ys[(b / 9) % 9],
+                        grid.xs[a / 27] - grid.xs[b / 27],
+                        grid.ys[a % 9] - grid.ys[b % 9],
                         grid.zs[ia] - grid.zs[ib],
                     ];
                     let want = spectrum::coherence(

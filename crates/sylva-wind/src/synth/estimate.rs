@@ -38,8 +38,9 @@ pub fn cholesky_estimate(grid: &Grid) -> CholeskyEstimate {
 
 /// Peak memory of [`crate::WindField::generate`] on `grid` with `method`, bytes: the f32
 /// output (3 components × points × frames) plus the method's working set — a few columns
-/// for the separable method, every point's coefficients (16 bytes × points × (M/2 + 1)) for
-/// the embedding and the dense Cholesky, plus the latter's n × n matrix.
+/// for the separable method, every point's coefficients for the embedding (in f32: 8 bytes
+/// × points × (M/2 + 1)) and the dense Cholesky (in f64: 16 bytes), plus the latter's n × n
+/// matrix.
 pub fn memory_estimate(grid: &Grid, method: Method) -> f64 {
     let n = grid.points() as f64;
     let nc = (grid.frames / 2 + 1) as f64;
@@ -49,7 +50,7 @@ pub fn memory_estimate(grid: &Grid, method: Method) -> f64 {
         Method::Separable => {
             32.0 * column * nc + 4.0 * EMIT_COLUMNS as f64 * column * grid.frames as f64
         }
-        Method::Embedding => 16.0 * n * nc,
+        Method::Embedding => 8.0 * n * nc,
         Method::Cholesky => cholesky_estimate(grid).bytes,
     };
     output + working

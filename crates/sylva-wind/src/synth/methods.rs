@@ -89,7 +89,7 @@ pub(super) fn separable<T: Sample>(
             }
         });
         if emitted {
-            emitter.push(ix, &col, &fac)?;
+            emitter.push(ix, Col::Wide(&col), &fac)?;
         }
         progress((ix + 1) as f64 / columns.end as f64);
     }
@@ -156,7 +156,7 @@ pub(super) fn cholesky<T: Sample>(
     let mut fac = vec![C64::default(); nz * nc];
     for (ix, col) in block.chunks(col_len).enumerate() {
         lines.column_factors(params.advection, grid.xs[ix], false, &mut fac);
-        emitter.push(ix, col, &fac)?;
+        emitter.push(ix, Col::Wide(col), &fac)?;
     }
 
     Ok(())
@@ -170,19 +170,19 @@ pub(super) fn embedding<T: Sample>(
     comp: Component,
     lines: &Lines,
     emitter: &mut Emitter<'_, T>,
-    spare: &mut Vec<C64>,
+    spare: &mut Vec<Complex<T>>,
     progress: &(dyn Fn(f64) + Sync),
 ) -> Result<f64, WindError> {
     let (nx, ny, nz) = (grid.nx(), grid.ny(), grid.nz());
     let nc = lines.nc;
     let col_len = nz * ny * nc;
-    let emb = embed::Embedding::new(params, grid, comp, lines.u_ref)?;
+    let emb = embed::Embedding::<T>::new(params, grid, comp, lines.u_ref)?;
     // Coefficients laid out (x, z, y, j), one column after another; every line is
     // independent and fills its own index j of every point.
     // Every entry is written below, so a block left by the previous component (the same
     // size) is taken as it is: no second gigabyte to fault in on a large grid.
     let mut block = std::mem::take(spare);
-    block.resize(nx * col_len, C64::default());
+    block.resize(nx * col_len, Complex::default());
     let out = OutPtr(block.as_mut_ptr(), block.len());
     let done = std::sync::atomic::AtomicUsize::new(0);
     let worst = std::sync::Mutex::new(0.0f64);
@@ -193,30 +193,30 @@ pub(super) fn embedding<T: Sample>(
     const RUN: usize = 16;
     let np = nz * ny * nx;
     let runs: Vec<usize> = (1..nc - 1).step_by(RUN).collect();
-    // The work buffers (several MB) are made once per thread: one contiguous share of the
-    // runs each, as every run costs the same.
-    let share = runs.len().div_ceil(rayon::current_num_threads()).max(1);
-    runs.par_chunks(share).for_each(|mine| {
-        let (mut s, mut staged) = (emb.scratch(), vec![C64::default(); np * RUN]);
-        for &j0 in mine {
+    // Runs go to the threads as they free up (rayon's splitting, so a core slowed by other
+    // work hands part of its share on); each piece of work makes its buffers (several MB)
+    // once. The output does not depend on the split: every line draws its own phasors.
+    runs.par_iter().for_each_init(
+        || (emb.scratch(), vec![Complex::<T>::default(); np * RUN]),
+        |(s, staged), &j0| {
             let j1 = (j0 + RUN).min(nc - 1);
             for j in j0..j1 {
                 let key = lines.keys[j];
-                let xi = |m: usize, k0: usize, out: &mut [C64]| {
-                    phasor_span(key, (m * kappas + k0) as u64, out)
+                let xi = |m: usize, k0: usize, out: &mut [Complex<T>]| {
+                    T::phasors(key, (m * kappas + k0) as u64, out)
                 };
                 let f = lines.omega[j] / (2.0 * PI);
                 let w = &mut staged[(j - j0) * np..(j - j0 + 1) * np];
-                let clipped = emb.line(f, &xi, &mut s, w);
+                let clipped = emb.line(f, &xi, s, w);
                 if clipped > 0.0
                     && let Ok(mut w) = worst.lock()
                 {
                     *w = w.max(clipped);
                 }
             }
+            // The fields come in the block's point order (x, z, y): both sides run forwards.
             for q in 0..np {
-                let (p, ix) = (q / nx, q % nx);
-                let at = ix * col_len + p * nc + j0;
+                let at = q * nc + j0;
                 for d in 0..j1 - j0 {
                     // SAFETY: lines j0 … j1 of every point belong to this task alone,
                     // and the index lies inside `block` (nx · nz · ny · nc entries).
@@ -225,13 +225,13 @@ pub(super) fn embedding<T: Sample>(
             }
             let d = done.fetch_add(j1 - j0, std::sync::atomic::Ordering::Relaxed);
             progress((d + j1 - j0) as f64 / (nc - 2) as f64);
-        }
-    });
+        },
+    );
     let coherence_error = worst.into_inner().unwrap_or(f64::INFINITY);
     let mut fac = vec![C64::default(); nz * nc];
     for (ix, col) in block.chunks(col_len).enumerate() {
         lines.column_factors(params.advection, grid.xs[ix], true, &mut fac);
-        emitter.push(ix, col, &fac)?;
+        emitter.push(ix, Col::Own(col), &fac)?;
     }
     *spare = block;
     Ok(coherence_error)

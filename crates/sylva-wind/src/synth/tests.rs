@@ -91,12 +91,19 @@ fn paired_phasors_are_unit_uniform_and_independent_halves() {
     // |mean of n/2 unit products| has σ ≈ 1/√(n/2) = 0.0032 when the halves are independent.
     let r = cross.norm() / (n / 2) as f64;
     assert!(r < 0.015, "halves of one hash correlate: {r}");
-    for (k0, len) in [(0u64, 7usize), (1, 7), (1, 8), (5, 1), (40_000, 33)] {
+    // Spans shorter than a block of 16 pairs, whole blocks, and blocks with a remainder, each
+    // starting on either half; the f32 span holds the same values before widening.
+    for (k0, len) in
+        [(0u64, 7usize), (1, 7), (1, 8), (5, 1), (40_000, 33), (0, 64), (1, 64), (3, 101), (2, 250)]
+    {
         let mut got = vec![C64::default(); len];
         phasor_span(key, k0, &mut got);
-        for (i, g) in got.iter().enumerate() {
+        let mut got32 = vec![Complex::<f32>::default(); len];
+        phasor_span_f32(key, k0, &mut got32);
+        for (i, (g, g32)) in got.iter().zip(&got32).enumerate() {
             let want = paired_phasor(key, k0 + i as u64);
             assert_eq!((g.re.to_bits(), g.im.to_bits()), (want.re.to_bits(), want.im.to_bits()));
+            assert_eq!((f64::from(g32.re), f64::from(g32.im)), (want.re, want.im));
         }
     }
 }
