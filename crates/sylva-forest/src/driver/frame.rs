@@ -21,6 +21,7 @@ mod occluded;
 use std::sync::atomic::Ordering;
 
 use rayon::prelude::*;
+use sylva_core::simd::prefetch;
 use sylva_sway::{LANES, PaletteSlot};
 
 use super::frame_data::*;
@@ -336,7 +337,16 @@ impl Forest {
                 self.settle_far_leaf(view, cell, kept, (states, settled), run);
                 let kept_trees = std::mem::take(&mut run.kept);
                 let mut to = RunOut { run, need_max, want_max, seen_max };
-                for &t in &kept_trees {
+                for (n, &t) in kept_trees.iter().enumerate() {
+                    // The kept trees lie apart in the leaf: ask for a later one's data now.
+                    if let Some(&ahead) = kept_trees.get(n + PREFETCH_AHEAD) {
+                        let k = ahead as usize - first;
+                        prefetch(trees, k);
+                        prefetch(states, k);
+                        for a in [cx, cy, cz, ch] {
+                            prefetch(a, k);
+                        }
+                    }
                     let k = t as usize - first;
                     classify_at(k, &mut states[k], &mut to);
                 }
@@ -649,7 +659,12 @@ impl Forest {
             |(instances, keys)| {
                 // The key of the draws before (a bucket's draws are consecutive).
                 let mut bucket: Option<KeyOf<'_>> = None;
-                for (instance, &(key, tagged)) in instances.iter_mut().zip(keys) {
+                for (n, (instance, &(key, tagged))) in instances.iter_mut().zip(keys).enumerate() {
+                    // The trees of a bucket lie far apart in memory: ask for a later draw's
+                    // data now, so it has arrived when its turn comes.
+                    if let Some(&(_, ahead)) = keys.get(n + PREFETCH_AHEAD) {
+                        self.prefetch_tree((ahead & TREE_BITS) as usize, states);
+                    }
                     let of = match bucket {
                         Some(b) if b.key == key => b,
                         _ => {
@@ -665,6 +680,18 @@ impl Forest {
             },
         );
         out.instances.truncate(out.keys.len());
+    }
+
+    /// Ask the memory system for what [`Forest::instance`] reads of tree `i` (a hint: it
+    /// changes no result).
+    #[inline(always)]
+    fn prefetch_tree(&self, i: usize, states: &[f32]) {
+        let cr = &self.crowns;
+        prefetch(&self.trees, i);
+        prefetch(states, i);
+        for a in [&cr.x, &cr.y, &cr.z, &cr.h] {
+            prefetch(a, i);
+        }
     }
 
     /// The instance of one draw: tree `tagged` in bucket `of`.
@@ -748,6 +775,9 @@ impl Forest {
         }
     }
 }
+
+/// How many draws ahead [`Forest::write_instances`] asks for a tree's data.
+const PREFETCH_AHEAD: usize = 12;
 
 /// One tree as pass 1 takes it: its index, placement and instance group, and its crown's
 /// centre and height as the culling took them.
