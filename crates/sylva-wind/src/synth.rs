@@ -136,8 +136,9 @@ pub trait Sample: realfft::FftNum + Default {
     fn scale_own_into(v: &[Complex<Self>], sc: &[C64], out: &mut [Complex<Self>]);
     /// Widen to f64.
     fn to_f64_sample(self) -> f64;
-    /// out = v narrowed to this type.
-    fn narrow_reals(v: &[f64], out: &mut [Self]);
+    /// out[2i] = out[2i + 1] = v[i] narrowed to this type (a real factor beside each complex
+    /// value's two parts, so products run in straight vector lanes).
+    fn narrow_pairs(v: &[f64], out: &mut [Self]);
     /// The embedding's phasors k0, k0 + 1, … of the line with key `key` in this type (f32:
     /// the f64 phasors' values before widening).
     fn phasors(key: u64, k0: u64, out: &mut [Complex<Self>]);
@@ -163,8 +164,8 @@ impl Sample for f32 {
     fn to_f64_sample(self) -> f64 {
         f64::from(self)
     }
-    fn narrow_reals(v: &[f64], out: &mut [f32]) {
-        narrow_reals_f32(v, out)
+    fn narrow_pairs(v: &[f64], out: &mut [f32]) {
+        narrow_pairs_f32(v, out)
     }
     fn phasors(key: u64, k0: u64, out: &mut [Complex<f32>]) {
         phasor_span_f32(key, k0, out)
@@ -192,8 +193,10 @@ impl Sample for f64 {
     fn to_f64_sample(self) -> f64 {
         self
     }
-    fn narrow_reals(v: &[f64], out: &mut [f64]) {
-        out.copy_from_slice(&v[..out.len()]);
+    fn narrow_pairs(v: &[f64], out: &mut [f64]) {
+        for (o, &x) in out.chunks_exact_mut(2).zip(v) {
+            o.fill(x);
+        }
     }
     fn phasors(key: u64, k0: u64, out: &mut [Complex<f64>]) {
         phasor_span(key, k0, out)
@@ -409,10 +412,10 @@ simd_kernel! {
 }
 
 simd_kernel! {
-    /// Reals narrowed to f32.
-    fn narrow_reals_f32(v: &[f64], out: &mut [f32]) {
-        for (o, &x) in out.iter_mut().zip(v) {
-            *o = x as f32;
+    /// Reals narrowed to f32, each twice: out[2i] = out[2i + 1] = v[i].
+    fn narrow_pairs_f32(v: &[f64], out: &mut [f32]) {
+        for (o, &x) in out.chunks_exact_mut(2).zip(v) {
+            o.fill(x as f32);
         }
     }
 }

@@ -143,7 +143,8 @@ pub(super) struct Scratch<T> {
     /// One row κy of blocks, pair by pair across κx, and which of them failed.
     lanes: Vec<f64>,
     fail: Vec<f64>,
-    /// The factored lanes of a row mirrored over all κx, in `T`.
+    /// The factored lanes of a row mirrored over all κx, in `T`, each value twice (beside
+    /// the real and imaginary parts it multiplies).
     full: Vec<T>,
     /// `full` in f64, before narrowing.
     full64: Vec<f64>,
@@ -223,7 +224,7 @@ impl<T: Sample> Embedding<T> {
             fft: vec![Complex::default(); fft_len],
             lanes: vec![0.0; np * (self.px / 2 + 1)],
             fail: vec![0.0; self.px / 2 + 1],
-            full: vec![T::default(); np * self.px],
+            full: vec![T::default(); 2 * np * self.px],
             full64: vec![0.0; np * self.px],
             work: vec![0.0; 2 * (self.px / 2 + 1)],
             xi: vec![Complex::default(); self.nz * self.px],
@@ -267,7 +268,7 @@ impl<T: Sample> Embedding<T> {
             block_row(&s.z, &s.kx, &s.ky[..], ky, py, norm, &mut s.lanes, &mut s.fail);
             lower_factor_lanes(&mut s.lanes, nz, &mut s.fail, &mut s.work);
             mirror_lanes(&s.lanes, wh, &mut s.full64);
-            T::narrow_reals(&s.full64, &mut s.full);
+            T::narrow_pairs(&s.full64, &mut s.full);
             let any_fail = s.fail.iter().any(|&f| f != 0.0);
             for ky in [ky, py - ky] {
                 if ky == py {
@@ -427,7 +428,9 @@ fn mirror_lanes(half: &[f64], w: usize, full: &mut [f64]) {
 }
 
 /// Row h of the factored blocks applied to the phasors, lane by lane:
-/// out[κx] = Σ_{m ≤ h} L_hm(κx) ξ_m(κx), summed in the order of m, in `F`.
+/// out[κx] = Σ_{m ≤ h} L_hm(κx) ξ_m(κx), summed in the order of m, in `F`. `lanes` holds
+/// each factor twice, beside the real and imaginary parts it multiplies, so the products
+/// run in straight vector lanes.
 #[inline(always)]
 fn apply_row_in<F: Sample>(
     lanes: &[F],
@@ -438,9 +441,10 @@ fn apply_row_in<F: Sample>(
 ) {
     out.fill(Complex::default());
     for m in 0..=h {
-        let (l, x) = (&lanes[pair(h, m) * w..(pair(h, m) + 1) * w], &xi[m * w..(m + 1) * w]);
-        for ((o, &l), x) in out.iter_mut().zip(l).zip(x) {
-            *o = Complex::new(o.re + x.re * l, o.im + x.im * l);
+        let q = pair(h, m);
+        let (l, x) = (&lanes[2 * q * w..2 * (q + 1) * w], &xi[m * w..(m + 1) * w]);
+        for ((o, l), x) in out.iter_mut().zip(l.chunks_exact(2)).zip(x) {
+            *o = Complex::new(o.re + x.re * l[0], o.im + x.im * l[1]);
         }
     }
 }
