@@ -124,9 +124,10 @@ pub struct SynthParams {
 pub const CHOLESKY_MAX_POINTS: usize = 4096;
 
 /// A number type the synthesis can write (f32 for fields, f64 for reference checks). The
-/// coefficients are computed in f64, except the embedding's spatial FFTs, which run in this
-/// type (an f32 field keeps f32's precision, and its FFTs run twice as many lanes); the
-/// final inverse FFT runs in this type.
+/// coefficients are computed in f64, except the embedding's phasors, their products with
+/// its factors and its spatial FFTs, which run in this type (an f32 field keeps f32's
+/// precision, and its FFTs run twice as many lanes); the final inverse FFT runs in this
+/// type.
 pub trait Sample: realfft::FftNum + Default {
     /// Convert from the f64 the synthesis computes in.
     fn from_f64_sample(x: f64) -> Self;
@@ -332,7 +333,10 @@ fn paired_hash(key: u64, k: u64) -> u32 {
 #[inline(always)]
 fn span_with<C>(key: u64, k0: u64, out: &mut [C], make: impl Fn(u32) -> C) {
     const PAIRS: usize = 16;
-    let (head, rest) = out.split_at_mut(usize::from(k0 % 2 == 1).min(out.len()));
+    if out.is_empty() {
+        return;
+    }
+    let (head, rest) = out.split_at_mut(usize::from(k0 % 2 == 1));
     if let Some(o) = head.first_mut() {
         *o = make(paired_hash(key, k0));
     }
