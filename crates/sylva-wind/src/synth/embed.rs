@@ -146,8 +146,6 @@ pub(super) struct Scratch<T> {
     /// The factored lanes of a row mirrored over all κx, in `T`, each value twice (beside
     /// the real and imaginary parts it multiplies).
     full: Vec<T>,
-    /// `full` in f64, before narrowing.
-    full64: Vec<f64>,
     /// The factor's per-lane scale and running sum.
     work: Vec<f64>,
     /// The phasors of one row κy, height column by height column.
@@ -225,7 +223,6 @@ impl<T: Sample> Embedding<T> {
             lanes: vec![0.0; np * (self.px / 2 + 1)],
             fail: vec![0.0; self.px / 2 + 1],
             full: vec![T::default(); 2 * np * self.px],
-            full64: vec![0.0; np * self.px],
             work: vec![0.0; 2 * (self.px / 2 + 1)],
             xi: vec![Complex::default(); self.nz * self.px],
         }
@@ -267,8 +264,7 @@ impl<T: Sample> Embedding<T> {
         for ky in 0..=py / 2 {
             block_row(&s.z, &s.kx, &s.ky[..], ky, py, norm, &mut s.lanes, &mut s.fail);
             lower_factor_lanes(&mut s.lanes, nz, &mut s.fail, &mut s.work);
-            mirror_lanes(&s.lanes, wh, &mut s.full64);
-            T::narrow_pairs(&s.full64, &mut s.full);
+            mirror_lanes(&s.lanes, wh, &mut s.full);
             let any_fail = s.fail.iter().any(|&f| f != 0.0);
             for ky in [ky, py - ky] {
                 if ky == py {
@@ -414,15 +410,20 @@ simd_kernel! {
     }
 }
 
-/// The factored lanes κx < w of every pair spread over the whole row:
-/// full[q·P_x + κx] = half[q·w + min(κx, P_x − κx)], P_x = `full.len()` / pairs.
-fn mirror_lanes(half: &[f64], w: usize, full: &mut [f64]) {
+/// The factored lanes κx < w of every pair spread over the whole row, in `T`, each value
+/// twice: full[2(q·P_x + κx) + {0, 1}] = half[q·w + min(κx, P_x − κx)], P_x = `full.len()`
+/// / (2 · pairs).
+fn mirror_lanes<T: Sample>(half: &[f64], w: usize, full: &mut [T]) {
     let pairs = half.len() / w;
-    let px = full.len() / pairs;
-    for (h, f) in half.chunks(w).zip(full.chunks_mut(px)) {
-        f[..w.min(px)].copy_from_slice(&h[..w.min(px)]);
-        for kx in w..px {
-            f[kx] = h[px - kx];
+    let px = full.len() / (2 * pairs);
+    let kept = w.min(px);
+    for (h, f) in half.chunks(w).zip(full.chunks_mut(2 * px)) {
+        T::narrow_pairs(&h[..kept], &mut f[..2 * kept]);
+        // κx = w … P_x − 1 take the lanes P_x − κx = P_x − w … 1, in reverse.
+        let (lo, hi) = f.split_at_mut(2 * kept);
+        let mirrored = lo[2..2 * (px - kept + 1)].chunks_exact(2).rev();
+        for (d, m) in hi.chunks_exact_mut(2).zip(mirrored) {
+            d.copy_from_slice(m);
         }
     }
 }
