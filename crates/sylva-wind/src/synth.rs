@@ -137,7 +137,7 @@ pub trait Sample: realfft::FftNum + Default {
     fn scale_own_into(v: &[Complex<Self>], sc: &[C64], out: &mut [Complex<Self>]);
     /// Widen to f64.
     fn to_f64_sample(self) -> f64;
-    /// out[2i] = out[2i + 1] = v[i] narrowed to this type (a real factor beside each complex
+    /// `out[2i] = out[2i + 1] = v[i]` narrowed to this type (a real factor beside each complex
     /// value's two parts, so products run in straight vector lanes).
     fn narrow_pairs(v: &[f64], out: &mut [Self]);
     /// The embedding's phasors k0, k0 + 1, … of the line with key `key` in this type (f32:
