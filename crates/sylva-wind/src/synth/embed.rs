@@ -565,15 +565,15 @@ mod tests {
     /// The largest difference between the covariance the method produces in `T`, built
     /// column by column from unit phasors, and the dense eq.-5 matrix with the pair-mean
     /// speed, over every pair of points, component and a few frequencies.
-    fn covariance_error<T: Sample>() -> f64 {
+    fn covariance_error<T: Sample>(grid: &Grid) -> f64 {
         let params =
             WindParams { coherence_speed: CoherenceSpeed::PairMean, ..WindParams::default() };
-        let grid = Grid::regular(5, 4, 3.0, &[13.0, 20.0, 38.0], 64, 0.1);
         let n = grid.points();
+        let (ny, nz) = (grid.ny(), grid.nz());
         let speeds: Vec<f64> = grid.zs.iter().map(|&z| params.mean_speed(z)).collect();
         let mut worst: f64 = 0.0;
         for comp in Component::ALL {
-            let emb = Embedding::<T>::new(&params, &grid, comp, 0.0).expect("regular grid");
+            let emb = Embedding::<T>::new(&params, grid, comp, 0.0).expect("regular grid");
             let mut s = emb.scratch();
             let mut w = vec![Complex::<T>::default(); n];
             for f in [0.002, 0.05, 0.4, 2.5] {
@@ -600,7 +600,7 @@ mod tests {
                 }
                 // Points in the order (x, z, y).
                 let pos = |p: usize| {
-                    let (iy, iz, ix) = (p % 4, (p / 4) % 3, p / 12);
+                    let (iy, iz, ix) = (p % ny, (p / ny) % nz, p / (ny * nz));
                     ([grid.xs[ix], grid.ys[iy], grid.zs[iz]], speeds[iz])
                 };
                 for a in 0..n {
@@ -622,12 +622,22 @@ mod tests {
     /// FFTs run in f32 (the fields the engine stores).
     #[test]
     fn covariance_equals_the_dense_pair_mean_cpsdm() {
-        let e64 = covariance_error::<f64>();
+        let grid = Grid::regular(5, 4, 3.0, &[13.0, 20.0, 38.0], 64, 0.1);
+        let e64 = covariance_error::<f64>(&grid);
         assert!(e64 < 1e-9, "f64: largest covariance error {e64:e}");
-        let e32 = covariance_error::<f32>();
+        let e32 = covariance_error::<f32>(&grid);
         assert!(e32 < 1e-6, "f32: largest covariance error {e32:e}");
         assert!(e32 > e64, "the f32 path must really run in f32 ({e32:e} against {e64:e})");
         println!("largest covariance error: f64 {e64:.2e}, f32 {e32:.2e}");
+        // Grids one point wide along x or y (a period of 1: no FFT that way) and the
+        // smallest torus, in either precision.
+        for (nx, ny, zs) in
+            [(1, 4, &[13.0, 20.0, 38.0][..]), (5, 1, &[15.0, 30.0]), (2, 2, &[20.0, 25.0])]
+        {
+            let grid = Grid::regular(nx, ny, 3.0, zs, 64, 0.1);
+            let (e64, e32) = (covariance_error::<f64>(&grid), covariance_error::<f32>(&grid));
+            assert!(e64 < 1e-9 && e32 < 1e-6, "{nx}×{ny}×{}: {e64:e} / {e32:e}", zs.len());
+        }
     }
 
     #[test]
