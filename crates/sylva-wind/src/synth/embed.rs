@@ -231,9 +231,8 @@ impl<T: Sample> Embedding<T> {
     /// The unit-variance coherence field of the line at frequency `f` (Hz) into `w`, laid
     /// out (x, z, y), the order of the synthesis' coefficient columns. `xi(m, κ0, out)`
     /// fills `out` with the phasors of height column `m` at the wavenumbers `κ0 …`, where
-    /// `κ = κy·P_x + κx`. Returns the bound on the coherence
-    /// error from blocks that had to be projected onto semidefinite ones (0 when the model
-    /// is a valid covariance).
+    /// `κ = κy·P_x + κx`. Returns the bound on the coherence error from blocks that had to
+    /// be projected onto semidefinite ones (0 when the model is a valid covariance).
     ///
     /// The blocks of one row κy are factored side by side, each pair's entries of every κx in
     /// one array, so the arithmetic runs in vector lanes; each lane computes what
@@ -316,7 +315,7 @@ impl<T: Sample> Embedding<T> {
             if px > 1 {
                 self.fft_x.process_with_scratch(plane, &mut s.fft);
             }
-            // Transposed in strips of 8 columns: each row's read is one cache line of f32s.
+            // Transposed in strips of 8 columns: each row gives a run of 8 values at once.
             for ix0 in (0..nx).step_by(8) {
                 let ix1 = (ix0 + 8).min(nx);
                 for ky in 0..py {
