@@ -776,7 +776,8 @@ impl Forest {
     }
 }
 
-/// How many draws ahead [`Forest::write_instances`] asks for a tree's data.
+/// How many draws ([`Forest::write_instances`]) or kept trees of a far leaf (pass 1) ahead
+/// the frame asks for a tree's data.
 const PREFETCH_AHEAD: usize = 12;
 
 /// One tree as pass 1 takes it: its index, placement and instance group, and its crown's
