@@ -282,6 +282,13 @@ fn lod(ui: &mut Ui, v: &Viewer, out: &mut Vec<Action>) {
     ui.add_enabled(l.geometry, egui::Slider::new(&mut l.band, 0.0..=1.0).text("cross-fade band"));
     ui.add_enabled(l.geometry, egui::Slider::new(&mut l.hysteresis, 0.0..=0.5).text("hysteresis"));
     ui.add_enabled(l.geometry, egui::Slider::new(&mut l.far_level, 1..=6).text("impostor level"));
+    ui.add_enabled(l.geometry, egui::Slider::new(&mut l.error_budget, 0.0..=8.0).text("error, px"))
+        .on_hover_text(
+            "mesh levels by screen-space error: the coarsest level within this many pixels \
+             of full detail (0: by h₀)",
+        );
+    ui.add_enabled(l.geometry, egui::Slider::new(&mut l.thin_px, 0.0..=32.0).text("thinning, px"))
+        .on_hover_text("far impostors thinned below this image height (0: off)");
     ui.checkbox(&mut l.animation, "animation LOD (joints by projected size)");
     ui.checkbox(&mut l.occlusion, "occlusion culling (hidden trees not drawn)");
     if l != lod {
